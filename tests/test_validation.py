@@ -1,0 +1,108 @@
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from skillbank import check_array, check_time
+from skillbank._validation import check_fraction, check_positive
+
+
+def test_check_array_converts_and_keeps_values():
+    out = check_array([[1, 2], [3, 4]], name="Y")
+    assert out.dtype == np.float64
+    np.testing.assert_array_equal(out, [[1, 2], [3, 4]])
+
+
+@pytest.mark.parametrize(
+    ("value", "kwargs", "match"),
+    [
+        ([[1.0, np.nan]], {}, r"Y: expected finite values, got 1 non-finite value\(s\) \(NaN"),
+        ([[1.0, np.inf]], {}, r"Y: expected finite values.*inf first at index \(0, 1\)"),
+        ([1.0, 2.0], {}, r"Y: expected a 2-D array, got 1-D"),
+        (np.zeros((2, 2, 2)), {"ndim": (1, 2)}, r"Y: expected a 1-D or 2-D array, got 3-D"),
+        ([["a", "b"]], {}, r"Y: expected an array of real numbers.*cannot be converted"),
+        (np.zeros((3, 2)), {"min_samples": 4}, r"Y: expected at least 4 samples, got 3"),
+        (np.zeros((3, 2)), {"n_dims": 3}, r"Y: expected 3 columns, got 2"),
+        (np.zeros((3, 0)), {}, r"Y: expected at least one column"),
+    ],
+)
+def test_check_array_errors(value, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        check_array(value, name="Y", **kwargs)
+
+
+def test_check_array_as_2d():
+    assert check_array([1.0, 2.0], name="g", ndim=(1, 2), as_2d=True).shape == (2, 1)
+
+
+@pytest.mark.parametrize(
+    ("value", "match"),
+    [
+        ([0.0, 1.0, 1.0], r"t: expected strictly increasing time, got t\[2\]=1.0 after t\[1\]=1.0"),
+        ([0.0, 2.0, 1.0], r"t: expected strictly increasing time"),
+        ([[0.0, 1.0]], r"t: expected a 1-D array, got 2-D"),
+        ([0.0, np.nan], r"t: expected finite values"),
+    ],
+)
+def test_check_time_errors(value, match):
+    with pytest.raises(ValueError, match=match):
+        check_time(value)
+
+
+def test_check_time_length():
+    with pytest.raises(ValueError, match=r"t: expected 3 samples to match the data, got 2"):
+        check_time([0.0, 1.0], n_steps=3)
+
+
+@pytest.mark.parametrize(
+    ("value", "kwargs", "match"),
+    [
+        (0, {}, r"w: expected a number > 0, got 0"),
+        (-1.0, {}, r"w: expected a number > 0, got -1.0"),
+        (2.5, {"integer": True}, r"w: expected an integer > 0, got 2.5"),
+        ("3", {}, r"w: expected a number > 0, got str"),
+        (True, {}, r"w: expected a number > 0, got bool"),
+        (float("nan"), {}, r"w: expected a number > 0, got nan"),
+    ],
+)
+def test_check_positive_errors(value, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        check_positive(value, name="w", **kwargs)
+
+
+def test_check_fraction():
+    assert check_fraction(0.5, name="x") == 0.5
+    with pytest.raises(ValueError, match=r"x: expected a number in \[0.0, 1.0\], got 1.5"):
+        check_fraction(1.5, name="x")
+
+
+finite_2d = hnp.arrays(
+    np.float64,
+    hnp.array_shapes(min_dims=2, max_dims=2, min_side=1, max_side=20),
+    elements=st.floats(-1e6, 1e6),
+)
+
+
+@given(finite_2d)
+def test_property_finite_arrays_pass_unchanged(arr):
+    np.testing.assert_array_equal(check_array(arr, name="Y"), arr)
+
+
+@given(finite_2d, st.data())
+def test_property_any_nonfinite_value_is_rejected(arr, data):
+    i = data.draw(st.integers(0, arr.shape[0] - 1))
+    j = data.draw(st.integers(0, arr.shape[1] - 1))
+    arr = arr.copy()
+    arr[i, j] = data.draw(st.sampled_from([np.nan, np.inf, -np.inf]))
+    with pytest.raises(ValueError, match=r"Y: expected finite values"):
+        check_array(arr, name="Y")
+
+
+@given(hnp.arrays(np.float64, st.integers(2, 50), elements=st.floats(-1e6, 1e6)))
+def test_property_time_is_accepted_iff_strictly_increasing(t):
+    if np.all(np.diff(t) > 0):
+        np.testing.assert_array_equal(check_time(t), t)
+    else:
+        with pytest.raises(ValueError, match=r"t: expected strictly increasing time"):
+            check_time(t)
