@@ -142,14 +142,14 @@ def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool 
     >>> check_positive(3, name="window", integer=True)
     3
     """
-    kind = "integer" if integer else "number"
+    kind = "an integer" if integer else "a number"
     bound = ">= 0" if allow_zero else "> 0"
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name}: expected a {kind} {bound}, got {_describe(value)}")
+        raise ValueError(f"{name}: expected {kind} {bound}, got {_describe(value)}")
     if integer and float(value) != int(value):
         raise ValueError(f"{name}: expected an integer {bound}, got {value!r}")
     if not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
-        raise ValueError(f"{name}: expected a {kind} {bound}, got {value!r}")
+        raise ValueError(f"{name}: expected {kind} {bound}, got {value!r}")
     return int(value) if integer else float(value)
 
 

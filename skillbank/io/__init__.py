@@ -1,0 +1,43 @@
+"""Reading and writing demonstrations.
+
+Readers for the robot multi-stream HDF5 recordings, handwriting HDF5 files,
+the RAIL benchmark (MATLAB v5) and the LASA dataset; generic CSV and NPZ
+readers and writers; JSON output for results; and format detection with
+:func:`load` / :func:`load_all`. Every reading problem raises
+:class:`FormatError`, a :class:`ValueError` with a one-line message
+``cannot read '<path>': <reason>``.
+
+Examples
+--------
+>>> from skillbank.io import load, detect_format
+>>> demo = load("seed/three_button_pressing_demo.h5")  # doctest: +SKIP
+>>> demo.stream_names  # doctest: +SKIP
+['joints', 'position', 'orientation', 'force', 'torque', 'gripper']
+"""
+
+from ._detect import detect_format, load, load_all
+from ._errors import FormatError
+from ._handwriting_h5 import read_handwriting_h5
+from ._lasa import lasa_shapes, load_lasa
+from ._rail import load_rail, read_rail_file
+from ._robot_h5 import read_robot_h5
+from ._tabular import read_csv, read_npz, to_jsonable, write_csv, write_json, write_npz
+
+__all__ = [
+    "FormatError",
+    "read_robot_h5",
+    "read_handwriting_h5",
+    "read_rail_file",
+    "load_rail",
+    "load_lasa",
+    "lasa_shapes",
+    "read_csv",
+    "write_csv",
+    "read_npz",
+    "write_npz",
+    "write_json",
+    "to_jsonable",
+    "detect_format",
+    "load",
+    "load_all",
+]

@@ -1,0 +1,184 @@
+"""Format detection from extension and content, and the generic ``load``/``load_all``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._demonstration import Demonstration
+from ._errors import (
+    HDF5_MAGIC,
+    MAT5_MAGIC,
+    ZIP_MAGICS,
+    FormatError,
+    as_file,
+    describe_content,
+    expect_magic,
+    read_head,
+    reading,
+)
+from ._handwriting_h5 import HANDWRITING_GROUPS, read_handwriting_h5
+from ._rail import read_rail_file
+from ._robot_h5 import ROBOT_STREAMS, read_robot_h5
+from ._tabular import read_csv, read_npz
+
+__all__ = ["detect_format", "load", "load_all", "FORMATS"]
+
+FORMATS = ("robot-h5", "handwriting-h5", "rail-mat", "csv", "npz")
+_EXTENSIONS = {
+    ".h5": "hdf5", ".hdf5": "hdf5", ".hdf": "hdf5",
+    ".mat": "mat", ".npz": "npz", ".csv": "csv", ".txt": "csv",
+}
+
+
+def _hdf5_kind(path) -> str:
+    import h5py
+
+    with reading(path, "corrupt HDF5 file"), h5py.File(path, "r") as h5:
+        groups = sorted(k for k in h5.keys() if isinstance(h5[k], h5py.Group))
+    robot_group = ROBOT_STREAMS["joints"][0]
+    if robot_group in groups:
+        return "robot-h5"
+    if any(g in groups for g in HANDWRITING_GROUPS):
+        return "handwriting-h5"
+    raise FormatError(
+        path, f"expected a robot recording (group '{robot_group}') or handwriting "
+        f"(groups {list(HANDWRITING_GROUPS)}), found groups {groups}"
+    )
+
+
+def _looks_like_csv(head: bytes) -> bool:
+    if b"\x00" in head:
+        return False
+    text = head.decode("utf-8", errors="ignore").lstrip("\ufeff")
+    lines = [line for line in text.splitlines() if line.strip()]
+    if not lines or "," not in lines[0]:
+        return False
+    if len(lines) < 2:
+        return True
+    # Only the first data row is checked: the head may cut the last line short.
+    try:
+        [float(cell) for cell in lines[1].split(",")]
+    except ValueError:
+        return False
+    return True
+
+
+def detect_format(path) -> str:
+    """Name the format of a demonstration file, from its extension and content.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    str
+        One of ``"robot-h5"``, ``"handwriting-h5"`` (both ``.h5``/``.hdf5``,
+        told apart by their groups), ``"rail-mat"`` (``.mat``), ``"csv"``
+        (``.csv``/``.txt``) or ``"npz"``.
+
+    Raises
+    ------
+    FormatError
+        If the file is missing or a directory, the extension is unknown, or
+        the content does not match the extension.
+
+    Examples
+    --------
+    >>> detect_format("seed/r_shape.h5")  # doctest: +SKIP
+    'handwriting-h5'
+    """
+    p = as_file(path)
+    kind = _EXTENSIONS.get(p.suffix.lower())
+    if kind is None:
+        known = ", ".join(sorted(_EXTENSIONS))
+        raise FormatError(p, f"unknown extension {p.suffix or '(none)'!r}: expected one of {known}")
+    if kind == "hdf5":
+        expect_magic(p, HDF5_MAGIC, "HDF5 content")
+        return _hdf5_kind(p)
+    if kind == "mat":
+        expect_magic(p, MAT5_MAGIC, "a MATLAB 5.0 file")
+        return "rail-mat"
+    if kind == "npz":
+        expect_magic(p, ZIP_MAGICS, "an NPZ (zip) archive")
+        return "npz"
+    head = read_head(p)
+    if not _looks_like_csv(head):
+        raise FormatError(
+            p, f"expected a comma-separated numeric table with a header, found {describe_content(head)}"
+        )
+    return "csv"
+
+
+def load_all(path, *, group: str = "normalized") -> list[Demonstration]:
+    """Read every demonstration in a file of any supported format.
+
+    Parameters
+    ----------
+    path : str or path-like
+    group : str, default="normalized"
+        For handwriting HDF5 files, which group to read.
+
+    Returns
+    -------
+    list of Demonstration
+
+    Raises
+    ------
+    FormatError
+        If the format is not recognised or the file is unreadable.
+
+    Examples
+    --------
+    >>> len(load_all("seed/r_shape.h5", group="smoothed"))  # doctest: +SKIP
+    5
+    """
+    fmt = detect_format(path)
+    if fmt == "robot-h5":
+        return [read_robot_h5(path)]
+    if fmt == "handwriting-h5":
+        return read_handwriting_h5(path, group=group)
+    if fmt == "rail-mat":
+        return read_rail_file(path)
+    if fmt == "npz":
+        return [read_npz(path)]
+    return [read_csv(path)]
+
+
+def load(path, *, index=None, group: str = "normalized") -> Demonstration:
+    """Read one demonstration from a file of any supported format.
+
+    Parameters
+    ----------
+    path : str or path-like
+    index : int, optional
+        Which demonstration in a multi-demonstration file (RAIL, handwriting);
+        default 0. Negative values count from the end.
+    group : str, default="normalized"
+        For handwriting HDF5 files, which group to read.
+
+    Returns
+    -------
+    Demonstration
+
+    Raises
+    ------
+    FormatError
+        If the file is unreadable or ``index`` is out of range (the message
+        says how many demonstrations the file holds).
+
+    Examples
+    --------
+    >>> load("rail/REACHING/1.mat", index=2).metadata["index"]  # doctest: +SKIP
+    2
+    """
+    demos = load_all(path, group=group)
+    if index is None:
+        return demos[0]
+    n = len(demos)
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+        raise FormatError(path, f"expected an integer index, got {index!r}")
+    if not -n <= index < n:
+        plural = "demonstration" if n == 1 else "demonstrations"
+        raise FormatError(path, f"index {index} is out of range: the file holds {n} {plural} (0..{n - 1})")
+    return demos[int(index)]

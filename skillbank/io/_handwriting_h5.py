@@ -1,0 +1,103 @@
+"""Reader for 2-D handwriting demonstrations stored as HDF5 groups ``<group>/<i>/{t,x,y}``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._demonstration import Demonstration
+from ._errors import HDF5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
+
+__all__ = ["read_handwriting_h5", "HANDWRITING_GROUPS"]
+
+HANDWRITING_GROUPS = ("normalized", "smoothed", "unsmoothed")
+
+
+def _sort_key(name: str):
+    # Numeric names sort as numbers ("2" before "10"); anything else after them.
+    return (0, int(name), "") if name.isdigit() else (1, 0, name)
+
+
+def _demo_names(path, h5, group: str) -> list[str]:
+    groups = sorted(k for k in h5.keys() if hasattr(h5[k], "keys"))
+    if group not in groups:
+        raise FormatError(path, f"expected a group {group!r}, found groups {groups}")
+    return sorted((k for k in h5[group].keys() if hasattr(h5[group][k], "keys")), key=_sort_key)
+
+
+def _read_one(path, node, group: str, name: str) -> Demonstration:
+    missing = [k for k in ("t", "x", "y") if k not in node]
+    if missing:
+        raise FormatError(
+            path, f"expected datasets t, x, y in '{group}/{name}', missing {missing}, "
+            f"found {sorted(node.keys())}"
+        )
+    t_ms, x, y = (np.asarray(node[k][()], dtype=float).ravel() for k in ("t", "x", "y"))
+    if not (t_ms.shape == x.shape == y.shape) or t_ms.size == 0:
+        raise FormatError(
+            path, f"expected non-empty t, x, y of equal length in '{group}/{name}', "
+            f"found lengths {t_ms.size}, {x.size}, {y.size}"
+        )
+    t0 = float(t_ms[0]) / 1000.0
+    t, xy, dropped = drop_repeated_times((t_ms - t_ms[0]) / 1000.0, np.column_stack([x, y]))
+    index = int(name) if name.isdigit() else name
+    metadata = {
+        "source": str(path), "format": "handwriting-h5", "group": group, "index": index, "t0": t0,
+    }
+    if dropped:
+        metadata["dropped_samples"] = dropped
+    with reading(path, f"invalid demonstration '{group}/{name}'"):
+        return Demonstration(t, {"position": xy}, metadata)
+
+
+def read_handwriting_h5(path, *, group: str = "normalized", index=None):
+    """Read handwriting demonstrations: groups ``<group>/<i>`` with datasets ``t``, ``x``, ``y``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.h5`` file.
+    group : str, default="normalized"
+        Which version of the data: ``"normalized"``, ``"smoothed"`` or
+        ``"unsmoothed"`` (any group present in the file is accepted).
+    index : int, optional
+        Read only demonstration ``<group>/<index>``.
+
+    Returns
+    -------
+    list of Demonstration, or Demonstration when ``index`` is given
+        Stream ``position`` = ``(x, y)`` as float (screen coordinates: y
+        points down). ``t`` is in seconds (the file stores milliseconds),
+        shifted to start at 0; metadata holds ``source``, ``format``
+        (``"handwriting-h5"``), ``group``, ``index`` and ``t0`` (seconds).
+        Demonstrations are sorted by their numeric index.
+
+    Raises
+    ------
+    FormatError
+        If the file is not HDF5, or the group or index does not exist (the
+        message lists what does).
+
+    Examples
+    --------
+    >>> demos = read_handwriting_h5("seed/r_shape.h5")  # doctest: +SKIP
+    >>> len(demos), demos[0]["position"].shape  # doctest: +SKIP
+    (5, (1000, 2))
+    >>> read_handwriting_h5("seed/r_shape.h5", group="unsmoothed", index=2).n_steps  # doctest: +SKIP
+    237
+    """
+    import h5py
+
+    p = as_file(path)
+    expect_magic(p, HDF5_MAGIC, "HDF5 content")
+    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+        names = _demo_names(p, h5, group)
+        if index is None:
+            if not names:
+                raise FormatError(p, f"expected demonstrations in group {group!r}, found none")
+            return [_read_one(p, h5[group][n], group, n) for n in names]
+        key = str(index)
+        if isinstance(index, bool) or key not in names:
+            raise FormatError(
+                p, f"expected an index in group {group!r} among [{', '.join(names)}], got {index!r}"
+            )
+        return _read_one(p, h5[group][key], group, key)

@@ -1,0 +1,10 @@
+"""Figures of segmentation results, drawn with matplotlib (no pyplot state)."""
+
+from ._segmentation import (
+    plot_jerk_profile,
+    plot_keypoint_probability,
+    plot_segmentation_summary,
+    plot_segments,
+)
+
+__all__ = ["plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary"]

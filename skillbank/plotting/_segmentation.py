@@ -1,0 +1,317 @@
+"""Figures of segmentation results (the paper's Fig. 3 panels).
+
+All functions draw on a fresh :class:`matplotlib.figure.Figure` (no pyplot
+global state), write it to ``path`` and return that path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from ..segmentation._result import SegmentationResult
+
+__all__ = [
+    "plot_jerk_profile",
+    "plot_keypoint_probability",
+    "plot_segments",
+    "plot_segmentation_summary",
+]
+
+_PALETTE = (
+    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+)  # matplotlib's tab10
+_DPI = 150
+
+
+def _colour(i: int) -> str:
+    return _PALETTE[i % len(_PALETTE)]
+
+
+def _check_result(result) -> SegmentationResult:
+    if not isinstance(result, SegmentationResult):
+        raise ValueError(f"result: expected a SegmentationResult, got {type(result).__name__}")
+    return result
+
+
+def _check_segmented_stream(result: SegmentationResult, stream):
+    names = list(result.streams)
+    if not names:
+        raise ValueError("result: expected at least one segmented stream, got none")
+    if stream is None:
+        return result.streams[names[0]]
+    if stream not in result.streams:
+        raise ValueError(f"stream: expected one of the segmented streams {names}, got {stream!r}")
+    return result.streams[stream]
+
+
+def _save(fig: Figure, path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=_DPI, bbox_inches="tight")
+    return path
+
+
+def _scaled(curve: np.ndarray) -> np.ndarray:
+    curve = np.asarray(curve, dtype=float)
+    top = float(np.max(curve)) if curve.size else 0.0
+    return curve / top if top > 0 else curve
+
+
+def _labels_from_cuts(n: int, cuts) -> np.ndarray:
+    marks = np.zeros(n, dtype=int)
+    cuts = np.asarray(cuts, dtype=int)
+    cuts = cuts[(cuts > 0) & (cuts < n)]
+    np.add.at(marks, cuts, 1)
+    return np.cumsum(marks)
+
+
+def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
+    """``(label, start, stop)`` of each run of equal labels (stop exclusive)."""
+    edges = np.flatnonzero(np.diff(labels)) + 1
+    starts = np.concatenate(([0], edges))
+    stops = np.concatenate((edges, [labels.size]))
+    return [(int(labels[a]), int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+
+
+def _draw_profile(ax, t, profile, cuts, *, markersize: float = 3.0) -> None:
+    """Profile line + points coloured by the segments between ``cuts``."""
+    labels = _labels_from_cuts(t.size, cuts)
+    for label, a, b in _runs(labels):
+        stop = min(b + 1, t.size)  # join to the next segment's first sample
+        ax.plot(t[a:stop], profile[a:stop], color=_colour(label), lw=1.2)
+        ax.plot(t[a:b], profile[a:b], ls="none", marker="o", ms=markersize, color=_colour(label))
+    for c in cuts:
+        ax.axvline(t[int(c)], color="0.3", ls="--", lw=1.0)
+    ax.set_xlim(t[0], t[-1])
+    if profile.size and np.all(np.isfinite(profile)):
+        lo, hi = min(0.0, float(profile.min())), max(1.0, float(profile.max()))
+        pad = 0.04 * (hi - lo)
+        ax.set_ylim(lo - pad, hi + pad)
+
+
+def plot_jerk_profile(result, path, *, stream=None) -> Path:
+    """Plot one stream's normalised windowed jerk profile, coloured by its segments.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+    path : str or path-like
+        Output image file; parent directories are created.
+    stream : str, optional
+        A segmented stream (default: the first one).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If ``result`` is not a SegmentationResult or ``stream`` was not segmented.
+
+    Examples
+    --------
+    >>> plot_jerk_profile(result, "figs/jerk.png", stream="position")  # doctest: +SKIP
+    PosixPath('figs/jerk.png')
+    """
+    result = _check_result(result)
+    seg = _check_segmented_stream(result, stream)
+    t = result.demonstration.t
+    fig = Figure(figsize=(7.0, 4.0))
+    ax = fig.add_subplot()
+    _draw_profile(ax, t, np.asarray(seg.profile, dtype=float), seg.changepoints)
+    ax.set_xlabel("Time [s]")
+    ax.set_ylabel("Normalised windowed jerk")
+    ax.set_title(f"Jerk profile: {seg.name}")
+    return _save(fig, path)
+
+
+def _draw_probability(ax, result: SegmentationResult, *, legend: bool = True) -> None:
+    t = result.demonstration.t
+    for i, seg in enumerate(result.streams.values()):
+        ax.plot(t, _scaled(seg.probability), lw=1.0, alpha=0.8, color=_colour(i + 1), label=seg.name)
+    ax.plot(t, _scaled(result.probability), lw=2.6, color="k", label="combined")
+    for k in result.keypoints:
+        ax.axvline(t[int(k)], color="crimson", ls=":", lw=1.2)
+    ax.set_xlim(t[0], t[-1])
+    ax.set_ylim(-0.03, 1.08)
+    if legend:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+
+
+def plot_keypoint_probability(result, path) -> Path:
+    """Plot each stream's keypoint curve and the combined keypoint probability.
+
+    Each curve is scaled to a maximum of 1. Stream curves are thin lines, the
+    combined curve is thick and black, keypoints are dotted vertical lines.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+    path : str or path-like
+        Output image file; parent directories are created.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Examples
+    --------
+    >>> plot_keypoint_probability(result, "figs/probability.png")  # doctest: +SKIP
+    PosixPath('figs/probability.png')
+    """
+    result = _check_result(result)
+    fig = Figure(figsize=(7.0, 4.0))
+    ax = fig.add_subplot()
+    _draw_probability(ax, result)
+    ax.set_xlabel("Time [s]")
+    ax.set_ylabel("Keypoint probability (scaled)")
+    ax.set_title("Keypoint probability")
+    return _save(fig, path)
+
+
+def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y: bool = False) -> Path:
+    """Plot a stream's trajectory coloured by segment, in 2-D or 3-D.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+    path : str or path-like
+        Output image file; parent directories are created.
+    stream : str, default="position"
+        Any stream of the demonstration (it need not have been segmented).
+    dims : {2, 3}, optional
+        Plot the first two or three columns. Default: 3 when the stream has at
+        least three columns, else 2.
+    invert_y : bool, default=False
+        Negate the second column, for data in screen coordinates (y down).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If ``result`` is not a SegmentationResult, ``stream`` is unknown, or
+        ``dims`` is not 2 or 3 or exceeds the stream's columns.
+
+    Examples
+    --------
+    >>> plot_segments(result, "figs/r.png", invert_y=True)  # doctest: +SKIP
+    PosixPath('figs/r.png')
+    """
+    result = _check_result(result)
+    demo = result.demonstration
+    if stream not in demo.streams:
+        raise ValueError(f"stream: expected one of the demonstration's streams {demo.stream_names}, "
+                         f"got {stream!r}")
+    Y = np.asarray(demo[stream], dtype=float)
+    n_cols = Y.shape[1]
+    if dims is None:
+        dims = 3 if n_cols >= 3 else 2
+    if isinstance(dims, bool) or dims not in (2, 3):
+        raise ValueError(f"dims: expected 2 or 3, got {dims!r}")
+    if dims > n_cols:
+        raise ValueError(f"dims: expected at most the {n_cols} columns of stream {stream!r}, got {dims}")
+    P = Y[:, :dims].copy()
+    if invert_y:
+        P[:, 1] = -P[:, 1]
+
+    labels = result.labels
+    fig = Figure(figsize=(6.0, 6.0) if dims == 2 else (7.0, 6.5))
+    ax = fig.add_subplot(projection="3d" if dims == 3 else None)
+    handles = []
+    for label, a, b in _runs(labels):
+        stop = min(b + 1, P.shape[0])
+        colour = _colour(label)
+        ax.plot(*P[a:stop].T, color=colour, lw=2.5, solid_capstyle="round")
+        handles.append(Line2D([], [], color=colour, lw=3, label=f"Segment {label + 1}"))
+    kp = np.asarray(result.keypoints, dtype=int)
+    if kp.size:
+        extra = {"depthshade": False} if dims == 3 else {}
+        ax.scatter(*P[kp].T, color="k", s=30, zorder=5, **extra)
+        handles.append(Line2D([], [], ls="none", marker="o", color="k", label="Keypoints"))
+    ax.plot(*P[:1].T, ls="none", marker="^", color="0.2", ms=7)
+    handles.append(Line2D([], [], ls="none", marker="^", color="0.2", ms=7, label="Start"))
+    if dims == 2:
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"{stream}[0]")
+        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
+    else:
+        span = np.ptp(P, axis=0)
+        ax.set_box_aspect(np.where(span > 0, span, 1.0) / max(float(span.max()), 1e-12) + 0.05)
+        ax.set_xlabel(f"{stream}[0]")
+        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
+        ax.set_zlabel(f"{stream}[2]")
+    ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
+    ax.set_title(f"{result.n_segments} segments of {stream}")
+    return _save(fig, path)
+
+
+def plot_segmentation_summary(result, path, *, stream=None) -> Path:
+    """Plot every segmented stream's jerk profile and the combined keypoint probability.
+
+    One panel per stream (stacked, shared time axis) shows its profile coloured
+    by its own changepoint segments, with dashed lines at its changepoints; the
+    bottom panel shows the keypoint curves. Keypoints are drawn as vertical
+    lines across all panels.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+    path : str or path-like
+        Output image file; parent directories are created.
+    stream : str or list of str, optional
+        Only these segmented streams' profiles (default: all).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Examples
+    --------
+    >>> plot_segmentation_summary(result, "figs/summary.png")  # doctest: +SKIP
+    PosixPath('figs/summary.png')
+    """
+    result = _check_result(result)
+    if stream is None:
+        names = list(result.streams)
+    else:
+        names = [stream] if isinstance(stream, str) else list(stream)
+    segs = [_check_segmented_stream(result, name) for name in names]
+    t = result.demonstration.t
+    n_panels = len(segs) + 1
+    fig = Figure(figsize=(8.0, 1.7 * n_panels + 0.8))
+    axes = fig.subplots(n_panels, 1, sharex=True, squeeze=False)[:, 0]
+    for ax, seg in zip(axes[:-1], segs, strict=True):
+        _draw_profile(ax, t, np.asarray(seg.profile, dtype=float), seg.changepoints, markersize=1.5)
+        ax.set_ylabel(f"{seg.name}\njerk", fontsize="small")
+    _draw_probability(axes[-1], result, legend=False)
+    axes[-1].set_ylabel("keypoint\nprobability", fontsize="small")
+    axes[-1].set_xlabel("Time [s]")
+    for ax in axes[:-1]:
+        for k in result.keypoints:
+            ax.axvline(t[int(k)], color="crimson", ls=":", lw=1.2)
+    handles = [Line2D([], [], color=_colour(i + 1), lw=1.0, label=name)
+               for i, name in enumerate(result.streams)]
+    handles += [Line2D([], [], color="k", lw=2.6, label="combined"),
+                Line2D([], [], color="0.3", ls="--", lw=1.0, label="changepoint"),
+                Line2D([], [], color="crimson", ls=":", lw=1.2, label="keypoint")]
+    axes[-1].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    if result.keypoints.size:
+        times = ", ".join(f"{x:.2f}" for x in result.keypoint_times)
+        axes[0].set_title(f"Segmentation: {result.n_segments} segments, keypoints at {times} s")
+    else:
+        axes[0].set_title("Segmentation: 1 segment, no keypoints")
+    fig.align_ylabels(axes)
+    return _save(fig, path)

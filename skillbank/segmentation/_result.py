@@ -1,0 +1,116 @@
+"""Segmentation result objects."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._demonstration import Demonstration
+
+__all__ = ["StreamSegmentation", "SegmentationResult"]
+
+
+@dataclass
+class StreamSegmentation:
+    """What segmentation found on one data stream.
+
+    Attributes
+    ----------
+    name : str
+    params : dict
+        Window, min_size, threshold and grace in samples, as used.
+    jerk : ndarray of shape (n_steps,)
+        Jerk norm per sample (relative or absolute, see ``params["scale"]``).
+    profile : ndarray of shape (n_steps,)
+        Normalised sliding-window mean of ``jerk``, in [0, 1].
+    changepoints : ndarray of int
+        Sample indices where a new segment starts.
+    strength : ndarray of float
+        Prominence of each changepoint's jerk event.
+    probability : ndarray of shape (n_steps,)
+        The stream's keypoint curve (Gaussians over a floor).
+    """
+
+    name: str
+    params: dict
+    jerk: np.ndarray
+    profile: np.ndarray
+    changepoints: np.ndarray
+    strength: np.ndarray
+    probability: np.ndarray
+
+
+@dataclass
+class SegmentationResult:
+    """The outcome of segmenting one demonstration.
+
+    Attributes
+    ----------
+    demonstration : Demonstration
+        The segmented input.
+    streams : dict of str to StreamSegmentation
+    probability : ndarray of shape (n_steps,)
+        The combined keypoint probability (product of the stream curves).
+    support : ndarray of shape (n_steps,)
+        How many streams agree at each sample.
+    keypoints : ndarray of int
+        Interior cut indices; there are ``n_segments - 1`` of them.
+    mode : str
+        ``"deterministic"`` or ``"sampling"``.
+    """
+
+    demonstration: Demonstration
+    streams: dict
+    probability: np.ndarray
+    support: np.ndarray
+    keypoints: np.ndarray
+    mode: str
+    params: dict = field(default_factory=dict)
+
+    @property
+    def changepoints(self) -> dict:
+        """Each stream's changepoints, by stream name."""
+        return {k: v.changepoints for k, v in self.streams.items()}
+
+    @property
+    def keypoint_times(self) -> np.ndarray:
+        """Keypoints as times in seconds on the demonstration's clock."""
+        return self.demonstration.t[self.keypoints]
+
+    @property
+    def n_segments(self) -> int:
+        """Number of segments (keypoints + 1)."""
+        return int(self.keypoints.size + 1)
+
+    @property
+    def bounds(self) -> list[tuple[int, int]]:
+        """``(start, stop)`` sample range of each segment (stop exclusive)."""
+        edges = np.concatenate(([0], self.keypoints, [self.demonstration.n_steps])).astype(int)
+        return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=False)]
+
+    @property
+    def labels(self) -> np.ndarray:
+        """Segment index of every sample, shape (n_steps,)."""
+        labels = np.zeros(self.demonstration.n_steps, dtype=int)
+        labels[self.keypoints] = 1
+        return np.cumsum(labels)
+
+    @property
+    def segments(self) -> list[Demonstration]:
+        """The segments as Demonstrations, with ``segment`` in their metadata."""
+        out = []
+        for i, (a, b) in enumerate(self.bounds):
+            seg = self.demonstration.slice(a, b)
+            seg.metadata["segment"] = i
+            out.append(seg)
+        return out
+
+    def to_dict(self) -> dict:
+        """The JSON form printed by ``skillbank segment --json``."""
+        return {
+            "keypoints": [int(k) for k in self.keypoints],
+            "keypoint_times": [float(x) for x in self.keypoint_times],
+            "changepoints": {k: [int(c) for c in v] for k, v in self.changepoints.items()},
+            "n_segments": self.n_segments,
+        }

@@ -1,0 +1,220 @@
+"""The probabilistic multimodal segmenter."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+
+import numpy as np
+
+from .._demonstration import Demonstration
+from .._validation import check_fraction, check_positive
+from ._changepoints import detect_changepoints
+from ._keypoints import (
+    changepoint_probability,
+    combine_probabilities,
+    keypoints_deterministic,
+    keypoints_sampling,
+)
+from ._profile import jerk_profile
+from ._result import SegmentationResult, StreamSegmentation
+
+__all__ = ["MultimodalSegmenter", "segment", "to_samples"]
+
+_STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize")
+_SECONDS = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*s\s*$")
+
+
+def to_samples(value, t: np.ndarray, *, name: str) -> int:
+    """Convert a size given in samples (int) or seconds (``"0.1s"``) to samples.
+
+    Seconds are converted with the median sample period, so uneven sampling
+    does not bias the conversion.
+
+    Examples
+    --------
+    >>> to_samples("0.5s", np.linspace(0, 1, 11), name="window")
+    5
+    >>> to_samples(8, np.linspace(0, 1, 11), name="window")
+    8
+    """
+    if isinstance(value, str):
+        match = _SECONDS.match(value)
+        if not match:
+            raise ValueError(f"{name}: expected an integer number of samples or seconds like '0.1s', "
+                             f"got {value!r}")
+        dt = float(np.median(np.diff(t))) if t.shape[0] > 1 else 1.0
+        return max(1, int(round(float(match.group(1)) / dt)))
+    return check_positive(value, name=name, integer=True)
+
+
+class MultimodalSegmenter:
+    """Probabilistic multimodal segmentation of a demonstration into primitives.
+
+    Each stream is segmented on its own: jerk (third time derivative) → norm
+    over the dimensions → sliding-window mean → normalisation → changepoints
+    at the onset of every jerk event whose prominence reaches ``threshold``.
+    Each changepoint becomes a Gaussian with σ = window / 2; the per-stream
+    curves are multiplied; keypoints are taken from the product.
+
+    Parameters
+    ----------
+    window : int or str, default="auto"
+        Sliding-window width, in samples or seconds (``"0.1s"``). ``"auto"``
+        uses 4 % of the demonstration's length (at least 8 samples).
+    min_size : int or str, default="auto"
+        Minimum segment length; ``"auto"`` uses 2 × window.
+    threshold : float, default=0.4
+        Minimum prominence of a jerk event on the normalised profile, in (0, 1].
+    grace : int or str, default="auto"
+        Samples ignored at each end of a stream (start-up transients and the
+        edge effects of differentiating); ``"auto"`` uses the window.
+    scale : {"relative", "absolute"}, default="relative"
+        ``"absolute"`` is the paper's jerk; ``"relative"`` divides it by the
+        local speed, making streams of any unit comparable.
+    normalize : {"robust", "max"}, default="robust"
+        ``"max"`` is the paper's; ``"robust"`` the median of the five highest peaks.
+    stream_params : mapping, optional
+        Per-stream overrides, e.g. ``{"force": {"threshold": 0.3}}``.
+    mode : {"deterministic", "sampling"}, default="deterministic"
+        ``"deterministic"`` takes the modes of the combined curve where at
+        least ``min_support`` streams agree; ``"sampling"`` is the paper's
+        procedure, reproducible with ``random_state``.
+    min_support : float, optional
+        Streams that must agree on a deterministic keypoint; default half of
+        the streams, at least 1.
+    n_samples, min_hits : int, default=20, 3
+        Draws per round, and draws a keypoint needs, in ``"sampling"`` mode.
+    floor : float, default=0.05
+        Baseline of each stream's curve, so no stream can veto the others.
+    random_state : int, Generator or None
+        Seed for ``"sampling"`` mode.
+
+    Attributes
+    ----------
+    result_ : SegmentationResult
+        Set by :meth:`fit`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 2.0, 400)
+    >>> Y = np.column_stack([np.minimum(t, 1.0), np.maximum(t - 1.0, 0.0)])
+    >>> seg = MultimodalSegmenter(window=16).fit(Demonstration.from_array(Y, t))
+    >>> seg.result_.n_segments
+    2
+    """
+
+    def __init__(
+        self, *, window="auto", min_size="auto", threshold=0.4, grace="auto", scale="relative",
+        normalize="robust", stream_params=None, mode="deterministic", min_support=None,
+        n_samples=20, min_hits=3, floor=0.05, random_state=None,
+    ):
+        self.window = window
+        self.min_size = min_size
+        self.threshold = threshold
+        self.grace = grace
+        self.scale = scale
+        self.normalize = normalize
+        self.stream_params = stream_params
+        self.mode = mode
+        self.min_support = min_support
+        self.n_samples = n_samples
+        self.min_hits = min_hits
+        self.floor = floor
+        self.random_state = random_state
+
+    def _stream_settings(self, name: str, t: np.ndarray) -> dict:
+        raw = {k: getattr(self, k) for k in _STREAM_KEYS}
+        overrides = (self.stream_params or {}).get(name, {})
+        unknown = set(overrides) - set(_STREAM_KEYS)
+        if unknown:
+            raise ValueError(f"stream_params[{name!r}]: expected keys among {list(_STREAM_KEYS)}, "
+                             f"got {sorted(unknown)}")
+        raw.update(overrides)
+        n = t.shape[0]
+        window = max(8, int(round(0.04 * n))) if raw["window"] == "auto" else to_samples(
+            raw["window"], t, name="window")
+        min_size = 2 * window if raw["min_size"] == "auto" else to_samples(
+            raw["min_size"], t, name="min_size")
+        grace = window if raw["grace"] == "auto" else (
+            0 if raw["grace"] == 0 else to_samples(raw["grace"], t, name="grace"))
+        threshold = check_fraction(raw["threshold"], name="threshold")
+        if threshold == 0:
+            raise ValueError("threshold: expected a number in (0, 1], got 0")
+        return {"window": window, "min_size": min_size, "threshold": threshold, "grace": grace,
+                "scale": raw["scale"], "normalize": raw["normalize"]}
+
+    def fit(self, demo: Demonstration, streams=None) -> MultimodalSegmenter:
+        """Segment ``demo`` using ``streams`` (default: all of its streams).
+
+        Returns
+        -------
+        self
+        """
+        if not isinstance(demo, Demonstration):
+            raise ValueError(f"demo: expected a skillbank.Demonstration, got {type(demo).__name__}")
+        names = demo.stream_names if streams is None else (
+            [streams] if isinstance(streams, str) else list(streams))
+        if not names:
+            raise ValueError("streams: expected at least one stream name, got none")
+        missing = [s for s in names if s not in demo]
+        if missing:
+            raise ValueError(f"streams: expected names among {demo.stream_names}, got unknown {missing}")
+        if self.stream_params is not None and not isinstance(self.stream_params, Mapping):
+            raise ValueError(f"stream_params: expected a mapping, got {type(self.stream_params).__name__}")
+        if self.mode not in ("deterministic", "sampling"):
+            raise ValueError(f"mode: expected 'deterministic' or 'sampling', got {self.mode!r}")
+        floor = check_fraction(self.floor, name="floor")
+        if floor == 0:
+            raise ValueError("floor: expected a number in (0, 1], got 0")
+        t, n = demo.t, demo.n_steps
+        per_stream = {}
+        for name in names:
+            p = self._stream_settings(name, t)
+            if n < max(4, 2 * p["min_size"]):
+                raise ValueError(
+                    f"demo: expected at least {max(4, 2 * p['min_size'])} samples to segment stream "
+                    f"{name!r} with min_size={p['min_size']}, got {n}")
+            j, prof = jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
+                                   normalize=p["normalize"], grace=p["grace"])
+            cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
+                                                grace=p["grace"], window=p["window"])
+            curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
+            per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
+        prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
+                                              floor=floor)
+        min_size = min(s.params["min_size"] for s in per_stream.values())
+        window = min(s.params["window"] for s in per_stream.values())
+        if self.mode == "deterministic":
+            need = max(1.0, len(names) / 2.0) if self.min_support is None else check_positive(
+                self.min_support, name="min_support")
+            # a keypoint at a single stream's Gaussian peak scores 1; allow for the
+            # small loss where two streams' peaks are a little apart
+            keypoints = keypoints_deterministic(support, min_support=need - 0.25, min_size=min_size)
+        else:
+            n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
+            min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
+            rng = np.random.default_rng(self.random_state)
+            keypoints = keypoints_sampling(prob, n_samples=n_samples, min_hits=min_hits, window=window,
+                                           min_size=min_size, rng=rng)
+        self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
+                                          {k: v.params for k, v in per_stream.items()})
+        return self
+
+    def fit_segments(self, demo: Demonstration, streams=None) -> list[Demonstration]:
+        """Segment ``demo`` and return the segments."""
+        return self.fit(demo, streams).result_.segments
+
+
+def segment(demo: Demonstration, streams=None, **params) -> SegmentationResult:
+    """Segment a demonstration; keyword arguments are :class:`MultimodalSegmenter`'s.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 300)
+    >>> segment(Demonstration.from_array(np.zeros((300, 3)), t)).n_segments
+    1
+    """
+    return MultimodalSegmenter(**params).fit(demo, streams).result_

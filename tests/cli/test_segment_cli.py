@@ -1,0 +1,89 @@
+import json
+
+import numpy as np
+import pytest
+
+import skillbank.io as sio
+from skillbank.cli import main
+from skillbank.experiments import synthetic_multistream
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("index", [1, 3, 4])
+def test_r_demos_give_three_segments(data_dir, capsys, index):
+    code, out, _ = _run(capsys, "segment", str(data_dir / "seed" / "r_shape.h5"), "--demo", str(index), "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["n_segments"] == 3
+    assert len(doc["keypoints"]) == len(doc["keypoint_times"]) == 2
+    assert set(doc["changepoints"]) == {"position"}
+
+
+def test_three_button_gives_four_segments(data_dir, capsys, tmp_path):
+    code, out, _ = _run(
+        capsys, "segment", str(data_dir / "seed" / "three_button_pressing_demo.h5"),
+        "--stream", "joints", "--stream", "position", "--stream", "force", "--stream", "gripper",
+        "--json", "--plot", str(tmp_path / "seg.png"), "--out", str(tmp_path / "segs"),
+    )
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["n_segments"] == 4
+    assert (tmp_path / "seg.png").read_bytes()[:4] == b"\x89PNG"
+    files = sorted((tmp_path / "segs").glob("*.npz"))
+    assert len(files) == 4
+    assert sum(sio.read_npz(f).n_steps for f in files) == 4099
+
+
+def test_csv_input_seconds_window_and_text_output(capsys, tmp_path):
+    demo = synthetic_multistream()
+    path = sio.write_csv(demo, tmp_path / "demo.csv", stream="position")
+    code, out, _ = _run(capsys, "segment", str(path), "--window", "0.48s", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["n_segments"] == 3
+    assert np.abs(np.array(doc["keypoints"]) - demo.metadata["true_keypoints"]).max() <= 5
+    code, out, _ = _run(capsys, "segment", str(path))
+    assert code == 0 and "3 segment(s)" in out
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (["--window", "0"], r"window: expected an integer > 0, got 0"),
+        (["--window", "fast"], r"argument --window: expected an integer number of samples"),
+        (["--threshold", "2"], r"threshold: expected a number in \[0.0, 1.0\], got 2.0"),
+        (["--stream", "force"], r"streams: expected names among \['position'\]"),
+        (["--mode", "magic"], r"argument --mode: invalid choice"),
+    ],
+)
+def test_bad_parameters_give_one_line_and_status_2(capsys, tmp_path, args, match):
+    path = sio.write_csv(synthetic_multistream(), tmp_path / "demo.csv")
+    with pytest.raises(SystemExit) if args[0] in ("--window", "--mode") and args[1] in ("fast", "magic") \
+            else _nullcontext():
+        code = main(["segment", str(path), *args])
+        assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert pytest.importorskip("re").search(match, err)
+
+
+def test_bad_files(capsys, tmp_path):
+    bad = tmp_path / "broken.h5"
+    bad.write_bytes(b"not an hdf5 file at all")
+    for path in (bad, tmp_path / "missing.csv", tmp_path / "x.xyz"):
+        code, out, err = _run(capsys, "segment", str(path))
+        assert code == 2 and out == ""
+        assert err.count("\n") == 1 and "cannot read" in err
+
+
+class _nullcontext:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False

@@ -1,0 +1,124 @@
+"""Tests for skillbank.plotting: segmentation figures are written as PNG files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import skillbank
+import skillbank.io
+from skillbank.plotting import (
+    plot_jerk_profile,
+    plot_keypoint_probability,
+    plot_segmentation_summary,
+    plot_segments,
+)
+from skillbank.segmentation import segment
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _is_png(path) -> bool:
+    data = path.read_bytes()
+    return len(data) > 1000 and data[:8] == PNG_MAGIC
+
+
+@pytest.fixture(scope="module")
+def result():
+    n = 400
+    t = np.linspace(0.0, 4.0, n)
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 1.0, 0.4], [0.0, 1.0, 0.1]])
+    s = np.linspace(0.0, corners.shape[0] - 1, n)
+    Y = np.column_stack([np.interp(s, np.arange(corners.shape[0]), c) for c in corners.T])
+    F = np.column_stack([np.sin(2.0 * t), np.where(t > 2.0, 1.0, 0.0) + 0.1 * t])
+    G = (t > 3.0).astype(float)
+    demo = skillbank.Demonstration(t, {"position": Y, "force": F, "gripper": G})
+    return segment(demo, ["position", "force"], window=16)
+
+
+def test_segmentation_has_keypoints(result):
+    assert result.n_segments > 1
+
+
+@pytest.mark.parametrize("stream", [None, "position", "force"])
+def test_plot_jerk_profile(result, tmp_path, stream):
+    out = plot_jerk_profile(result, tmp_path / "nested" / "jerk.png", stream=stream)
+    assert out == tmp_path / "nested" / "jerk.png"
+    assert _is_png(out)
+
+
+def test_plot_keypoint_probability(result, tmp_path):
+    out = plot_keypoint_probability(result, str(tmp_path / "prob.png"))
+    assert _is_png(out)
+
+
+@pytest.mark.parametrize(
+    ("stream", "dims", "invert_y"),
+    [("position", None, False), ("position", 2, True), ("position", 3, False), ("force", None, False)],
+)
+def test_plot_segments(result, tmp_path, stream, dims, invert_y):
+    out = plot_segments(result, tmp_path / "seg.png", stream=stream, dims=dims, invert_y=invert_y)
+    assert _is_png(out)
+
+
+def test_plot_segments_unsegmented_stream(result, tmp_path):
+    # any stream of the demonstration can be drawn, not only segmented ones
+    assert "gripper" not in result.streams
+    with pytest.raises(ValueError, match="dims"):
+        plot_segments(result, tmp_path / "g.png", stream="gripper")
+
+
+@pytest.mark.parametrize("stream", [None, "force", ["position", "force"]])
+def test_plot_segmentation_summary(result, tmp_path, stream):
+    out = plot_segmentation_summary(result, tmp_path / "summary.png", stream=stream)
+    assert _is_png(out)
+
+
+@pytest.mark.parametrize(
+    "plot", [plot_jerk_profile, plot_keypoint_probability, plot_segments, plot_segmentation_summary]
+)
+def test_rejects_non_result(plot, tmp_path):
+    with pytest.raises(ValueError, match="result.*SegmentationResult"):
+        plot({"keypoints": []}, tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("plot", [plot_jerk_profile, plot_segments, plot_segmentation_summary])
+def test_rejects_unknown_stream(result, plot, tmp_path):
+    with pytest.raises(ValueError, match=r"stream.*'position'.*'nope'"):
+        plot(result, tmp_path / "x.png", stream="nope")
+
+
+def test_jerk_profile_rejects_unsegmented_stream(result, tmp_path):
+    with pytest.raises(ValueError, match="segmented streams"):
+        plot_jerk_profile(result, tmp_path / "x.png", stream="gripper")
+
+
+@pytest.mark.parametrize(
+    ("stream", "dims", "match"),
+    [("position", 4, "expected 2 or 3"), ("position", 1, "expected 2 or 3"), ("position", True, "2 or 3"),
+     ("force", 3, "at most the 2 columns")],
+)
+def test_plot_segments_rejects_bad_dims(result, tmp_path, stream, dims, match):
+    with pytest.raises(ValueError, match=match):
+        plot_segments(result, tmp_path / "x.png", stream=stream, dims=dims)
+
+
+def test_real_handwriting_r(data_dir, tmp_path):
+    demo = skillbank.io.read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized", index=3)
+    res = segment(demo, window=16, min_size=64, threshold=0.16)
+    paths = [
+        plot_jerk_profile(res, tmp_path / "r_changepoints.png"),
+        plot_keypoint_probability(res, tmp_path / "r_probability.png"),
+        plot_segments(res, tmp_path / "r_segmented.png", invert_y=True),
+        plot_segmentation_summary(res, tmp_path / "r_summary.png"),
+    ]
+    assert all(_is_png(p) for p in paths)
+
+
+def test_single_segment_without_keypoints(tmp_path):
+    t = np.linspace(0.0, 1.0, 300)
+    res = segment(skillbank.Demonstration.from_array(np.zeros((300, 3)), t))
+    assert res.n_segments == 1
+    for plot in (plot_jerk_profile, plot_keypoint_probability, plot_segments, plot_segmentation_summary):
+        assert _is_png(plot(res, tmp_path / f"{plot.__name__}.png"))
