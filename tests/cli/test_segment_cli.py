@@ -39,9 +39,9 @@ def test_three_button_gives_four_segments(data_dir, capsys, tmp_path):
     assert sum(sio.read_npz(f).n_steps for f in files) == 4099
 
 
-def test_csv_input_seconds_window_and_text_output(capsys, tmp_path):
+def test_npz_input_all_streams_seconds_window_and_text_output(capsys, tmp_path):
     demo = synthetic_multistream()
-    path = sio.write_csv(demo, tmp_path / "demo.csv", stream="position")
+    path = sio.write_npz(demo, tmp_path / "demo.npz")
     code, out, _ = _run(capsys, "segment", str(path), "--window", "0.48s", "--json")
     assert code == 0
     doc = json.loads(out)
