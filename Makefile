@@ -18,7 +18,7 @@ demo: $(STAMP)
 	$(VENV)/bin/skillbank demo --out demo_output
 
 lint: $(STAMP)
-	$(PY) -m ruff check skillbank tests benchmarks
+	$(PY) -m ruff check .
 
 test: $(STAMP) lint
 	$(PY) -m pytest

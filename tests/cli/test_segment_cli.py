@@ -16,7 +16,8 @@ def _run(capsys, *argv):
 
 @pytest.mark.parametrize("index", [1, 3, 4])
 def test_r_demos_give_three_segments(data_dir, capsys, index):
-    code, out, _ = _run(capsys, "segment", str(data_dir / "seed" / "r_shape.h5"), "--demo", str(index), "--json")
+    path = str(data_dir / "seed" / "r_shape.h5")
+    code, out, _ = _run(capsys, "segment", path, "--demo", str(index), "--json")
     assert code == 0
     doc = json.loads(out)
     assert doc["n_segments"] == 3
