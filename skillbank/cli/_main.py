@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from . import _cluster, _experiment
+
 __all__ = ["main", "build_parser"]
 
 
@@ -111,6 +113,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     _add_segment(sub)
     _add_demo(sub)
+    _cluster.add_parser(sub)
+    _experiment.add_parser(sub)
     return parser
 
 

@@ -1,5 +1,16 @@
 """Reproducible experiments and the main demo job."""
 
 from ._demo import run_segmentation_demo, synthetic_multistream
+from ._rail import (
+    PAPER_REPRESENTATIVES,
+    RailExperimentResult,
+    composition,
+    count_misclustered,
+    rail_experiment,
+    run_rail_experiment,
+)
 
-__all__ = ["run_segmentation_demo", "synthetic_multistream"]
+__all__ = [
+    "run_segmentation_demo", "synthetic_multistream", "PAPER_REPRESENTATIVES", "RailExperimentResult",
+    "composition", "count_misclustered", "rail_experiment", "run_rail_experiment",
+]

@@ -1,5 +1,6 @@
 """Figures of segmentation results, drawn with matplotlib (no pyplot state)."""
 
+from ._clustering import plot_cluster_comparison, plot_rail_experiment
 from ._segmentation import (
     plot_jerk_profile,
     plot_keypoint_probability,
@@ -7,4 +8,7 @@ from ._segmentation import (
     plot_segments,
 )
 
-__all__ = ["plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary"]
+__all__ = [
+    "plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary",
+    "plot_cluster_comparison", "plot_rail_experiment",
+]

@@ -1,0 +1,78 @@
+"""``skillbank experiment rail``: the paper's RAIL clustering experiment (Fig. 4)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub):
+    """Register ``experiment`` (with its ``rail`` sub-command) on argparse subparsers ``sub``.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parser = argparse.ArgumentParser(prog="skillbank")
+    >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
+    ArgumentParser(...)
+    """
+    p = sub.add_parser("experiment", help="run a reproducible experiment from the paper")
+    experiments = p.add_subparsers(dest="experiment", required=True)
+    rail = experiments.add_parser(
+        "rail", help="cluster RAIL demonstrations with elastic and agglomerative clustering (Fig. 4)")
+    rail.add_argument("--data", type=Path, required=True,
+                      help="the RAIL folder (REACHING/, PUSHING/, ...) or a folder holding rail/")
+    rail.add_argument("--mode", choices=["default", "paper"], default="default",
+                      help="paper: the paper's representatives and settings; default: no labels at all")
+    rail.add_argument("--classes", default="reaching,pushing,writing",
+                      help="comma-separated classes among reaching, pushing, pressing, writing")
+    rail.add_argument("--seed", type=int, default=0, help="random seed (first elastic node, PCA)")
+    rail.add_argument("--json", action="store_true", help="print the result as JSON")
+    rail.add_argument("--plot", type=Path, default=None, help="write the cluster comparison figure here")
+    rail.set_defaults(func=run)
+    return p
+
+
+def _table(summary: dict) -> list[str]:
+    classes = summary["classes"]
+    counts = ", ".join(f"{c} {n}" for c, n in zip(classes, summary["class_counts"], strict=True))
+    lines = [
+        f"RAIL clustering, {summary['mode']} mode: {summary['n_demos']} demos ({counts})",
+        f"features: {summary['features']}",
+        "",
+        f"{'method':<15}{'clusters':>9}{'misclustered':>18}{'ARI':>8}",
+    ]
+    for method in ("elastic", "agglomerative"):
+        m = summary[method]
+        mis = f"{m['misclustered']} ({100 * m['misclustered_fraction']:.1f} %)"
+        lines.append(f"{method:<15}{m['n_clusters']:>9}{mis:>18}{m['ari']:>8.3f}")
+    width = max(len(c) for c in classes) + 2
+    for method in ("elastic", "agglomerative"):
+        lines += ["", f"{method}: {summary[method]['method']}",
+                  "  cluster " + "".join(f"{c:>{width}}" for c in classes)]
+        for i, row in enumerate(summary[method]["composition"]):
+            lines.append(f"  {i + 1:>7} " + "".join(f"{n:>{width}}" for n in row))
+    timing = summary["timing"]
+    lines += ["", f"time: {timing['total_s']:.3f} s (loading {timing['load_s']:.3f} s)"]
+    return lines
+
+
+def run(args) -> int:
+    """Run the experiment named by ``args.experiment``; returns the exit status."""
+    from ..experiments._rail import rail_experiment
+
+    result = rail_experiment(args.data, mode=args.mode, classes=args.classes, random_state=args.seed)
+    summary = result.summary()
+    if args.plot is not None:
+        from ..plotting._clustering import plot_rail_experiment
+
+        plot_rail_experiment(result, args.plot)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print("\n".join(_table(summary)))
+        if args.plot is not None:
+            print(f"wrote {args.plot}")
+    return 0

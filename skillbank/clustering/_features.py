@@ -1,0 +1,317 @@
+"""Featurisers that turn a list of trajectories into a feature matrix for clustering."""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.decomposition import PCA
+from sklearn.utils.validation import check_is_fitted
+
+from .._demonstration import Demonstration
+from .._validation import check_array, check_positive
+
+__all__ = ["angular_similarity", "AngularSimilarityFeatures", "TrajectoryFeatures", "resample_trajectories"]
+
+
+def as_trajectories(X, *, name: str = "X", with_time: bool = False):
+    """Validate a collection of trajectories.
+
+    Accepts a list of arrays ``(n_steps, n_dims)`` or of
+    :class:`~skillbank.Demonstration` (their ``"position"`` stream), or one
+    3-D array ``(n_trajectories, n_steps, n_dims)``. Returns a list of
+    float64 arrays (and, with ``with_time``, the matching time vectors: the
+    demonstration's ``t`` or ``arange(n_steps)``).
+    """
+    if isinstance(X, Demonstration):
+        raise ValueError(f"{name}: expected a list of trajectories, got a single Demonstration; "
+                         "wrap it in a list")
+    if isinstance(X, np.ndarray) and X.dtype != object:
+        if X.ndim != 3:
+            raise ValueError(f"{name}: expected a list of (n_steps, n_dims) trajectories or a 3-D array, "
+                             f"got a {X.ndim}-D array of shape {X.shape}; wrap a single trajectory in a list")
+        X = list(X)
+    try:
+        items = list(X)
+    except TypeError:
+        raise ValueError(f"{name}: expected a list of trajectories, got {type(X).__name__}") from None
+    if not items:
+        raise ValueError(f"{name}: expected at least one trajectory, got none")
+    trajs, times = [], []
+    for k, item in enumerate(items):
+        if isinstance(item, Demonstration):
+            if "position" not in item.streams:
+                raise ValueError(f"{name}[{k}]: expected a Demonstration with a 'position' stream, "
+                                 f"got streams {sorted(item.streams)}")
+            trajs.append(item["position"])
+            times.append(item.t)
+        else:
+            arr = check_array(item, name=f"{name}[{k}]", ndim=(1, 2), as_2d=True)
+            trajs.append(arr)
+            times.append(np.arange(arr.shape[0], dtype=float))
+    dims = {a.shape[1] for a in trajs}
+    if len(dims) > 1:
+        raise ValueError(f"{name}: expected every trajectory to have the same number of dimensions, "
+                         f"got {sorted(dims)}")
+    return (trajs, times) if with_time else trajs
+
+
+def _unit_steps(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit displacement vectors along the last-but-one axis, and a mask of non-zero steps."""
+    D = np.diff(Y, axis=-2)
+    norm = np.sqrt(np.einsum("...i,...i->...", D, D))
+    moving = norm > 0.0
+    return D / np.where(moving, norm, 1.0)[..., None], moving
+
+
+def _angular_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Angular similarity of every trajectory of ``A`` (a, n, d) with every one of ``B`` (b, n, d)."""
+    n = A.shape[1]
+    UA, mA = _unit_steps(A)
+    UB, mB = _unit_steps(B)
+    out = np.empty((A.shape[0], B.shape[0]))
+    # Chunk over A so the (chunk, b, n - 1) cosine block stays around 8 MB.
+    chunk = max(1, int(1e6 // max(1, B.shape[0] * max(n - 1, 1))))
+    for s in range(0, A.shape[0], chunk):
+        cos = np.einsum("atd,btd->abt", UA[s:s + chunk], UB)
+        angle = np.arccos(np.clip(cos, -1.0, 1.0))
+        angle *= mA[s:s + chunk, None, :] & mB[None, :, :]  # a zero-length step counts 0
+        out[s:s + chunk] = angle.sum(axis=2) / (np.pi * n)
+    return out
+
+
+def _stack_equal(trajs, *, name: str, n_steps: int | None = None) -> np.ndarray:
+    lengths = {a.shape[0] for a in trajs}
+    if n_steps is not None:
+        lengths.add(n_steps)
+    if len(lengths) > 1:
+        raise ValueError(f"{name}: angular similarity needs trajectories of equal length, got lengths "
+                         f"{sorted(lengths)}; resample them first")
+    return np.stack(trajs)
+
+
+def angular_similarity(A, B) -> float:
+    """Angular similarity of two trajectories of the same length (the paper's RAIL feature).
+
+    For each step t the displacement vectors ``A[t+1] - A[t]`` and
+    ``B[t+1] - B[t]`` make an angle; ``arccos(cos) / pi`` is summed over the
+    ``n - 1`` steps and divided by ``n`` (not ``n - 1``), as in the authors'
+    code. A zero-length step counts 0. The value is 0 for trajectories moving
+    in the same directions and approaches 1 for opposite ones.
+
+    Parameters
+    ----------
+    A, B : array-like of shape (n_steps, n_dims) or Demonstration
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        If the lengths or dimensions differ.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 5)[:, None]
+    >>> angular_similarity(t, t)
+    0.0
+    >>> angular_similarity(t, -t)
+    0.8
+    """
+    trajs = as_trajectories([A, B], name="A, B")
+    stacked = _stack_equal(trajs, name="A, B")
+    return float(_angular_matrix(stacked[:1], stacked[1:])[0, 0])
+
+
+class AngularSimilarityFeatures(TransformerMixin, BaseEstimator):
+    """Angular similarity of each trajectory to a few representatives (the paper's features).
+
+    Parameters
+    ----------
+    representatives : list of array-like (n_steps, n_dims) or Demonstration
+        One representative trajectory per feature. All trajectories, these
+        and the ones transformed, must have the same length.
+
+    Attributes
+    ----------
+    representatives_ : ndarray of shape (n_representatives, n_steps, n_dims)
+    n_features_in_ : int
+        Dimensions of each trajectory.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 50)
+    >>> line, wave = np.column_stack([t, t]), np.column_stack([t, np.sin(6 * t)])
+    >>> feats = AngularSimilarityFeatures(representatives=[line, wave]).fit_transform([line, wave])
+    >>> feats.shape, round(float(feats[0, 0]), 6), round(float(feats[0, 1]), 3)
+    ((2, 2), 0.0, 0.395)
+    """
+
+    def __init__(self, *, representatives):
+        self.representatives = representatives
+
+    def fit(self, X=None, y=None):
+        """Validate and store the representatives (``X`` is only checked for length)."""
+        reps = as_trajectories(self.representatives, name="representatives")
+        self.representatives_ = _stack_equal(reps, name="representatives")
+        self.n_features_in_ = self.representatives_.shape[2]
+        if X is not None:
+            self._check(X)
+        return self
+
+    def _check(self, X):
+        trajs = as_trajectories(X, name="X")
+        if trajs[0].shape[1] != self.n_features_in_:
+            raise ValueError(f"X: expected trajectories with {self.n_features_in_} dimensions like the "
+                             f"representatives, got {trajs[0].shape[1]}")
+        return _stack_equal(trajs, name="X", n_steps=self.representatives_.shape[1])
+
+    def transform(self, X):
+        """Features of shape ``(n_trajectories, n_representatives)``."""
+        check_is_fitted(self, "representatives_")
+        return _angular_matrix(self._check(X), self.representatives_)
+
+    def get_feature_names_out(self, input_features=None):
+        check_is_fitted(self, "representatives_")
+        return np.array([f"angular_similarity{i}" for i in range(self.representatives_.shape[0])],
+                        dtype=object)
+
+
+def resample_trajectories(trajs, times, n_points: int, by: str = "arc_length") -> np.ndarray:
+    """Resample trajectories of any lengths to ``n_points`` each, in one vectorised pass.
+
+    ``by="arc_length"`` spaces the samples evenly along the path (a trajectory
+    that never moves falls back to time); ``by="time"`` evenly in time.
+
+    Returns
+    -------
+    ndarray of shape (n_trajectories, n_points, n_dims)
+
+    Examples
+    --------
+    >>> Y = np.array([[0.0], [1.0], [3.0]])
+    >>> resample_trajectories([Y], [np.arange(3.0)], 4)[0].ravel().tolist()
+    [0.0, 1.0, 2.0, 3.0]
+    """
+    lengths = np.array([a.shape[0] for a in trajs])
+    Y = np.concatenate(trajs)
+    owner = np.repeat(np.arange(len(trajs)), lengths)
+    first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    # Per-sample progress in [0, 1] within its own trajectory.
+    t = np.concatenate(times).astype(float)
+    span_t = t[first + lengths - 1] - t[first]
+    by_time = (t - t[first][owner]) / np.where(span_t > 0, span_t, 1.0)[owner]
+    if by == "arc_length":
+        step = np.zeros(Y.shape[0])
+        step[1:] = np.linalg.norm(np.diff(Y, axis=0), axis=1)
+        step[first] = 0.0
+        cum = np.cumsum(step)
+        cum -= cum[first][owner]
+        total = cum[first + lengths - 1]
+        progress = np.where((total > 0)[owner], cum / np.where(total > 0, total, 1.0)[owner], by_time)
+    else:
+        progress = by_time
+    # One global monotone key: trajectory index + progress; query n_points per trajectory.
+    key = 2.0 * owner + progress
+    q = (2.0 * np.arange(len(trajs))[:, None] + np.linspace(0.0, 1.0, n_points)[None, :]).ravel()
+    start_of = np.repeat(first, n_points)
+    hi = np.minimum(np.searchsorted(key, q, side="left"), start_of + np.repeat(lengths, n_points) - 1)
+    lo = np.maximum(hi - 1, start_of)
+    gap = key[hi] - key[lo]
+    w = np.where(gap > 0, (q - key[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
+    out = Y[lo] + np.clip(w, 0.0, 1.0)[:, None] * (Y[hi] - Y[lo])
+    return out.reshape(len(trajs), n_points, Y.shape[1])
+
+
+class TrajectoryFeatures(TransformerMixin, BaseEstimator):
+    """Shape features for libraries without representatives: resample, align the start, PCA.
+
+    Each trajectory (any length) is resampled to ``n_points`` evenly spaced
+    along its path (or in time), its start is subtracted (so the features are
+    invariant to where the motion starts), it is optionally scaled, flattened,
+    and projected on principal components fitted on the training set.
+
+    Parameters
+    ----------
+    n_points : int, default=32
+        Samples per trajectory after resampling.
+    by : {"arc_length", "time"}, default="arc_length"
+        Spacing of the resampled points.
+    scale : {"none", "path_length"}, default="none"
+        ``"path_length"`` divides each trajectory by its path length, making
+        the features invariant to size as well.
+    n_components : int, float or None, default=0.99
+        PCA components: a count, a fraction of variance to keep, or None for
+        no PCA.
+    random_state : int, RandomState instance or None, default=None
+        Passed to :class:`sklearn.decomposition.PCA`.
+
+    Attributes
+    ----------
+    pca_ : PCA or None
+    n_features_in_ : int
+        Dimensions of each trajectory.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 40)
+    >>> trajs = [np.column_stack([t, a * t]) + 5.0 * a for a in (0.0, 0.5, 1.0, 2.0)]
+    >>> TrajectoryFeatures(n_points=16, n_components=2).fit_transform(trajs).shape
+    (4, 2)
+    """
+
+    def __init__(self, *, n_points=32, by="arc_length", scale="none", n_components=0.99,
+                 random_state=None):
+        self.n_points = n_points
+        self.by = by
+        self.scale = scale
+        self.n_components = n_components
+        self.random_state = random_state
+
+    def _flat(self, X, *, reset: bool) -> np.ndarray:
+        n_points = check_positive(self.n_points, name="n_points", integer=True)
+        if n_points < 2:
+            raise ValueError(f"n_points: expected an integer >= 2, got {self.n_points!r}")
+        if self.by not in ("arc_length", "time"):
+            raise ValueError(f"by: expected 'arc_length' or 'time', got {self.by!r}")
+        if self.scale not in ("none", "path_length"):
+            raise ValueError(f"scale: expected 'none' or 'path_length', got {self.scale!r}")
+        trajs, times = as_trajectories(X, name="X", with_time=True)
+        if reset:
+            self.n_features_in_ = trajs[0].shape[1]
+        elif trajs[0].shape[1] != self.n_features_in_:
+            raise ValueError(f"X: expected trajectories with {self.n_features_in_} dimensions, "
+                             f"got {trajs[0].shape[1]}")
+        R = resample_trajectories(trajs, times, n_points, self.by)
+        R -= R[:, :1, :]
+        if self.scale == "path_length":
+            length = np.linalg.norm(np.diff(R, axis=1), axis=2).sum(axis=1)
+            R /= np.where(length > 0, length, 1.0)[:, None, None]
+        return R.reshape(R.shape[0], -1)
+
+    def fit(self, X, y=None):
+        """Fit the PCA on the resampled training trajectories."""
+        self.fit_transform(X)
+        return self
+
+    def fit_transform(self, X, y=None):
+        """Fit and return the features of ``X``."""
+        F = self._flat(X, reset=True)
+        if self.n_components is None:
+            self.pca_ = None
+            return F
+        if F.shape[0] < 2:
+            raise ValueError(f"X: expected at least 2 trajectories to fit the PCA, got {F.shape[0]}; "
+                             "pass n_components=None to skip it")
+        if not np.any(F != F[0]):
+            raise ValueError("X: every trajectory has the same shape once resampled and moved to a common "
+                             "start, so PCA has no variance to keep; pass n_components=None")
+        self.pca_ = PCA(n_components=self.n_components, random_state=self.random_state)
+        return self.pca_.fit_transform(F)
+
+    def transform(self, X):
+        """Features of shape ``(n_trajectories, n_components)``."""
+        check_is_fitted(self, "n_features_in_")
+        F = self._flat(X, reset=False)
+        return F if self.pca_ is None else self.pca_.transform(F)
