@@ -10,8 +10,11 @@ Examples
 200
 """
 
+from ._constraints import Box, Constraints, Sphere, ViaPoint
 from ._demonstration import Demonstration
 from ._validation import check_array, check_time
 
-__all__ = ["Demonstration", "check_array", "check_time", "__version__"]
+__all__ = [
+    "Demonstration", "Constraints", "ViaPoint", "Sphere", "Box", "check_array", "check_time", "__version__",
+]
 __version__ = "0.1.0"

@@ -1,0 +1,18 @@
+"""Trajectory editing: Laplacian trajectory editing (LTE) under task constraints.
+
+Examples
+--------
+>>> import numpy as np
+>>> from skillbank._constraints import Constraints, Sphere
+>>> s = np.linspace(0.0, 1.0, 200)
+>>> Y = np.column_stack([s, np.zeros_like(s)])
+>>> res = lte(Y, Constraints(obstacles=[Sphere([0.5, 0.0], 0.1)]))
+>>> bool(res.success), bool(res.collision)
+(True, False)
+"""
+
+from ._editor import LaplacianEditor
+from ._laplacian import LaplacianSystem, laplacian_matrix
+from ._lte import EditResult, laplacian_edit, lte
+
+__all__ = ["lte", "laplacian_edit", "EditResult", "LaplacianEditor", "LaplacianSystem", "laplacian_matrix"]

@@ -1,0 +1,138 @@
+"""Shape and smoothness metrics of sampled trajectories."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validation import check_array, check_time
+from ..editing._laplacian import laplacian_matrix
+
+__all__ = ["swept_error_area", "angular_similarity", "curvature_deviation", "jerk_cost", "path_length"]
+
+
+def _same_length(P, Q, *, min_samples=1):
+    P = check_array(P, name="P", ndim=(1, 2), as_2d=True, min_samples=min_samples)
+    Q = check_array(Q, name="Q", ndim=(1, 2), as_2d=True, min_samples=min_samples)
+    if P.shape != Q.shape:
+        raise ValueError(f"Q: expected the shape of P {P.shape} (same number of samples), got {Q.shape}")
+    return P, Q
+
+
+def _triangle_areas(U, V):
+    """Areas of the triangles spanned by rows of U and V, in any dimension (Lagrange's identity)."""
+    uu, vv, uv = (np.einsum("ij,ij->i", a, b) for a, b in ((U, U), (V, V), (U, V)))
+    return 0.5 * np.sqrt(np.maximum(uu * vv - uv * uv, 0.0))
+
+
+def swept_error_area(P, Q) -> float:
+    """Area swept between two curves of equal length.
+
+    For each pair of consecutive samples the quadrilateral ``P_i, P_{i+1},
+    Q_{i+1}, Q_i`` is split along its diagonal ``P_i Q_{i+1}`` into two
+    triangles, whose areas ``|u||v| sin(angle) / 2`` are defined in any number
+    of dimensions; the result is the sum over all ``n - 1`` quadrilaterals. In
+    2-D, for quadrilaterals that do not fold over, this is the area between the
+    curves. 1-D curves sweep no area (add a time column to compare them).
+
+    Examples
+    --------
+    >>> swept_error_area([[0, 0], [1, 0], [2, 0]], [[0, 1], [1, 1], [2, 1]])
+    2.0
+    """
+    P, Q = _same_length(P, Q)
+    if P.shape[1] == 1:
+        return 0.0
+    A, B, C, D = P[:-1], P[1:], Q[1:], Q[:-1]
+    return float(_triangle_areas(B - A, C - A).sum() + _triangle_areas(C - A, D - A).sum())
+
+
+def angular_similarity(P, Q) -> float:
+    """Angular (dis)similarity of two equally long trajectories, as defined by the paper's authors.
+
+    For each of the ``n - 1`` steps, the angle between the displacement of ``P``
+    and that of ``Q`` over the step, divided by pi; the sum over the steps is
+    divided by ``n`` (not ``n - 1``). A step where either trajectory stands still
+    counts 0. 0 for curves moving in the same directions, up to ``(n - 1) / n``
+    for opposite ones.
+
+    Examples
+    --------
+    >>> angular_similarity([[0, 0], [1, 0], [2, 0]], [[0, 0], [0, 1], [1, 1]])
+    0.16666666666666666
+    """
+    P, Q = _same_length(P, Q)
+    n = P.shape[0]
+    U, V = np.diff(P, axis=0), np.diff(Q, axis=0)
+    nu, nv = np.linalg.norm(U, axis=1), np.linalg.norm(V, axis=1)
+    moving = (nu > 0) & (nv > 0)
+    cos = np.einsum("ij,ij->i", U, V)[moving] / (nu[moving] * nv[moving])
+    return float(np.arccos(np.clip(cos, -1.0, 1.0)).sum() / (np.pi * n))
+
+
+def curvature_deviation(P, Q, t=None) -> float:
+    """Mean Euclidean distance between the Laplacian coordinates of two equally long curves.
+
+    The Laplacian coordinate of a sample is the sample minus the weighted mean
+    of its neighbours (the operator that LTE keeps, see
+    :func:`skillbank.editing.laplacian_matrix`); it measures local curvature and
+    ignores translation. Returns ``mean_i |(L P)_i - (L Q)_i|``.
+
+    Parameters
+    ----------
+    P, Q : array-like of shape (n_steps, n_dims)
+    t : array-like of shape (n_steps,), optional
+        Time stamps for the Laplacian weights (default: uniform).
+
+    Examples
+    --------
+    >>> curvature_deviation([[0, 0], [1, 0], [2, 0]], [[0, 0], [1, 1], [2, 0]])
+    1.0
+    """
+    P, Q = _same_length(P, Q)
+    t = None if t is None else check_time(t, n_steps=P.shape[0])
+    R = laplacian_matrix(P.shape[0], t) @ (P - Q)
+    return float(np.linalg.norm(R, axis=1).mean())
+
+
+def jerk_cost(Y, t) -> float:
+    """Integral of the squared jerk, ``int |d^3 Y / dt^3|^2 dt``, on real time stamps.
+
+    The jerk over each window of 4 samples is 6 times their third divided
+    difference (exact for cubic motion, any spacing), placed at the window's
+    mean time; the integral is a midpoint sum whose cells split
+    ``[t_0, t_{n-1}]`` halfway between those times, so cubic motion gives
+    exactly ``36 a^2 (t_{n-1} - t_0)`` for ``Y = a t^3``.
+
+    Parameters
+    ----------
+    Y : array-like of shape (n_steps, n_dims), n_steps >= 4
+    t : array-like of shape (n_steps,)
+        Strictly increasing time stamps in seconds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> round(jerk_cost(t**3, t), 12)  # jerk 6 for 1 s
+    36.0
+    """
+    Y = check_array(Y, name="Y", ndim=(1, 2), as_2d=True, min_samples=4)
+    t = check_time(t, n_steps=Y.shape[0])
+    d1 = np.diff(Y, axis=0) / np.diff(t)[:, None]
+    d2 = np.diff(d1, axis=0) / (t[2:] - t[:-2])[:, None]
+    d3 = np.diff(d2, axis=0) / (t[3:] - t[:-3])[:, None]
+    centre = (t[:-3] + t[1:-2] + t[2:-1] + t[3:]) / 4.0
+    edges = np.concatenate([[t[0]], 0.5 * (centre[1:] + centre[:-1]), [t[-1]]])
+    return float((36.0 * np.einsum("ij,ij->i", d3, d3) * np.diff(edges)).sum())
+
+
+def path_length(Y) -> float:
+    """Length of the polyline through the samples.
+
+    Examples
+    --------
+    >>> path_length([[0, 0], [3, 4], [3, 5]])
+    6.0
+    """
+    Y = check_array(Y, name="Y", ndim=(1, 2), as_2d=True)
+    return float(np.linalg.norm(np.diff(Y, axis=0), axis=1).sum())
