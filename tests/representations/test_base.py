@@ -1,0 +1,169 @@
+"""The shared interface: input handling, time base, constraints, obstacle post-editing."""
+
+from __future__ import annotations
+
+import sys
+import types
+
+import numpy as np
+import pytest
+from sklearn.exceptions import NotFittedError
+
+from skillbank import Demonstration
+from skillbank._constraints import Constraints, Sphere
+from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP, as_constraints, resample
+
+ALL = [JerkAccuracy, ProMP, ElasticMap, DMP]
+
+
+def test_resample_is_linear_in_phase():
+    Y = np.array([[0.0, 0.0], [1.0, 2.0], [4.0, 4.0]])
+    out = resample(Y, 5)
+    np.testing.assert_allclose(out, [[0, 0], [0.5, 1], [1, 2], [2.5, 3], [4, 4]])
+    np.testing.assert_array_equal(resample(Y, 3), Y)
+
+
+@pytest.mark.parametrize("cls", ALL)
+def test_output_is_demonstration_on_demo_time_base(cls, arc):
+    model = cls().fit(arc)
+    out = model.reproduce()
+    assert isinstance(out, Demonstration)
+    assert out.stream_names == ["position"]
+    np.testing.assert_allclose(out.t, arc.t)
+    assert out.metadata["representation"] == cls.__name__
+    short = model.reproduce(n_steps=101)
+    assert short["position"].shape == (101, 2)
+    np.testing.assert_allclose(short.t, np.linspace(0.0, 2.0, 101))
+
+
+@pytest.mark.parametrize("cls", ALL)
+def test_plain_array_and_uneven_time(cls, arc):
+    Y = arc["position"]
+    a = cls().fit(Y).reproduce()
+    np.testing.assert_allclose(a.t, np.arange(Y.shape[0], dtype=float))
+    # Uneven time: interpolated onto an even grid between the same end times.
+    t = np.linspace(0, 1, Y.shape[0]) ** 1.2 * 2.0
+    out = cls().fit(Demonstration(t, {"position": Y})).reproduce()
+    np.testing.assert_allclose(out.t, np.linspace(0.0, 2.0, Y.shape[0]))
+
+
+def test_time_base_of_several_demos(arc):
+    Y = arc["position"]
+    d1 = Demonstration(np.linspace(0.0, 2.0, 300), {"position": Y})
+    d2 = Demonstration(np.linspace(1.0, 5.0, 200), {"position": resample(Y, 200)})
+    d3 = Demonstration(np.linspace(0.5, 3.5, 250), {"position": resample(Y, 250)})
+    model = ProMP().fit([d1, d2, d3])
+    np.testing.assert_allclose(model.t_, np.linspace(0.5, 3.5, 250))
+    assert model.n_demos_ == 3 and model.n_dims_ == 2
+
+
+@pytest.mark.parametrize("cls", ALL)
+def test_input_errors(cls, arc):
+    with pytest.raises(ValueError, match="demos: expected at least one"):
+        cls().fit([])
+    with pytest.raises(ValueError, match="demos: expected a Demonstration"):
+        cls().fit("demo.csv")
+    with pytest.raises(ValueError, match=r"demos\[0\]: expected a 'position' stream"):
+        cls().fit(Demonstration(arc.t, {"joints": arc["position"]}))
+    with pytest.raises(ValueError, match=r"demos\[0\]: expected finite values"):
+        cls().fit(np.array([[0.0, np.nan]] * 10))
+    too_few = cls._min_samples - 1
+    message = rf"demos\[0\]: {cls.__name__} needs at least \d+ samples, got {too_few}"
+    with pytest.raises(ValueError, match=message):
+        cls().fit(np.zeros((too_few, 2)))
+    with pytest.raises(NotFittedError, match="not fitted yet"):
+        cls().reproduce()
+    model = cls().fit(arc)
+    with pytest.raises(ValueError, match="constraints: expected a skillbank.Constraints or None, got dict"):
+        model.reproduce({"goal": [0, 0]})
+    with pytest.raises(ValueError, match="constraints: goal has 3 dimensions but the trajectory has 2"):
+        model.reproduce(Constraints(goal=[0.0, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="n_steps: expected an integer > 0, got 0"):
+        model.reproduce(n_steps=0)
+    with pytest.raises(ValueError, match=f"n_steps: {cls.__name__} needs at least"):
+        model.reproduce(n_steps=too_few)
+
+
+@pytest.mark.parametrize("cls", [ProMP, ElasticMap, DMP])
+def test_several_demos_must_share_dimensions(cls, arc):
+    with pytest.raises(ValueError, match=r"demos\[1\]: expected 2 dimensions like demos\[0\], got 3"):
+        cls().fit([arc, np.zeros((50, 3))])
+
+
+def test_one_demo_methods_reject_several(arc):
+    with pytest.raises(ValueError, match="JerkAccuracy learns from exactly one demonstration, got 2"):
+        JerkAccuracy().fit([arc, arc])
+
+
+def test_as_constraints():
+    assert as_constraints(None).is_empty
+    c = Constraints(goal=[1.0])
+    assert as_constraints(c) is c
+
+
+# ------------------------------------------------------------------ obstacles
+def _fake_editing(monkeypatch, success=True):
+    calls = []
+
+    def lte(Y, constraints, *, t=None):
+        calls.append((Y.copy(), constraints, t))
+        return types.SimpleNamespace(Y=Y + 1.0, collision=not success, success=success,
+                                     message="ok" if success else "still inside obstacles[0]")
+
+    module = types.ModuleType("skillbank.editing")
+    module.lte = lte
+    monkeypatch.setitem(sys.modules, "skillbank.editing", module)
+    return calls
+
+
+def test_obstacles_are_post_edited_with_lte(monkeypatch, arc):
+    calls = _fake_editing(monkeypatch)
+    model = JerkAccuracy().fit(arc)
+    plain = model.reproduce()["position"]
+    c = Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)])
+    out = model.reproduce(c)
+    assert len(calls) == 1
+    Y_in, given, t = calls[0]
+    np.testing.assert_allclose(Y_in, plain, atol=1e-9)
+    np.testing.assert_allclose(t, arc.t)
+    # The editor gets start and goal filled in, so it keeps the reproduction's end points.
+    np.testing.assert_allclose(given.start, plain[0])
+    np.testing.assert_allclose(given.goal, plain[-1])
+    assert given.obstacles == c.obstacles
+    np.testing.assert_allclose(out["position"], plain + 1.0, atol=1e-9)
+    assert out.metadata["obstacle_editing"] == {"success": True, "collision": False, "message": "ok"}
+
+
+def test_failed_obstacle_editing_warns(monkeypatch, arc):
+    _fake_editing(monkeypatch, success=False)
+    with pytest.warns(UserWarning, match="obstacle editing did not succeed: still inside obstacles"):
+        out = ProMP().fit(arc).reproduce(Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)]))
+    assert out.metadata["obstacle_editing"]["success"] is False
+
+
+def test_obstacles_without_editing_module_fail_loudly(monkeypatch, arc):
+    monkeypatch.setitem(sys.modules, "skillbank.editing", types.ModuleType("skillbank.editing"))
+    with pytest.raises(ImportError, match="does not avoid obstacles itself"):
+        DMP().fit(arc).reproduce(Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)]))
+
+
+def test_no_obstacles_does_not_touch_editing(monkeypatch, arc):
+    calls = _fake_editing(monkeypatch)
+    ElasticMap().fit(arc).reproduce(Constraints(goal=[0.0, 0.0]))
+    assert calls == []
+
+
+@pytest.mark.parametrize("cls", ALL)
+def test_real_lte_moves_the_reproduction_out_of_an_obstacle(cls, arc):
+    editing = pytest.importorskip("skillbank.editing")
+    if not hasattr(editing, "lte"):
+        pytest.skip("skillbank.editing.lte is not available")
+    model = cls().fit(arc)
+    plain = model.reproduce()["position"]
+    sphere = Sphere(plain[150], 0.15)
+    c = Constraints(goal=plain[-1] + [0.05, 0.0], obstacles=[sphere])
+    assert c.collides(plain)
+    out = model.reproduce(c)
+    assert out.metadata["obstacle_editing"]["success"]
+    assert not c.collides(out["position"])
+    assert c.position_error(out["position"]) < 1e-6
