@@ -158,10 +158,15 @@ def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: 
                 total += velocity[d][i] * velocity[d][i]
             speed[i] = math.sqrt(total)
         typical = float(np.percentile(speed, 95.0))
-        if typical <= _FLAT:
+        # round-off level of the signal: a held signal is not motion
+        steps = sorted(t[i + 1] - t[i] for i in range(n - 1))
+        dt = steps[(n - 1) // 2] if (n - 1) % 2 else 0.5 * (steps[(n - 1) // 2 - 1] + steps[(n - 1) // 2])
+        peak = max(abs(v) for row in Y for v in row)
+        flat = 1e-9 * (1.0 + peak) / dt
+        if typical <= flat:
             typical = max(speed)
         for i in range(n):
-            if typical <= _FLAT:
+            if typical <= flat:
                 raw[i] = 0.0
             else:
                 raw[i] = raw[i] / (speed[i] + _TYPICAL_FRACTION * typical)

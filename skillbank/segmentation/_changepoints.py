@@ -71,7 +71,12 @@ def detect_changepoints(profile, *, threshold: float, min_size: int, grace: int,
     n = profile.shape[0]
     # pad with zeros so an event running into an end still has a valley there
     padded = np.concatenate(([0.0], profile, [0.0]))
-    peaks, props = find_peaks(padded, prominence=threshold)
+    # Computing prominences is what costs: each scans outward to a higher
+    # sample. On a non-negative profile padded with zeros a peak's prominence
+    # never exceeds its height, so the height test is exact; and the windowed
+    # mean cannot hold two separate events within one window, so ripples closer
+    # than a window to a higher peak are dropped before prominences are computed.
+    peaks, props = find_peaks(padded, height=threshold, distance=max(1, int(window)), prominence=threshold)
     if peaks.size == 0:
         return np.array([], dtype=int), np.array([], dtype=float)
     prom = props["prominences"]

@@ -138,9 +138,13 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
         Yc = np.asarray(Y, dtype=float).reshape(len(j), -1)
         speed = np.linalg.norm(np.gradient(Yc, np.asarray(t, dtype=float), axis=0), axis=1)
         typical = np.percentile(speed, 95.0)
-        if typical <= _FLAT:
+        # speeds at the round-off level of the signal's magnitude are a held
+        # signal (e.g. a gripper that never moves), not motion
+        dt = float(np.median(np.diff(np.asarray(t, dtype=float))))
+        flat = 1e-9 * (1.0 + float(np.abs(Yc).max())) / dt
+        if typical <= flat:
             typical = speed.max()
-        if typical <= _FLAT:
+        if typical <= flat:
             j = np.zeros_like(j)
         else:
             j = j / (speed + 0.05 * typical)
