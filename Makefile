@@ -25,6 +25,8 @@ test: $(STAMP) lint
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_segmentation.py
+	$(PY) benchmarks/bench_clustering.py
+	$(PY) benchmarks/bench_editing.py
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache
