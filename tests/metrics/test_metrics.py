@@ -90,7 +90,7 @@ def test_swept_area_matches_shoelace_for_graphs(n, seed):
     hi = lo + rng.uniform(0.0, 2.0, n)
     P, Q = np.column_stack([x, lo]), np.column_stack([x, hi])
     expected = sum(shoelace(np.array([P[i], P[i + 1], Q[i + 1], Q[i]])) for i in range(n - 1))
-    assert swept_error_area(P, Q) == pytest.approx(expected, abs=1e-12)
+    assert swept_error_area(P, Q) == pytest.approx(expected, rel=1e-10, abs=1e-12)
 
 
 def test_angular_similarity():
