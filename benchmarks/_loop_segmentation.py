@@ -215,6 +215,41 @@ def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: 
 # --------------------------------------------------------------------------- keypoints
 
 
+def loop_jerk_norm(t, Y) -> list:
+    """Absolute jerk norm per sample, with loops."""
+    t = [float(v) for v in np.asarray(t, dtype=float)]
+    Y = np.asarray(Y, dtype=float)
+    if Y.ndim == 1:
+        Y = Y[:, None]
+    n, dims = Y.shape
+    jerk = []
+    for d in range(dims):
+        column = [float(v) for v in Y[:, d]]
+        jerk.append(loop_gradient(t, loop_gradient(t, loop_gradient(t, column))))
+    out = [0.0] * n
+    for i in range(n):
+        out[i] = math.sqrt(sum(jerk[d][i] * jerk[d][i] for d in range(dims)))
+    return out
+
+
+def loop_refine(changepoints, jerk_norm: list, *, half_width: int, n_iter: int = 2) -> list:
+    """Centre of mass of the jerk within ``half_width`` of each changepoint, twice."""
+    n = len(jerk_norm)
+    out = []
+    for c in changepoints:
+        pos = float(c)
+        for _ in range(n_iter):
+            centre = int(np.round(pos))
+            mass = moment = 0.0
+            for i in range(max(0, centre - half_width), min(n, centre + half_width + 1)):
+                mass += jerk_norm[i]
+                moment += i * jerk_norm[i]
+            if mass > 0:
+                pos = moment / mass
+        out.append(min(max(int(np.round(pos)), 0), n - 1))
+    return out
+
+
 def _gaussian_curve(changepoints, n: int, sigma: float, floor: float) -> list:
     """Floor plus, at each sample, the highest unit Gaussian of any changepoint."""
     curve = [floor] * n
@@ -310,7 +345,7 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
                                          normalize=p["normalize"], grace=p["grace"])
         cps, _ = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
                                      grace=p["grace"], **_window_argument(p["window"]))
-        cps = [int(c) for c in cps]
+        cps = loop_refine(cps, loop_jerk_norm(t, demo[name]), half_width=max(2, p["window"] // 4))
         profiles[name], raws[name], changepoints[name], params[name] = profile, raw, cps, p
         curves[name] = _gaussian_curve(cps, n, sigma=p["window"] / 2.0, floor=floor)
 

@@ -100,7 +100,8 @@ def normalize_profile(m, *, method: str = "robust", grace: int = 0) -> np.ndarra
     return m / scale
 
 
-def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust", grace: int = 0):
+def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust", grace: int = 0,
+                 jerk_norm=None):
     """Normalised sliding-window mean of the jerk norm of one stream.
 
     Parameters
@@ -118,6 +119,8 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
         See :func:`normalize_profile`.
     grace : int, default=0
         Samples at each end left out of the normalisation.
+    jerk_norm : ndarray of shape (n_steps,), optional
+        The jerk norm of ``Y`` if already computed (it is not recomputed).
 
     Returns
     -------
@@ -133,7 +136,7 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
     >>> float(prof.max())
     0.0
     """
-    j = np.linalg.norm(jerk(t, Y), axis=1)
+    j = np.linalg.norm(jerk(t, Y), axis=1) if jerk_norm is None else np.asarray(jerk_norm, dtype=float)
     if scale == "relative":
         Yc = np.asarray(Y, dtype=float).reshape(len(j), -1)
         speed = np.linalg.norm(np.gradient(Yc, np.asarray(t, dtype=float), axis=0), axis=1)

@@ -9,14 +9,14 @@ import numpy as np
 
 from .._demonstration import Demonstration
 from .._validation import check_fraction, check_positive
-from ._changepoints import detect_changepoints
+from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._keypoints import (
     changepoint_probability,
     combine_probabilities,
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import jerk_profile
+from ._profile import jerk, jerk_profile
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
@@ -176,10 +176,13 @@ class MultimodalSegmenter:
                 raise ValueError(
                     f"demo: expected at least {max(4, 2 * p['min_size'])} samples to segment stream "
                     f"{name!r} with min_size={p['min_size']}, got {n}")
+            absj = np.linalg.norm(jerk(t, demo[name]), axis=1)
             j, prof = jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
-                                   normalize=p["normalize"], grace=p["grace"])
+                                   normalize=p["normalize"], grace=p["grace"], jerk_norm=absj)
             cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
                                                 grace=p["grace"], window=p["window"])
+            # the profile places an event to a sample or two; the raw jerk's centre pins it
+            cps = refine_to_jerk_centre(cps, absj, half_width=max(2, p["window"] // 4))
             curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
