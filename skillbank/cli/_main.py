@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from . import _cluster, _experiment
+from . import _cluster, _experiment, _library
 
 __all__ = ["main", "build_parser"]
 
@@ -115,6 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_demo(sub)
     _cluster.add_parser(sub)
     _experiment.add_parser(sub)
+    _library.add_parser(sub)
     return parser
 
 

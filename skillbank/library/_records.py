@@ -1,0 +1,135 @@
+"""Reading and writing demonstrations and primitives in an open library connection."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._demonstration import Demonstration
+from ._arrays import from_json, from_npy, to_json, to_npy
+from ._schema import now
+
+__all__ = ["Primitive", "insert_demonstration", "load_demonstrations", "chunks", "test_pause"]
+
+_CHUNK = 500  # ids per IN (...) query, well under SQLite's variable limit
+PAUSE_ENV = "SKILLBANK_LIBRARY_TEST_PAUSE"
+MARKER_ENV = "SKILLBANK_LIBRARY_TEST_MARKER"
+
+
+@dataclass
+class Primitive:
+    """One stored motion primitive.
+
+    Attributes
+    ----------
+    id : int
+    demonstration_id : int
+    start, stop : int
+        Sample range ``start:stop`` in its demonstration (stop exclusive).
+    cluster : int or None
+        Cluster in the current clustering version (None: not clustered yet).
+    label : str or None
+        The primitive's own label, else its cluster's.
+    demo : Demonstration or None
+        The primitive's samples, every stream of its demonstration.
+    features : ndarray or None
+        Its features in the current clustering version.
+    """
+
+    id: int
+    demonstration_id: int
+    start: int
+    stop: int
+    cluster: int | None = None
+    label: str | None = None
+    demo: Demonstration | None = field(default=None, repr=False)
+    features: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def n_steps(self) -> int:
+        """Number of samples."""
+        return int(self.stop - self.start)
+
+
+def chunks(ids):
+    """Split ``ids`` into lists short enough for one ``IN (?, ...)`` query."""
+    ids = list(ids)
+    for i in range(0, len(ids), _CHUNK):
+        yield ids[i:i + _CHUNK]
+
+
+def placeholders(n: int) -> str:
+    """``?, ?, ...`` for ``n`` bound parameters."""
+    return ", ".join("?" * n)
+
+
+def test_pause() -> None:
+    """Test hook: sleep inside the add transaction when ``SKILLBANK_LIBRARY_TEST_PAUSE`` is set.
+
+    Only the durability tests set it, to kill a process in the middle of an add:
+    ``SKILLBANK_LIBRARY_TEST_MARKER`` names a file written when the pause starts.
+    Unset (the normal case) it does nothing.
+    """
+    seconds = os.environ.get(PAUSE_ENV)
+    if not seconds:
+        return
+    marker = os.environ.get(MARKER_ENV)
+    if marker:
+        Path(marker).write_text("in transaction\n")
+    time.sleep(float(seconds))
+
+
+def insert_demonstration(conn, demo: Demonstration, bounds, *, source, label, provenance) -> tuple:
+    """Insert a demonstration, its streams and its primitives; returns ``(demo_id, primitive_ids)``.
+
+    The caller holds the transaction.
+    """
+    conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
+                 ("segmentation", to_json(provenance), now()))
+    pid = conn.execute("SELECT last_insert_rowid()").fetchone()[0]
+    cur = conn.execute(
+        "INSERT INTO demonstrations (source, n_steps, t, metadata, created, provenance_id) "
+        "VALUES (?, ?, ?, ?, ?, ?)",
+        (source, demo.n_steps, to_npy(demo.t), to_json(demo.metadata), now(), pid))
+    demo_id = cur.lastrowid
+    conn.executemany(
+        "INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
+        [(demo_id, name, k, to_npy(arr)) for k, (name, arr) in enumerate(demo.streams.items())])
+    test_pause()
+    prim_ids = []
+    for a, b in bounds:
+        cur = conn.execute("INSERT INTO primitives (demonstration_id, start, stop, label) "
+                           "VALUES (?, ?, ?, ?)",
+                           (demo_id, int(a), int(b), label))
+        prim_ids.append(cur.lastrowid)
+    return demo_id, prim_ids
+
+
+def load_demonstrations(conn, ids) -> dict:
+    """Demonstrations by id, streams in their stored order."""
+    ids = sorted({int(i) for i in ids})
+    rows, streams = {}, {}
+    for part in chunks(ids):
+        q = placeholders(len(part))
+        for did, t, meta in conn.execute(
+                f"SELECT id, t, metadata FROM demonstrations WHERE id IN ({q})", part):
+            rows[did] = (from_npy(t), from_json(meta))
+        for did, name, data in conn.execute(
+                f"SELECT demonstration_id, name, data FROM streams WHERE demonstration_id IN ({q}) "
+                "ORDER BY demonstration_id, position", part):
+            streams.setdefault(did, {})[name] = from_npy(data)
+    missing = [i for i in ids if i not in rows]
+    if missing:
+        raise ValueError(f"demonstration: no demonstration with id {missing[0]} in the library")
+    return {did: Demonstration(t, streams.get(did, {}), meta) for did, (t, meta) in rows.items()}
+
+
+def primitive_demo(parent: Demonstration, pid: int, did: int, start: int, stop: int) -> Demonstration:
+    """The samples of one primitive, with its ids in the metadata."""
+    demo = parent.slice(start, stop)
+    demo.metadata.update(primitive_id=int(pid), demonstration_id=int(did))
+    return demo

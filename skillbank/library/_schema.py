@@ -1,0 +1,186 @@
+"""The SQLite schema of a library file: creation, version checks and migration.
+
+The schema version is SQLite's ``PRAGMA user_version``; ``meta`` holds
+``application = skillbank``. Version 1 (the first released layout) lacked
+segmentation provenance and did not record how a primitive joined its cluster;
+:func:`migrate` brings it to version 2.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sqlite3
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+__all__ = ["SCHEMA_VERSION", "connect", "transaction", "now", "database_errors"]
+
+SCHEMA_VERSION = 2
+APPLICATION = "skillbank"
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+_TABLES_V1 = (
+    "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    "CREATE TABLE demonstrations (id INTEGER PRIMARY KEY AUTOINCREMENT, source TEXT, "
+    "n_steps INTEGER NOT NULL, t BLOB NOT NULL, metadata TEXT NOT NULL, created TEXT NOT NULL)",
+    "CREATE TABLE streams (demonstration_id INTEGER NOT NULL REFERENCES demonstrations(id) "
+    "ON DELETE CASCADE, name TEXT NOT NULL, position INTEGER NOT NULL, data BLOB NOT NULL, "
+    "PRIMARY KEY (demonstration_id, name))",
+    "CREATE TABLE primitives (id INTEGER PRIMARY KEY AUTOINCREMENT, demonstration_id INTEGER NOT NULL "
+    "REFERENCES demonstrations(id) ON DELETE CASCADE, start INTEGER NOT NULL, stop INTEGER NOT NULL, "
+    "label TEXT)",
+    "CREATE TABLE cluster_versions (version INTEGER PRIMARY KEY AUTOINCREMENT, created TEXT NOT NULL, "
+    "params TEXT NOT NULL, n_clusters INTEGER NOT NULL, centers BLOB NOT NULL, pca_mean BLOB NOT NULL, "
+    "pca_components BLOB NOT NULL)",
+    "CREATE TABLE cluster_members (version INTEGER NOT NULL REFERENCES cluster_versions(version) "
+    "ON DELETE CASCADE, primitive_id INTEGER NOT NULL REFERENCES primitives(id) ON DELETE CASCADE, "
+    "cluster INTEGER NOT NULL, features BLOB NOT NULL, PRIMARY KEY (version, primitive_id))",
+    "CREATE TABLE cluster_labels (version INTEGER NOT NULL REFERENCES cluster_versions(version) "
+    "ON DELETE CASCADE, cluster INTEGER NOT NULL, label TEXT NOT NULL, PRIMARY KEY (version, cluster))",
+    "CREATE INDEX primitives_demo ON primitives(demonstration_id)",
+    "CREATE INDEX members_primitive ON cluster_members(primitive_id)",
+)
+
+# Version 1 -> 2: provenance of the segmentation, and how each member joined its cluster.
+_MIGRATE_1_TO_2 = (
+    "CREATE TABLE provenance (id INTEGER PRIMARY KEY AUTOINCREMENT, kind TEXT NOT NULL, "
+    "params TEXT NOT NULL, created TEXT NOT NULL)",
+    "ALTER TABLE demonstrations ADD COLUMN provenance_id INTEGER REFERENCES provenance(id)",
+    "ALTER TABLE cluster_members ADD COLUMN assigned TEXT NOT NULL DEFAULT 'fit'",
+)
+
+
+def now() -> str:
+    """UTC time stamp in ISO 8601."""
+    return datetime.now(timezone.utc).isoformat(timespec="microseconds")
+
+
+@contextlib.contextmanager
+def database_errors(path):
+    """Turn SQLite's corruption and format errors into a one-line ValueError."""
+    try:
+        yield
+    except sqlite3.OperationalError as exc:
+        if "locked" in str(exc) or "busy" in str(exc):
+            raise
+        raise ValueError(f"library {str(path)!r}: {exc}") from None
+    except sqlite3.DatabaseError as exc:
+        raise ValueError(f"library {str(path)!r} is not a readable skillbank library: {exc}") from None
+
+
+@contextlib.contextmanager
+def transaction(conn):
+    """``BEGIN IMMEDIATE`` ... ``COMMIT``; rolled back on any exception.
+
+    Taking the write lock up front lets SQLite's busy timeout queue
+    concurrent writers instead of failing one with "database is locked".
+    """
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        yield conn
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+
+
+def _check_header(path: Path) -> None:
+    if not path.exists() or path.stat().st_size == 0:
+        return
+    if path.is_dir():
+        raise ValueError(f"library {str(path)!r}: expected a file, got a folder")
+    with open(path, "rb") as fh:
+        head = fh.read(len(_SQLITE_MAGIC))
+    if head != _SQLITE_MAGIC:
+        raise ValueError(f"library {str(path)!r} is not a SQLite file (header {head[:16]!r})")
+
+
+def _wal(conn) -> None:
+    # Switching to WAL needs a moment of exclusive access; retry while another opener holds it.
+    for attempt in range(200):
+        try:
+            mode = conn.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+            break
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or attempt == 199:
+                raise
+            time.sleep(0.05)
+    if str(mode).lower() != "wal":
+        raise ValueError(f"journal_mode: expected WAL, SQLite reports {mode!r}")
+
+
+def _create(conn) -> None:
+    for sql in _TABLES_V1 + _MIGRATE_1_TO_2:
+        conn.execute(sql)
+    conn.execute("INSERT INTO meta (key, value) VALUES (?, ?)", ("application", APPLICATION))
+    conn.execute("INSERT INTO meta (key, value) VALUES (?, ?)", ("created", now()))
+    conn.execute(f"PRAGMA user_version = {int(SCHEMA_VERSION)}")
+
+
+def migrate(conn, version: int) -> int:
+    """Bring a library from ``version`` to :data:`SCHEMA_VERSION` inside the caller's transaction."""
+    if version == 1:
+        for sql in _MIGRATE_1_TO_2:
+            conn.execute(sql)
+        conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
+                     ("segmentation", '{"unknown": true, "migrated_from_schema": 1}', now()))
+        pid = conn.execute("SELECT last_insert_rowid()").fetchone()[0]
+        conn.execute("UPDATE demonstrations SET provenance_id = ?", (pid,))
+        version = 2
+    conn.execute(f"PRAGMA user_version = {int(version)}")
+    return version
+
+
+def _tables(conn) -> set:
+    return {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+
+
+def _prepare(conn, path) -> int:
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
+    if version > SCHEMA_VERSION:
+        raise ValueError(f"library {str(path)!r} has schema version {version}, written by a newer skillbank; "
+                         f"this one reads versions up to {SCHEMA_VERSION}")
+    if version == SCHEMA_VERSION:
+        return version
+    with transaction(conn):
+        version = conn.execute("PRAGMA user_version").fetchone()[0]  # another process may have won
+        tables = _tables(conn) - {"sqlite_sequence"}
+        if version == 0:
+            if tables:
+                raise ValueError(f"library {str(path)!r} is a SQLite file but not a skillbank library "
+                                 f"(tables {sorted(tables)[:5]})")
+            _create(conn)
+        elif version < SCHEMA_VERSION:
+            migrate(conn, version)
+    return version
+
+
+def connect(path, *, timeout: float = 60.0, create: bool = True) -> sqlite3.Connection:
+    """Open (and create or migrate) the library file at ``path``.
+
+    Raises
+    ------
+    ValueError
+        A one-line message for a file that is not SQLite, is corrupt, is not a
+        skillbank library, or has a newer schema version.
+    """
+    path = Path(path)
+    _check_header(path)
+    if not create and not path.exists():
+        raise ValueError(f"library {str(path)!r} does not exist; create it with 'skillbank library init'")
+    if not path.parent.exists():
+        raise ValueError(f"library {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    conn = sqlite3.connect(str(path), timeout=timeout, isolation_level=None)
+    try:
+        with database_errors(path):
+            conn.execute("PRAGMA foreign_keys = ON")
+            _wal(conn)
+            _prepare(conn, path)
+            app = conn.execute("SELECT value FROM meta WHERE key = ?", ("application",)).fetchone()
+            if app is None or app[0] != APPLICATION:
+                raise ValueError(f"library {str(path)!r} is a SQLite file but not a skillbank library")
+    except BaseException:
+        conn.close()
+        raise
+    return conn

@@ -1,0 +1,215 @@
+"""Library: add, segment, cluster, label, query, remove, provenance."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import numpy as np
+import pytest
+
+from skillbank import Demonstration
+from skillbank.library import Library, from_npy, to_npy
+
+
+@pytest.fixture
+def lib(tmp_path):
+    with Library(tmp_path / "lib.db") as library:
+        yield library
+
+
+@pytest.fixture
+def reach(make_reach):
+    return make_reach
+
+
+@pytest.fixture
+def two_skills(make_skills):
+    return make_skills
+
+
+def test_npy_round_trip_refuses_pickles():
+    a = np.arange(12.0).reshape(3, 4)
+    assert np.array_equal(from_npy(to_npy(a)), a)
+    with pytest.raises(ValueError, match="numeric array"):
+        to_npy(np.array([{"a": 1}], dtype=object))
+    import io
+
+    buf = io.BytesIO()
+    np.save(buf, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(ValueError, match="not a numeric .npy"):
+        from_npy(buf.getvalue())
+
+
+def test_wal_mode_and_schema_version(tmp_path):
+    Library(tmp_path / "a.db").close()
+    conn = sqlite3.connect(tmp_path / "a.db")
+    assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == Library.schema_version == 2
+    conn.close()
+
+
+def test_demonstration_is_stored_losslessly(lib):
+    rng = np.random.default_rng(1)
+    t = np.cumsum(rng.uniform(0.001, 0.01, 50))
+    demo = Demonstration(t, {"joints": rng.standard_normal((50, 6)), "position": rng.standard_normal((50, 3)),
+                             "gripper": rng.standard_normal((50, 1))}, {"user": "7", "nested": {"a": [1, 2]}})
+    did = lib.add(demo, segment=False, source="robot.h5")
+    back = lib.demonstration(did)
+    assert back.stream_names == ["joints", "position", "gripper"]
+    assert np.array_equal(back.t, t)
+    for name in demo.streams:
+        assert np.array_equal(back[name], demo[name])
+    assert back.metadata == {"user": "7", "nested": {"a": [1, 2]}}
+    [prim] = lib.primitives(source="robot.h5")
+    assert (prim.start, prim.stop, prim.n_steps) == (0, 50, 50)
+    assert np.array_equal(prim.demo["joints"], demo["joints"])
+    assert lib.provenance(did) == {"segment": False}
+
+
+def test_segmentation_bounds_tile_the_demo_and_provenance_is_recorded(lib):
+    t = np.linspace(0.0, 2.0, 400)
+    Y = np.column_stack([np.minimum(t, 1.0), np.maximum(t - 1.0, 0.0), 0 * t])
+    did = lib.add(Demonstration.from_array(Y, t), segmentation={"window": 16})
+    prims = lib.primitives(demonstration=did)
+    assert len(prims) == 2
+    assert prims[0].start == 0 and prims[-1].stop == 400 and prims[0].stop == prims[1].start
+    assert np.array_equal(np.vstack([p.demo["position"] for p in prims]), Y)
+    prov = lib.provenance(did)
+    assert prov["segment"] is True and prov["requested"]["window"] == 16
+    assert prov["resolved"]["position"]["window"] == 16
+
+
+def test_cluster_label_query_and_incremental_assignment(lib, reach, two_skills):
+    lib.add_many(two_skills(), segment=False)
+    assert lib.summary()["skills"] == []
+    version = lib.cluster()
+    assert version == 1
+    doc = lib.summary()
+    assert [s["count"] for s in doc["skills"]] == [6, 6]
+    clusters = [p["cluster"] for p in doc["primitives"]]
+    straight, bowed = clusters[0], clusters[6]
+    assert straight != bowed and clusters == [straight] * 6 + [bowed] * 6
+    lib.label("straight", cluster=straight)
+    assert [p.id for p in lib.primitives(label="straight")] == [1, 2, 3, 4, 5, 6]
+    # A primitive's own label overrides its cluster's.
+    lib.label("special", primitive=2)
+    assert [p.id for p in lib.primitives(label="straight")] == [1, 3, 4, 5, 6]
+    assert lib.primitives(label="special")[0].cluster == straight
+    # New primitives go to the nearest centre under the stored featuriser.
+    new_bowed = lib.add(reach([0, 0, 0], [1.0, -0.7, 0], bend=0.8, seed=50), segment=False)
+    new_straight = lib.add(reach([3, 1, 2], [2.2, 1.8, 2], seed=51), segment=False)
+    assert lib.primitives(demonstration=new_bowed)[0].cluster == bowed
+    p = lib.primitives(demonstration=new_straight)[0]
+    assert p.cluster == straight and p.label == "straight" and p.features.shape == (3,)
+    unassigned = lib.add(reach([0, 0, 0], [1, 1, 0], seed=52), segment=False, assign="none")
+    assert lib.primitives(demonstration=unassigned)[0].cluster is None
+    assert len(lib.primitives(cluster=straight)) == 7  # 6 fitted + 1 assigned
+
+
+def test_recluster_adds_a_version_and_carries_labels(lib, reach, two_skills):
+    lib.add_many(two_skills(), segment=False)
+    lib.cluster()
+    first = lib.summary()["primitives"][0]["cluster"]
+    lib.label("straight", cluster=first)
+    version = lib.cluster(stretch=0.5, random_state=3)
+    assert version == 2
+    assert [v["version"] for v in lib.versions()] == [1, 2]
+    assert lib.versions()[1]["params"]["stretch"] == 0.5
+    assert lib.clustering_params(1)["stretch"] == 1.2
+    assert [p.id for p in lib.primitives(label="straight")] == [1, 2, 3, 4, 5, 6]
+    ids = lib.add_many([reach([0, 0, 0], [1, 0.5, 0], seed=60)], segment=False, assign="recluster")
+    assert lib.versions()[-1]["version"] == 3 and lib.versions()[-1]["params"]["stretch"] == 0.5
+    assert lib.primitives(demonstration=ids[0])[0].label == "straight"
+
+
+def test_remove_deletes_primitives_and_memberships(lib, two_skills):
+    ids = lib.add_many(two_skills(), segment=False)
+    lib.cluster()
+    lib.remove(ids[0])
+    assert lib.demonstration_ids() == ids[1:]
+    assert [p.demonstration_id for p in lib.primitives()] == ids[1:]
+    n = lib.conn.execute("SELECT COUNT(*) FROM cluster_members").fetchone()[0]
+    assert n == 11 and lib.conn.execute("SELECT COUNT(*) FROM streams").fetchone()[0] == 11
+    with pytest.raises(ValueError, match="no demonstration with id 1"):
+        lib.remove(ids[0])
+
+
+def test_add_is_all_or_nothing(lib, monkeypatch, reach):
+    from skillbank.library import _records
+
+    lib.add(reach([0, 0, 0], [1, 1, 0]), segment=False)
+
+    def boom():
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(_records, "test_pause", boom)
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        lib.add(reach([0, 0, 0], [1, 1, 0]), segment=False)
+    for table in ("demonstrations", "streams", "primitives", "provenance"):
+        assert lib.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0] == 1, table  # noqa: S608
+
+
+def test_errors(lib, reach, two_skills):
+    with pytest.raises(ValueError, match="expected a Demonstration"):
+        lib.add(np.zeros((5, 2)))
+    with pytest.raises(ValueError, match="'position' stream"):
+        lib.add(Demonstration(np.arange(5.0), {"force": np.zeros((5, 3))}))
+    with pytest.raises(ValueError, match="assign: expected one of"):
+        lib.add(reach([0, 0], [1, 1]), assign="sometimes")
+    with pytest.raises(ValueError, match="label: expected a non-empty string"):
+        lib.add(reach([0, 0], [1, 1]), label="  ")
+    with pytest.raises(ValueError, match="at least 2 primitives"):
+        lib.cluster()
+    with pytest.raises(ValueError, match="no clusters yet"):
+        lib.label("x", cluster=0)
+    with pytest.raises(ValueError, match="exactly one of"):
+        lib.label("x")
+    with pytest.raises(ValueError, match="no primitive with id 99"):
+        lib.label("x", primitive=99)
+    lib.add_many(two_skills(), segment=False)
+    lib.cluster()
+    with pytest.raises(ValueError, match=r"cluster id in 0\.\.1"):
+        lib.label("x", cluster=5)
+    with pytest.raises(ValueError, match="features: expected one of"):
+        lib.cluster(features="wavelets")
+    with pytest.raises(ValueError, match="skill: no primitive has label 'nope'"):
+        lib.skill("nope")
+    with pytest.raises(ValueError, match="skill: expected a label"):
+        lib.skill(1.5)
+    with pytest.raises(ValueError, match="does not exist"):
+        Library(lib.path.parent / "missing.db", create=False)
+
+
+def test_closed_library(tmp_path):
+    lib = Library(tmp_path / "c.db")
+    lib.close()
+    lib.close()
+    with pytest.raises(ValueError, match="is closed"):
+        lib.summary()
+
+
+def test_reuse_passes_the_skill_primitives_to_selection(lib, two_skills, monkeypatch):
+    """Library.reuse's own part: which candidates and ids reach skillbank.selection.reuse."""
+    import sys
+    import types
+
+    seen = {}
+
+    def fake_reuse(primitives, constraints, *, method, k, ids, random_state):
+        seen.update(primitives=primitives, constraints=constraints, method=method, k=k, ids=ids,
+                    random_state=random_state)
+        return "result"
+
+    module = types.ModuleType("skillbank.selection")
+    module.reuse = fake_reuse
+    monkeypatch.setitem(sys.modules, "skillbank.selection", module)
+    lib.add_many(two_skills(), segment=False)
+    lib.cluster()
+    cluster = lib.primitives(demonstration=7)[0].cluster
+    lib.label("bow", cluster=cluster)
+    assert lib.reuse("bow", "C", method="ja", k=1, random_state=4) == "result"
+    assert seen["ids"] == [7, 8, 9, 10, 11, 12] and seen["method"] == "ja" and seen["k"] == 1
+    assert all(isinstance(p, Demonstration) and p.n_steps == 60 for p in seen["primitives"])
+    assert seen["primitives"][0].metadata["primitive_id"] == 7
+    lib.reuse(cluster, "C")
+    assert seen["ids"] == [7, 8, 9, 10, 11, 12] and seen["method"] == "promp" and seen["k"] is None
