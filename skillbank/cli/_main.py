@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from . import _cluster, _experiment, _library
+from . import _cluster, _edit, _experiment, _library
 
 __all__ = ["main", "build_parser"]
 
@@ -116,6 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     _cluster.add_parser(sub)
     _experiment.add_parser(sub)
     _library.add_parser(sub)
+    _edit.add_parser(sub)
     return parser
 
 

@@ -10,6 +10,9 @@ from sklearn.utils.validation import check_is_fitted
 from .._demonstration import Demonstration
 from .._validation import check_array, check_positive
 
+# One implementation of the angular similarity, in metrics; re-exported here under its old name.
+from ..metrics._shape import angular_similarity, angular_similarity_matrix
+
 __all__ = ["angular_similarity", "AngularSimilarityFeatures", "TrajectoryFeatures", "resample_trajectories"]
 
 
@@ -55,30 +58,6 @@ def as_trajectories(X, *, name: str = "X", with_time: bool = False):
     return (trajs, times) if with_time else trajs
 
 
-def _unit_steps(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit displacement vectors along the last-but-one axis, and a mask of non-zero steps."""
-    D = np.diff(Y, axis=-2)
-    norm = np.sqrt(np.einsum("...i,...i->...", D, D))
-    moving = norm > 0.0
-    return D / np.where(moving, norm, 1.0)[..., None], moving
-
-
-def _angular_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Angular similarity of every trajectory of ``A`` (a, n, d) with every one of ``B`` (b, n, d)."""
-    n = A.shape[1]
-    UA, mA = _unit_steps(A)
-    UB, mB = _unit_steps(B)
-    out = np.empty((A.shape[0], B.shape[0]))
-    # Chunk over A so the (chunk, b, n - 1) cosine block stays around 8 MB.
-    chunk = max(1, int(1e6 // max(1, B.shape[0] * max(n - 1, 1))))
-    for s in range(0, A.shape[0], chunk):
-        cos = np.einsum("atd,btd->abt", UA[s:s + chunk], UB)
-        angle = np.arccos(np.clip(cos, -1.0, 1.0))
-        angle *= mA[s:s + chunk, None, :] & mB[None, :, :]  # a zero-length step counts 0
-        out[s:s + chunk] = angle.sum(axis=2) / (np.pi * n)
-    return out
-
-
 def _stack_equal(trajs, *, name: str, n_steps: int | None = None) -> np.ndarray:
     lengths = {a.shape[0] for a in trajs}
     if n_steps is not None:
@@ -87,41 +66,6 @@ def _stack_equal(trajs, *, name: str, n_steps: int | None = None) -> np.ndarray:
         raise ValueError(f"{name}: angular similarity needs trajectories of equal length, got lengths "
                          f"{sorted(lengths)}; resample them first")
     return np.stack(trajs)
-
-
-def angular_similarity(A, B) -> float:
-    """Angular similarity of two trajectories of the same length (the paper's RAIL feature).
-
-    For each step t the displacement vectors ``A[t+1] - A[t]`` and
-    ``B[t+1] - B[t]`` make an angle; ``arccos(cos) / pi`` is summed over the
-    ``n - 1`` steps and divided by ``n`` (not ``n - 1``), as in the authors'
-    code. A zero-length step counts 0. The value is 0 for trajectories moving
-    in the same directions and approaches 1 for opposite ones.
-
-    Parameters
-    ----------
-    A, B : array-like of shape (n_steps, n_dims) or Demonstration
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ValueError
-        If the lengths or dimensions differ.
-
-    Examples
-    --------
-    >>> t = np.linspace(0.0, 1.0, 5)[:, None]
-    >>> angular_similarity(t, t)
-    0.0
-    >>> angular_similarity(t, -t)
-    0.8
-    """
-    trajs = as_trajectories([A, B], name="A, B")
-    stacked = _stack_equal(trajs, name="A, B")
-    return float(_angular_matrix(stacked[:1], stacked[1:])[0, 0])
 
 
 class AngularSimilarityFeatures(TransformerMixin, BaseEstimator):
@@ -170,7 +114,7 @@ class AngularSimilarityFeatures(TransformerMixin, BaseEstimator):
     def transform(self, X):
         """Features of shape ``(n_trajectories, n_representatives)``."""
         check_is_fitted(self, "representatives_")
-        return _angular_matrix(self._check(X), self.representatives_)
+        return angular_similarity_matrix(self._check(X), self.representatives_)
 
     def get_feature_names_out(self, input_features=None):
         check_is_fitted(self, "representatives_")

@@ -11,9 +11,17 @@ Examples
 
 from ._distances import dtw_distance, frechet_distance
 from ._report import constraint_report
-from ._shape import angular_similarity, curvature_deviation, jerk_cost, path_length, swept_error_area
+from ._shape import (
+    angular_similarity,
+    angular_similarity_matrix,
+    curvature_deviation,
+    jerk_cost,
+    path_length,
+    swept_error_area,
+)
 
 __all__ = [
-    "frechet_distance", "dtw_distance", "swept_error_area", "angular_similarity", "curvature_deviation",
+    "frechet_distance", "dtw_distance", "swept_error_area", "angular_similarity", "angular_similarity_matrix",
+    "curvature_deviation",
     "jerk_cost", "path_length", "constraint_report",
 ]

@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._demonstration import Demonstration
 from .._validation import check_array, check_time
 from ..editing._laplacian import laplacian_matrix
 
-__all__ = ["swept_error_area", "angular_similarity", "curvature_deviation", "jerk_cost", "path_length"]
+__all__ = [
+    "swept_error_area", "angular_similarity", "angular_similarity_matrix", "curvature_deviation",
+    "jerk_cost", "path_length",
+]
 
 
 def _same_length(P, Q, *, min_samples=1):
@@ -46,6 +50,65 @@ def swept_error_area(P, Q) -> float:
     return float(_triangle_areas(B - A, C - A).sum() + _triangle_areas(C - A, D - A).sum())
 
 
+def _positions(x, name: str) -> np.ndarray:
+    """Array-like or Demonstration (its ``"position"`` stream) as ``(n_steps, n_dims)``."""
+    if isinstance(x, Demonstration):
+        if "position" not in x.streams:
+            raise ValueError(f"{name}: expected a Demonstration with a 'position' stream, "
+                             f"got streams {x.stream_names}")
+        x = x["position"]
+    return check_array(x, name=name, ndim=(1, 2), as_2d=True)
+
+
+def _unit_steps(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit displacements along the step axis (last but one) and a mask of the non-zero ones."""
+    D = np.diff(Y, axis=-2)
+    norm = np.sqrt(np.einsum("...i,...i->...", D, D))
+    moving = norm > 0.0
+    return D / np.where(moving, norm, 1.0)[..., None], moving
+
+
+def angular_similarity_matrix(A, B) -> np.ndarray:
+    """Angular similarity of every trajectory of ``A`` with every trajectory of ``B``.
+
+    The batched form of :func:`angular_similarity`, used by clustering
+    (:class:`skillbank.clustering.AngularSimilarityFeatures`).
+
+    Parameters
+    ----------
+    A : array-like of shape (n_a, n_steps, n_dims)
+    B : array-like of shape (n_b, n_steps, n_dims)
+        Same number of samples and dimensions as ``A``.
+
+    Returns
+    -------
+    ndarray of shape (n_a, n_b)
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 5)[:, None]
+    >>> angular_similarity_matrix([t, -t], [t]).ravel().tolist()
+    [0.0, 0.8]
+    """
+    A = check_array(A, name="A", ndim=3)
+    B = check_array(B, name="B", ndim=3)
+    if A.shape[1:] != B.shape[1:]:
+        raise ValueError(f"B: expected trajectories of shape {A.shape[1:]} (n_steps, n_dims) like A, "
+                         f"got {B.shape[1:]}; angular similarity needs the same number of samples")
+    n = A.shape[1]
+    UA, mA = _unit_steps(A)
+    UB, mB = _unit_steps(B)
+    out = np.empty((A.shape[0], B.shape[0]))
+    # Chunk over A so that the (chunk, n_b, n - 1) block of cosines stays around 8 MB.
+    chunk = max(1, int(1e6 // max(1, B.shape[0] * max(n - 1, 1))))
+    for s in range(0, A.shape[0], chunk):
+        cos = np.einsum("atd,btd->abt", UA[s:s + chunk], UB)
+        angle = np.arccos(np.clip(cos, -1.0, 1.0))
+        angle *= mA[s:s + chunk, None, :] & mB[None, :, :]  # a step standing still counts 0
+        out[s:s + chunk] = angle.sum(axis=2) / (np.pi * n)
+    return out
+
+
 def angular_similarity(P, Q) -> float:
     """Angular (dis)similarity of two equally long trajectories, as defined by the paper's authors.
 
@@ -53,20 +116,30 @@ def angular_similarity(P, Q) -> float:
     and that of ``Q`` over the step, divided by pi; the sum over the steps is
     divided by ``n`` (not ``n - 1``). A step where either trajectory stands still
     counts 0. 0 for curves moving in the same directions, up to ``(n - 1) / n``
-    for opposite ones.
+    for opposite ones. This is the paper's RAIL clustering feature; it is also
+    exported as ``skillbank.clustering.angular_similarity``.
+
+    Parameters
+    ----------
+    P, Q : array-like of shape (n_steps, n_dims) or (n_steps,), or Demonstration
+        A Demonstration gives its ``"position"`` stream.
+
+    Returns
+    -------
+    float
 
     Examples
     --------
     >>> angular_similarity([[0, 0], [1, 0], [2, 0]], [[0, 0], [0, 1], [1, 1]])
     0.16666666666666666
     """
-    P, Q = _same_length(P, Q)
-    n = P.shape[0]
-    U, V = np.diff(P, axis=0), np.diff(Q, axis=0)
-    nu, nv = np.linalg.norm(U, axis=1), np.linalg.norm(V, axis=1)
-    moving = (nu > 0) & (nv > 0)
-    cos = np.einsum("ij,ij->i", U, V)[moving] / (nu[moving] * nv[moving])
-    return float(np.arccos(np.clip(cos, -1.0, 1.0)).sum() / (np.pi * n))
+    P, Q = _positions(P, "P"), _positions(Q, "Q")
+    if P.shape[1] != Q.shape[1]:
+        raise ValueError(f"Q: expected {P.shape[1]} columns to match P, got {Q.shape[1]}")
+    if P.shape[0] != Q.shape[0]:
+        raise ValueError(f"Q: expected the same number of samples as P ({P.shape[0]}), got {Q.shape[0]}; "
+                         "resample them first")
+    return float(angular_similarity_matrix(P[None], Q[None])[0, 0])
 
 
 def curvature_deviation(P, Q, t=None) -> float:

@@ -1,6 +1,7 @@
 """Figures of segmentation results, drawn with matplotlib (no pyplot state)."""
 
 from ._clustering import plot_cluster_comparison, plot_rail_experiment
+from ._editing import draw_edit, plot_edit
 from ._segmentation import (
     plot_jerk_profile,
     plot_keypoint_probability,
@@ -10,5 +11,5 @@ from ._segmentation import (
 
 __all__ = [
     "plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary",
-    "plot_cluster_comparison", "plot_rail_experiment",
+    "plot_cluster_comparison", "plot_rail_experiment", "draw_edit", "plot_edit",
 ]

@@ -48,6 +48,21 @@ def test_angular_similarity_matches_the_loop_definition():
     assert angular_similarity(walks[2], walks[3]) == pytest.approx(loop_angular(walks[2], walks[3]), abs=1e-7)
 
 
+def test_one_angular_similarity_for_metrics_and_clustering():
+    from skillbank import metrics
+    from skillbank.metrics._shape import angular_similarity_matrix
+
+    assert angular_similarity is metrics.angular_similarity
+    walks = random_walks(5, 25, n_dims=2, seed=4)
+    demos = [Demonstration.from_array(w, dt=0.1) for w in walks]
+    M = angular_similarity_matrix(walks[:3], walks[3:])
+    expected = [[loop_angular(a, b) for b in walks[3:]] for a in walks[:3]]
+    np.testing.assert_allclose(M, expected, rtol=1e-10, atol=1e-12)
+    assert angular_similarity(demos[0], demos[4]) == pytest.approx(M[0, 1], abs=1e-15)
+    with pytest.raises(ValueError, match=r"B: expected trajectories of shape \(25, 2\)"):
+        angular_similarity_matrix(walks[:3], walks[3:, :20])
+
+
 def test_angular_similarity_known_values():
     t = np.linspace(0.0, 1.0, 11)[:, None]
     assert angular_similarity(t, t) == pytest.approx(0.0, abs=1e-7)
@@ -72,16 +87,17 @@ def test_angular_features_accept_demonstrations_and_3d_arrays():
 
 
 def test_angular_similarity_errors():
-    with pytest.raises(ValueError, match=r"A, B: angular similarity needs trajectories of equal length, "
-                                         r"got lengths \[5, 6\]"):
+    with pytest.raises(ValueError, match=r"Q: expected the same number of samples as P \(5\), got 6"):
         angular_similarity(np.zeros((5, 2)), np.zeros((6, 2)))
     model = AngularSimilarityFeatures(representatives=[np.zeros((5, 2))]).fit()
     with pytest.raises(ValueError, match=r"X: angular similarity needs trajectories of equal length"):
         model.transform([np.zeros((5, 2)), np.zeros((7, 2))])
     with pytest.raises(ValueError, match=r"X: expected trajectories with 2 dimensions"):
         model.transform([np.zeros((5, 3))])
-    with pytest.raises(ValueError, match=r"expected every trajectory to have the same number of dimensions"):
+    with pytest.raises(ValueError, match=r"Q: expected 2 columns to match P, got 3"):
         angular_similarity(np.zeros((5, 2)), np.zeros((5, 3)))
+    with pytest.raises(ValueError, match=r"Q: expected a Demonstration with a 'position' stream"):
+        angular_similarity(np.zeros((5, 2)), Demonstration(np.arange(5.0), {"force": np.zeros((5, 2))}))
     with pytest.raises(ValueError, match=r"X: expected a list of \(n_steps, n_dims\) trajectories or a 3-D "
                                          r"array, got a 2-D array"):
         model.transform(np.zeros((5, 2)))
