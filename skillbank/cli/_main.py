@@ -82,19 +82,23 @@ def _run_segment(args) -> int:
 def _add_demo(sub):
     p = sub.add_parser("demo", help="run the main job on embedded data (LASA) and write figures")
     p.add_argument("--out", type=Path, default=Path("demo_output"), help="folder for figures and summary")
+    p.add_argument("--data", type=Path, default=None,
+                   help="shared data folder: use RAIL and the three-button demo instead of LASA")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=_run_demo)
 
 
 def _run_demo(args) -> int:
-    from ..experiments import run_segmentation_demo
+    from ..experiments import run_library_demo
 
-    summary = run_segmentation_demo(args.out)
+    summary = run_library_demo(args.out, data=args.data)
     if args.json:
         print(json.dumps(summary))
     else:
-        for item in summary["items"]:
-            print(f"{item['name']}: {item['n_segments']} segment(s), keypoints {item['keypoints']}")
+        for r in summary["reuse"]:
+            outcome = r["error"] if "error" in r else (
+                f"used {r['used']}, constraint error {r['constraint_error']:.2g}, collision {r['collision']}")
+            print(f"reuse {r['skill']} ({r['method']}): {outcome}")
         print(f"figures and summary written to {summary['out']}")
         print(f"open {summary['summary']}")
     return 0

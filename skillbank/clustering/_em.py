@@ -159,6 +159,9 @@ def pairwise_separation(X: np.ndarray, labels: np.ndarray, n_clusters: int) -> n
     # PRIOR_COUNT points: a few tail points of one blob look tight only by chance.
     var = _shrink(half / np.maximum(dof, 1.0), dof)
     spread = 0.5 * (np.sqrt(var) + np.sqrt(var.T))
+    # a spread at the round-off level of the data is no spread (repeated points, or
+    # points that differ only across the line): treat it as zero, not as a tiny divisor
+    spread = np.where(spread > 1e-9 * max(1.0, float(np.abs(X).max(initial=0.0))), spread, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         delta = np.where(spread > 0, dist / spread, np.where(dist > 0, np.inf, 0.0))
     delta = _lower_bound(delta, counts[:, None], counts[None, :])
@@ -167,7 +170,8 @@ def pairwise_separation(X: np.ndarray, labels: np.ndarray, n_clusters: int) -> n
     delta[~filled, :] = 0.0
     delta[:, ~filled] = 0.0
     np.fill_diagonal(delta, 0.0)
-    return delta
+    # the pair is judged once: round-off must not make i-j and j-i disagree
+    return np.minimum(delta, delta.T)
 
 
 def _lower_bound(delta, n_i, n_j):

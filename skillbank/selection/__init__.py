@@ -1,0 +1,27 @@
+"""Selection of reusable primitives: adapt stored primitives to a new task, rank them, reproduce.
+
+The paper's "Selection of Reusable Primitives": every candidate is warped to
+the task's constraints with Laplacian trajectory editing, candidates that
+still collide or miss a constraint are dropped, the rest are ranked by curve
+length, and the best ones train a learning-from-demonstration representation
+that produces the new trajectory.
+
+Examples
+--------
+>>> import numpy as np
+>>> from skillbank import Constraints
+>>> from skillbank.selection import reuse
+>>> s = np.linspace(0.0, 1.0, 100)
+>>> prims = [np.column_stack([s, a * np.sin(np.pi * s)]) for a in (0.5, 0.2, 0.3)]
+>>> res = reuse(prims, Constraints(goal=[1.2, 0.1]), method="ja", ids=["a", "b", "c"])
+>>> res.used, res.trajectory["position"][-1].round(6).tolist()
+(['b'], [1.2, 0.1])
+"""
+
+from ._candidates import RANKINGS, Candidate, Selection, select_candidates
+from ._reuse import DEFAULT_K, METHODS, ReuseResult, reproduce_selection, reuse
+
+__all__ = [
+    "reuse", "ReuseResult", "select_candidates", "reproduce_selection", "Selection", "Candidate",
+    "METHODS", "DEFAULT_K", "RANKINGS",
+]

@@ -1,0 +1,224 @@
+"""Candidate adaptation and ranking: the first three steps of reuse.
+
+Every stored primitive is a candidate. Each is warped to the task's
+constraints with Laplacian trajectory editing; those that still collide or
+miss a constraint are dropped with the editor's reason; the rest are ranked.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._constraints import Constraints
+from .._demonstration import Demonstration
+from .._validation import check_array, check_time
+from ..editing import lte
+from ..representations import resample
+
+__all__ = ["Candidate", "Selection", "select_candidates", "RANKINGS", "MIN_SAMPLES"]
+
+RANKINGS = ("length", "endpoints", "deformation")
+MIN_SAMPLES = 3  # DMP and ElasticMap need three samples; a shorter primitive cannot be reused.
+
+
+@dataclass
+class Candidate:
+    """One adapted candidate.
+
+    Attributes
+    ----------
+    id : hashable
+        The caller's id of the primitive.
+    t : ndarray of shape (n_steps,)
+    original, adapted : ndarray of shape (n_steps, n_dims)
+        The primitive before and after Laplacian trajectory editing.
+    length : float
+        Curve length of the adapted path.
+    endpoint_distance : float
+        Distance of the original start to the requested start plus that of
+        the original end to the requested goal (0 for a missing one).
+    deformation : float
+        Root-mean-square displacement of the samples by the edit.
+    message : str
+        The editor's message.
+    """
+
+    id: object
+    t: np.ndarray
+    original: np.ndarray
+    adapted: np.ndarray
+    length: float
+    endpoint_distance: float
+    deformation: float
+    message: str
+
+    def demo(self) -> Demonstration:
+        """The adapted candidate as a Demonstration (metadata ``{"id": ...}``)."""
+        return Demonstration(self.t, {"position": self.adapted}, {"id": self.id})
+
+
+@dataclass
+class Selection:
+    """Usable candidates, best first, and the rejected ones with their reasons.
+
+    Attributes
+    ----------
+    candidates : list of Candidate
+        Adapted, collision-free candidates meeting the constraints, best first.
+    rejected : dict
+        Candidate id -> reason (str), in input order.
+    rank : str
+        The ranking criterion used.
+    """
+
+    candidates: list
+    rejected: dict = field(default_factory=dict)
+    rank: str = "length"
+
+    @property
+    def ranking(self) -> list:
+        """``[(id, curve length), ...]`` of the usable candidates, best first."""
+        return [(c.id, c.length) for c in self.candidates]
+
+
+def _check_ids(ids, n: int) -> list:
+    if ids is None:
+        return list(range(n))
+    if isinstance(ids, (str, bytes)) or not hasattr(ids, "__len__"):
+        raise ValueError(f"ids: expected a list of {n} ids, got {type(ids).__name__}")
+    ids = [i.item() if isinstance(i, np.generic) else i for i in ids]
+    if len(ids) != n:
+        raise ValueError(f"ids: expected one id per primitive ({n}), got {len(ids)}")
+    try:
+        unique = len(set(ids)) == n
+    except TypeError:
+        raise ValueError("ids: expected hashable ids (int or str)") from None
+    if not unique:
+        seen, dup = set(), None
+        for i in ids:
+            if i in seen:
+                dup = i
+                break
+            seen.add(i)
+        raise ValueError(f"ids: expected distinct ids, got {dup!r} more than once")
+    return ids
+
+
+def _arrays(primitives, ids, t):
+    """``(id, t, Y)`` per primitive, rejections for unusable shapes, and the checked ids."""
+    if isinstance(primitives, (Demonstration, np.ndarray)) or not isinstance(primitives, (list, tuple)):
+        raise ValueError(
+            "primitives: expected a list of Demonstrations or arrays (n_steps, n_dims), "
+            f"got {type(primitives).__name__}"
+        )
+    if len(primitives) == 0:
+        raise ValueError("primitives: expected at least one candidate, got an empty list")
+    ids = _check_ids(ids, len(primitives))
+    out, rejected = [], {}
+    for k, (pid, prim) in enumerate(zip(ids, primitives, strict=True)):
+        if isinstance(prim, Demonstration):
+            if "position" not in prim.streams:
+                rejected[pid] = f"no 'position' stream (streams {prim.stream_names})"
+                continue
+            Y, tk = prim["position"], prim.t
+        else:
+            Y = check_array(prim, name=f"primitives[{k}]", ndim=2)
+            tk = np.arange(Y.shape[0], dtype=float)
+        if Y.shape[0] < MIN_SAMPLES:
+            rejected[pid] = f"too short: {Y.shape[0]} sample(s), need at least {MIN_SAMPLES}"
+            continue
+        if t is not None:
+            Y, tk = resample(Y, t.shape[0]), t
+        out.append((pid, tk, Y))
+    return out, rejected, ids
+
+
+def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = "length",
+                      **lte_params) -> Selection:
+    """Adapt every candidate to ``constraints`` with LTE, drop the failures, rank the rest.
+
+    Parameters
+    ----------
+    primitives : list of Demonstration or array of shape (n_steps, n_dims)
+        Candidates (stream ``"position"`` of a Demonstration; an array gets
+        the time base ``0, 1, 2, ...``).
+    constraints : Constraints
+        Start, goal, via-points, boundary velocities and obstacles of the task.
+    ids : list, optional
+        One id per primitive; default ``0 .. n-1``.
+    t : array-like of shape (n_steps,), optional
+        Common time base: every candidate is first resampled (linearly in
+        phase) to ``len(t)`` samples on it. Default: each keeps its own.
+    rank : {"length", "endpoints", "deformation"}, default="length"
+        ``"length"``: shortest adapted curve first, as in the paper.
+        ``"endpoints"``: candidates whose own start and end lie nearest the
+        requested ones first (curve length breaks ties). ``"deformation"``:
+        smallest root-mean-square displacement by the edit first.
+    **lte_params
+        Passed to :func:`skillbank.editing.lte` (e.g. ``margin``, ``max_iter``).
+
+    Returns
+    -------
+    Selection
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skillbank import Constraints
+    >>> s = np.linspace(0.0, 1.0, 50)
+    >>> prims = [np.column_stack([s, a * np.sin(np.pi * s)]) for a in (0.5, 0.1, 0.3)]
+    >>> sel = select_candidates(prims, Constraints(goal=[1.2, 0.0]))
+    >>> [c.id for c in sel.candidates]
+    [1, 2, 0]
+    """
+    if not isinstance(constraints, Constraints):
+        raise ValueError(f"constraints: expected a skillbank Constraints, got {type(constraints).__name__}")
+    if rank not in RANKINGS:
+        raise ValueError(f"rank: expected one of {list(RANKINGS)}, got {rank!r}")
+    if t is not None:
+        t = check_time(t, name="t", min_samples=MIN_SAMPLES)
+    items, rejected, ids = _arrays(primitives, ids, t)
+    n_dims = constraints.n_dims
+    if n_dims is None and items:
+        n_dims = items[0][2].shape[1]
+    usable = []
+    for pid, tk, Y in items:
+        if Y.shape[1] != n_dims:
+            rejected[pid] = f"has {Y.shape[1]} dimensions, the task has {n_dims}"
+            continue
+        try:
+            res = lte(Y, constraints, t=tk, **lte_params)
+        except ValueError as exc:  # e.g. two constraints on one sample of a short candidate
+            rejected[pid] = f"cannot be edited: {exc}"
+            continue
+        if not res.success:
+            what = "still collides" if res.collision else "misses a constraint"
+            rejected[pid] = f"{what} after editing: {res.message}"
+            continue
+        usable.append((pid, tk, Y, res))
+    candidates = [_candidate(pid, tk, Y, res, constraints) for pid, tk, Y, res in usable]
+    key = {
+        "length": lambda c: (c.length,),
+        "endpoints": lambda c: (c.endpoint_distance, c.length),
+        "deformation": lambda c: (c.deformation, c.length),
+    }[rank]
+    candidates.sort(key=key)  # stable: equal keys keep the input order
+    rejected = {pid: rejected[pid] for pid in ids if pid in rejected}  # input order
+    return Selection(candidates=candidates, rejected=rejected, rank=rank)
+
+
+def _candidate(pid, t, Y, res, constraints) -> Candidate:
+    P = np.asarray(res.Y, dtype=float)
+    steps = np.diff(P, axis=0)
+    length = float(np.sqrt(np.einsum("ij,ij->i", steps, steps)).sum())
+    ends = 0.0
+    if constraints.start is not None:
+        ends += float(np.linalg.norm(Y[0] - constraints.start))
+    if constraints.goal is not None:
+        ends += float(np.linalg.norm(Y[-1] - constraints.goal))
+    D = P - Y
+    deformation = float(np.sqrt(np.einsum("ij,ij->i", D, D).mean()))
+    return Candidate(id=pid, t=t, original=Y, adapted=P, length=length, endpoint_distance=ends,
+                     deformation=deformation, message=res.message)

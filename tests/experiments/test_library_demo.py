@@ -1,0 +1,75 @@
+"""The main demo job: a library built, clustered, labelled and reused, with figures and a summary."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skillbank.experiments._library_demo import run_library_demo
+from skillbank.library import Library
+
+
+def check_result(res, out):
+    json.dumps(res)  # JSON-able
+    assert Path(res["summary"]) == out / "summary.md" and Path(res["summary"]).is_file()
+    assert json.loads((out / "summary.json").read_text())["n_demonstrations"] == res["n_demonstrations"]
+    for fig in res["figures"].values():
+        assert Path(fig).is_file() and Path(fig).stat().st_size > 10_000
+    assert len(res["reuse"]) == 2
+    for item in res["reuse"]:
+        assert "error" not in item, item
+        assert item["constraint_error"] < 1e-6 and not item["collision"]
+    assert "majority" in Path(res["summary"]).read_text()
+
+
+def test_lasa_library_demo(tmp_path):
+    res = run_library_demo(tmp_path, segmentation=False)
+    check_result(res, tmp_path)
+    labels = {r["label"] for r in res["skills"]}
+    assert {"Angle", "CShape", "NShape", "WShape", "pick", "place", "return"} <= labels
+    assert all(r["majority"] == 1.0 for r in res["skills"])
+    wshape, place = res["reuse"]
+    assert wshape["skill"] == "WShape" and "sphere" in wshape["task"] and len(wshape["used"]) == 3
+    assert place["skill"] == "place" and len(place["used"]) == 1
+    with Library(res["library"]) as lib:
+        assert lib.summary()["n_demonstrations"] == res["n_demonstrations"] == 31
+        ids = {p.id for p in lib.primitives(label="WShape", load=False)}
+        assert set(wshape["used"]) <= ids
+    # a second run replaces the library rather than adding to it
+    again = run_library_demo(tmp_path, segmentation=False)
+    assert again["n_demonstrations"] == 31 and again["n_primitives"] == res["n_primitives"]
+
+
+def test_reused_trajectory_meets_the_task(tmp_path):
+    res = run_library_demo(tmp_path, segmentation=False)
+    with Library(res["library"]) as lib:
+        from skillbank.experiments._library_demo import _goal_task
+
+        task = _goal_task(lib, "place", "ja", np.array([0.08, -0.12, 0.05]), "x")
+        out = lib.reuse("place", task.constraints, method="ja")
+    Y = out.trajectory["position"]
+    np.testing.assert_allclose(Y[-1], task.constraints.goal, atol=1e-9)
+    np.testing.assert_allclose(Y[0], task.constraints.start, atol=1e-9)
+
+
+def test_demo_with_segmentation_links_it(tmp_path):
+    res = run_library_demo(tmp_path)
+    assert Path(res["segmentation"]).is_file()
+    assert "segmentation/summary.md" in Path(res["summary"]).read_text()
+
+
+def test_rail_library_demo(tmp_path, data_dir):
+    res = run_library_demo(tmp_path, data=data_dir, segmentation=False)
+    check_result(res, tmp_path)
+    skills = {r["label"] for r in res["skills"]}
+    assert res["reuse"][0]["skill"] in skills
+    assert res["reuse"][1]["skill"] == "press-button"
+    assert res["n_demonstrations"] == 31
+
+
+def test_bad_data_folder(tmp_path):
+    with pytest.raises(ValueError, match=r"data: expected a folder with rail/ and seed/"):
+        run_library_demo(tmp_path / "out", data=tmp_path, segmentation=False)
