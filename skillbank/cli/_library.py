@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ._edit import _NEGATIVE_COORDINATES
+
 __all__ = ["add_parser"]
 
 _METHODS = ("lte", "ja", "promp", "elmap", "dmp")
@@ -81,10 +83,14 @@ def add_parser(sub):
                    help="sphere:X,Y[,Z],R or box:XMIN,YMIN[,ZMIN],XMAX,YMAX[,ZMAX] (repeatable)")
     c.add_argument("--method", choices=_METHODS, default="promp", help="representation (default promp)")
     c.add_argument("--k", type=int, default=None, help="candidates passed to the representation")
+    c.add_argument("--rank", choices=["length", "endpoints", "deformation"], default="length",
+                   help="candidate ranking: the paper's curve length (default), or endpoint distance")
     c.add_argument("--seed", type=int, default=None, help="random seed")
     c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
+    # coordinates such as "-25,3" are values, not options (as for `skillbank edit`)
+    c._negative_number_matcher = _NEGATIVE_COORDINATES
     c.set_defaults(func=_reuse)
 
     c = cmds.add_parser("export", help="write the library to a folder of NPZ files and a manifest")
@@ -204,7 +210,8 @@ def _reuse(args) -> int:
     constraints = Constraints.from_cli(start=args.start, goal=args.goal, via=args.via, obstacle=args.obstacle)
     with _open(args) as lib:
         skill = _skill(lib, args.skill)
-        result = lib.reuse(skill, constraints, method=args.method, k=args.k, random_state=args.seed)
+        result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
+                           random_state=args.seed)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz

@@ -399,10 +399,13 @@ class Library:
             raise ValueError(f"skill: no primitive has {what}; labels in the library: {known}")
         return prims
 
-    def reuse(self, skill, constraints, *, method: str = "promp", k=None, random_state=None):
+    def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "length",
+              random_state=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
+        ``rank="length"`` is the paper's ranking; ``"endpoints"`` prefers
+        candidates whose own start and goal are nearest the requested ones.
 
         Returns
         -------
@@ -417,7 +420,7 @@ class Library:
         from ..selection import reuse
 
         return reuse([p.demo for p in prims], constraints, method=method, k=k,
-                     ids=[p.id for p in prims], random_state=random_state)
+                     ids=[p.id for p in prims], rank=rank, random_state=random_state)
 
     def export(self, folder):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

@@ -139,3 +139,24 @@ def test_errors_exit_2_with_one_line(run, tmp_path):
     assert code == 2 and "start: expected a number" in err
     code, _, err = run("library", "reuse", db, "--skill", "x", "--start", "0,0")
     assert code == 2 and "no primitive has label 'x'" in err
+
+
+def test_reuse_accepts_negative_coordinates(run, tmp_path):
+    from skillbank import Demonstration
+    from skillbank.io import write_npz
+
+    t = np.linspace(0.0, 1.0, 60)
+    files = []
+    for k in range(3):
+        path = tmp_path / f"arc{k}.npz"
+        write_npz(Demonstration.from_array(np.column_stack([t, np.sin(np.pi * t) * (1 + 0.1 * k)]), t), path)
+        files.append(path)
+    db = tmp_path / "neg.db"
+    run("library", "init", db)
+    run("library", "add", db, *files, "--whole", "--label", "arc")
+    code, out, err = run("library", "reuse", db, "--skill", "arc", "--start", "-0.5,-0.25",
+                         "--goal", "1,0", "--method", "lte", "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    np.testing.assert_allclose(result["trajectory"][0], [-0.5, -0.25], atol=1e-9)
+    np.testing.assert_allclose(result["trajectory"][-1], [1.0, 0.0], atol=1e-9)
