@@ -7,7 +7,7 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
 from .._validation import check_fraction, check_positive
-from ._features import as_trajectories, resample_trajectories
+from ._features import as_trajectories, resampled_input
 
 __all__ = ["dtw_distance", "DTWFeatures"]
 
@@ -132,16 +132,7 @@ class DTWFeatures(TransformerMixin, BaseEstimator):
         self.window = window
 
     def _prepare(self, X, *, reset: bool) -> np.ndarray:
-        n_points = check_positive(self.n_points, name="n_points", integer=True)
-        if n_points < 2:
-            raise ValueError(f"n_points: expected an integer >= 2, got {self.n_points!r}")
-        trajs, times = as_trajectories(X, name="X", with_time=True)
-        if reset:
-            self.n_features_in_ = trajs[0].shape[1]
-        elif trajs[0].shape[1] != self.n_features_in_:
-            raise ValueError(f"X: expected trajectories with {self.n_features_in_} dimensions, "
-                             f"got {trajs[0].shape[1]}")
-        R = resample_trajectories(trajs, times, n_points, "time")
+        R = resampled_input(self, X, reset=reset, by="time")
         return R - R[:, :1, :]
 
     def _window(self):

@@ -168,7 +168,38 @@ def resample_trajectories(trajs, times, n_points: int, by: str = "arc_length") -
     return out.reshape(len(trajs), n_points, Y.shape[1])
 
 
-class TrajectoryFeatures(TransformerMixin, BaseEstimator):
+def resampled_input(estimator, X, *, reset: bool, by: str) -> np.ndarray:
+    """The featurisers' common input step: check ``n_points``, read the
+    trajectories, record or check their dimension, resample to ``(n, n_points, d)``."""
+    n_points = check_positive(estimator.n_points, name="n_points", integer=True)
+    if n_points < 2:
+        raise ValueError(f"n_points: expected an integer >= 2, got {estimator.n_points!r}")
+    trajs, times = as_trajectories(X, name="X", with_time=True)
+    if reset:
+        estimator.n_features_in_ = trajs[0].shape[1]
+    elif trajs[0].shape[1] != estimator.n_features_in_:
+        raise ValueError(f"X: expected trajectories with {estimator.n_features_in_} dimensions, "
+                         f"got {trajs[0].shape[1]}")
+    return resample_trajectories(trajs, times, int(n_points), by)
+
+
+class FlatPCAMixin:
+    """``fit`` and ``transform`` for featurisers that flatten (``_flat``) then
+    optionally project with a PCA fitted in ``fit_transform``."""
+
+    def fit(self, X, y=None):
+        """Fit the PCA on the training trajectories."""
+        self.fit_transform(X)
+        return self
+
+    def transform(self, X):
+        """Features of shape ``(n_trajectories, n_components)``."""
+        check_is_fitted(self, "n_features_in_")
+        F = self._flat(X, reset=False)
+        return F if self.pca_ is None else self.pca_.transform(F)
+
+
+class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
     """Shape features for libraries without representatives: resample, align the start, PCA.
 
     Each trajectory (any length) is resampled to ``n_points`` evenly spaced
@@ -214,30 +245,16 @@ class TrajectoryFeatures(TransformerMixin, BaseEstimator):
         self.random_state = random_state
 
     def _flat(self, X, *, reset: bool) -> np.ndarray:
-        n_points = check_positive(self.n_points, name="n_points", integer=True)
-        if n_points < 2:
-            raise ValueError(f"n_points: expected an integer >= 2, got {self.n_points!r}")
         if self.by not in ("arc_length", "time"):
             raise ValueError(f"by: expected 'arc_length' or 'time', got {self.by!r}")
         if self.scale not in ("none", "path_length"):
             raise ValueError(f"scale: expected 'none' or 'path_length', got {self.scale!r}")
-        trajs, times = as_trajectories(X, name="X", with_time=True)
-        if reset:
-            self.n_features_in_ = trajs[0].shape[1]
-        elif trajs[0].shape[1] != self.n_features_in_:
-            raise ValueError(f"X: expected trajectories with {self.n_features_in_} dimensions, "
-                             f"got {trajs[0].shape[1]}")
-        R = resample_trajectories(trajs, times, n_points, self.by)
+        R = resampled_input(self, X, reset=reset, by=self.by)
         R -= R[:, :1, :]
         if self.scale == "path_length":
             length = np.linalg.norm(np.diff(R, axis=1), axis=2).sum(axis=1)
             R /= np.where(length > 0, length, 1.0)[:, None, None]
         return R.reshape(R.shape[0], -1)
-
-    def fit(self, X, y=None):
-        """Fit the PCA on the resampled training trajectories."""
-        self.fit_transform(X)
-        return self
 
     def fit_transform(self, X, y=None):
         """Fit and return the features of ``X``."""
@@ -253,9 +270,3 @@ class TrajectoryFeatures(TransformerMixin, BaseEstimator):
                              "start, so PCA has no variance to keep; pass n_components=None")
         self.pca_ = PCA(n_components=self.n_components, random_state=self.random_state)
         return self.pca_.fit_transform(F)
-
-    def transform(self, X):
-        """Features of shape ``(n_trajectories, n_components)``."""
-        check_is_fitted(self, "n_features_in_")
-        F = self._flat(X, reset=False)
-        return F if self.pca_ is None else self.pca_.transform(F)

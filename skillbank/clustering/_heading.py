@@ -5,10 +5,8 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.decomposition import PCA
-from sklearn.utils.validation import check_is_fitted
 
-from .._validation import check_positive
-from ._features import as_trajectories, resample_trajectories
+from ._features import FlatPCAMixin, resampled_input
 
 __all__ = ["HeadingFeatures", "heading_directions"]
 
@@ -55,7 +53,7 @@ def heading_directions(R: np.ndarray, *, mirror: bool = True) -> np.ndarray:
     return D / np.where(norm > 0.0, norm, 1.0)
 
 
-class HeadingFeatures(TransformerMixin, BaseEstimator):
+class HeadingFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
     """Direction-over-time features, invariant to start, goal, facing and size.
 
     Each trajectory is resampled to ``n_points`` samples evenly in time, put
@@ -101,23 +99,9 @@ class HeadingFeatures(TransformerMixin, BaseEstimator):
         self.random_state = random_state
 
     def _flat(self, X, *, reset: bool) -> np.ndarray:
-        n_points = check_positive(self.n_points, name="n_points", integer=True)
-        if n_points < 2:
-            raise ValueError(f"n_points: expected an integer >= 2, got {self.n_points!r}")
-        trajs, times = as_trajectories(X, name="X", with_time=True)
-        if reset:
-            self.n_features_in_ = trajs[0].shape[1]
-        elif trajs[0].shape[1] != self.n_features_in_:
-            raise ValueError(f"X: expected trajectories with {self.n_features_in_} dimensions, "
-                             f"got {trajs[0].shape[1]}")
-        R = resample_trajectories(trajs, times, int(n_points), "time")
+        R = resampled_input(self, X, reset=reset, by="time")
         U = heading_directions(R, mirror=bool(self.mirror))
         return U.reshape(U.shape[0], -1)
-
-    def fit(self, X, y=None):
-        """Fit the PCA on the training trajectories."""
-        self.fit_transform(X)
-        return self
 
     def fit_transform(self, X, y=None):
         """Fit and return the features of ``X``, shape ``(n_trajectories, n_components)``."""
@@ -133,9 +117,3 @@ class HeadingFeatures(TransformerMixin, BaseEstimator):
             n_comp = min(int(n_comp), F.shape[0], F.shape[1])
         self.pca_ = PCA(n_components=n_comp, random_state=self.random_state)
         return self.pca_.fit_transform(F)
-
-    def transform(self, X):
-        """Features of shape ``(n_trajectories, n_components)``."""
-        check_is_fitted(self, "n_features_in_")
-        F = self._flat(X, reset=False)
-        return F if self.pca_ is None else self.pca_.transform(F)
