@@ -9,31 +9,11 @@ import pytest
 
 import skillbank
 import skillbank.io as sio
-from skillbank.cli import _cluster, _main
+from skillbank.cli import _cluster
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.fixture
-def cli(monkeypatch, capsys):
-    """Run ``skillbank`` with the cluster command registered (whether or not _main wires it yet)."""
-    build = _main.build_parser
-
-    def parser():
-        p = build()
-        sub = next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction")
-        if "cluster" not in sub.choices:
-            _cluster.add_parser(sub)
-        return p
-
-    monkeypatch.setattr(_main, "build_parser", parser)
-
-    def call(*argv):
-        code = _main.main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    return call
 
 
 def _blobs(n=20, seed=0):

@@ -15,7 +15,6 @@ import pytest
 import skillbank
 import skillbank.io as sio
 from skillbank._constraints import Constraints
-from skillbank.cli import _edit, _main
 from skillbank.metrics import dtw_distance, frechet_distance
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -35,26 +34,6 @@ SHAPE = {
 PLAIN = {"lte": 1e-12, "ja": 1e-4, "promp": 6e-3, "elmap": 8e-3, "dmp": 1e-3}  # 0, 4e-5, 2.7e-3, 3.9e-3, 2e-4
 
 
-@pytest.fixture
-def cli(monkeypatch, capsys):
-    """Run ``skillbank`` with the edit command registered (whether or not _main wires it yet)."""
-    build = _main.build_parser
-
-    def parser():
-        p = build()
-        sub = next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction")
-        if "edit" not in sub.choices:
-            _edit.add_parser(sub)
-        return p
-
-    monkeypatch.setattr(_main, "build_parser", parser)
-
-    def call(*argv):
-        code = _main.main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    return call
 
 
 def arc(k: int, n: int = 200) -> skillbank.Demonstration:

@@ -7,31 +7,9 @@ import re
 
 import pytest
 
-from skillbank.cli import _experiment, _main
-
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.fixture
-def cli(monkeypatch, capsys):
-    """Run ``skillbank`` with the experiment command registered (whether or not _main wires it yet)."""
-    build = _main.build_parser
-
-    def parser():
-        p = build()
-        sub = next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction")
-        if "experiment" not in sub.choices:
-            _experiment.add_parser(sub)
-        return p
-
-    monkeypatch.setattr(_main, "build_parser", parser)
-
-    def call(*argv):
-        code = _main.main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    return call
 
 
 def test_paper_mode_json(cli, data_dir):

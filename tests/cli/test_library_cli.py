@@ -2,45 +2,16 @@
 
 from __future__ import annotations
 
-import argparse
-import importlib
 import json
 import sqlite3
 
 import numpy as np
 import pytest
 
-from skillbank.cli import _library, _main
-
 
 @pytest.fixture
-def run(monkeypatch, capsys):
-    """``skillbank ...`` through the real ``main``; registers ``library`` if _main does not yet."""
-    original = _main.build_parser
-
-    def build_parser():
-        parser = original()
-        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-        if "library" not in sub.choices:
-            _library.add_parser(sub)
-        return parser
-
-    monkeypatch.setattr(_main, "build_parser", build_parser)
-
-    def call(*argv):
-        capsys.readouterr()
-        code = _main.main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    return call
-
-
-def _has_selection() -> bool:
-    try:
-        return hasattr(importlib.import_module("skillbank.selection"), "reuse")
-    except ImportError:
-        return False
+def run(cli):
+    return cli
 
 
 def test_end_to_end_on_rail(run, tmp_path, data_dir):
@@ -69,8 +40,6 @@ def test_end_to_end_on_rail(run, tmp_path, data_dir):
     assert doc["primitives"][0]["n_steps"] == 1000
     code, text, _ = run("library", "list", db)
     assert code == 0 and "cluster 0:" in text and "label first" in text
-    if not _has_selection():
-        pytest.skip("skillbank.selection.reuse is not in the tree yet (engineer S)")
     from skillbank.io import read_rail_file
 
     held = read_rail_file(rail / "REACHING" / "3.mat")[0]["position"]
