@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import re
 import warnings
 from pathlib import Path
 
+from ._options import METHODS, add_constraint_options
+
 __all__ = ["add_parser", "run", "METHODS", "read_demonstrations", "reproduce", "edit_metrics"]
 
-METHODS = ("lte", "ja", "promp", "elmap", "dmp")
-_NEGATIVE_COORDINATES = re.compile(r"^-(\d|\.\d)[\d.eE+\-,]*$")
 _SINGLE = {"lte": "Laplacian trajectory editing", "ja": "the jerk-accuracy model"}
 
 
@@ -31,19 +30,10 @@ def add_parser(sub):
     p.add_argument("--method", choices=METHODS, default="lte",
                    help="lte (Laplacian trajectory editing), ja (jerk-accuracy), promp, elmap (elastic map), "
                         "dmp; default lte")
-    p.add_argument("--start", default=None, metavar="X,Y[,Z]", help="new initial point")
-    p.add_argument("--goal", default=None, metavar="X,Y[,Z]", help="new final point")
-    p.add_argument("--via", action="append", default=[], metavar="PHASE:X,Y[,Z]",
-                   help="via-point at a phase in [0, 1] (repeatable)")
-    p.add_argument("--obstacle", action="append", default=[], metavar="sphere:X,Y,Z,R|box:...",
-                   help="region to avoid: sphere:X,Y[,Z],R or box:XMIN,YMIN[,ZMIN],XMAX,YMAX[,ZMAX] "
-                        "(repeatable)")
+    add_constraint_options(p)
     p.add_argument("--out", type=Path, default=None, help="write the result here (.csv or .npz)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None, help="write a figure of the edit here")
-    # Let coordinates such as "-25,3" through as values (argparse only knows "-25" as a number);
-    # "--start=-25,3" works either way.
-    p._negative_number_matcher = _NEGATIVE_COORDINATES
     p.set_defaults(func=run)
     return p
 

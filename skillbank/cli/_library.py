@@ -5,11 +5,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._edit import _NEGATIVE_COORDINATES
+from ._options import METHODS, add_constraint_options, add_segmentation_options
 
 __all__ = ["add_parser"]
-
-_METHODS = ("lte", "ja", "promp", "elmap", "dmp")
 
 
 def add_parser(sub):
@@ -22,8 +20,6 @@ def add_parser(sub):
     >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
     ArgumentParser(...)
     """
-    from ._main import _size
-
     p = sub.add_parser("library", help="a durable library of motion primitives (SQLite)")
     cmds = p.add_subparsers(dest="library_command", required=True)
 
@@ -34,15 +30,7 @@ def add_parser(sub):
     c = cmds.add_parser("add", help="segment demonstrations and store their primitives")
     c.add_argument("db", type=Path)
     c.add_argument("files", nargs="+", type=Path, help="demonstration files (.h5, .mat, .csv, .npz)")
-    c.add_argument("--demo", type=int, default=None, help="only this demonstration of multi-demo files")
-    c.add_argument("--group", default="normalized", help="group inside handwriting HDF5 files")
-    c.add_argument("--stream", action="append", default=None, help="stream to segment (repeatable)")
-    c.add_argument("--window", type=_size, default="auto", help="window in samples or seconds (0.1s)")
-    c.add_argument("--min-size", type=_size, default="auto", help="minimum segment size")
-    c.add_argument("--threshold", type=float, default=0.4, help="minimum jerk-event prominence in (0, 1]")
-    c.add_argument("--grace", type=_size, default="auto", help="samples ignored at each end")
-    c.add_argument("--mode", choices=["deterministic", "sampling"], default="deterministic")
-    c.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
+    add_segmentation_options(c)
     c.add_argument("--whole", action="store_true", help="store each demonstration as one primitive")
     c.add_argument("--label", default=None, help="label every primitive added")
     c.add_argument("--assign", choices=["incremental", "none", "recluster"], default="incremental",
@@ -76,12 +64,8 @@ def add_parser(sub):
     c = cmds.add_parser("reuse", help="reproduce a skill under new constraints")
     c.add_argument("db", type=Path)
     c.add_argument("--skill", required=True, help="a label, or a cluster id")
-    c.add_argument("--start", default=None, help="start position X,Y[,Z]")
-    c.add_argument("--goal", default=None, help="goal position X,Y[,Z]")
-    c.add_argument("--via", action="append", default=[], help="via-point PHASE:X,Y[,Z] (repeatable)")
-    c.add_argument("--obstacle", action="append", default=[],
-                   help="sphere:X,Y[,Z],R or box:XMIN,YMIN[,ZMIN],XMAX,YMAX[,ZMAX] (repeatable)")
-    c.add_argument("--method", choices=_METHODS, default="promp", help="representation (default promp)")
+    add_constraint_options(c)
+    c.add_argument("--method", choices=METHODS, default="promp", help="representation (default promp)")
     c.add_argument("--k", type=int, default=None, help="candidates passed to the representation")
     c.add_argument("--rank", choices=["length", "endpoints", "deformation"], default="length",
                    help="candidate ranking: the paper's curve length (default), or endpoint distance")
@@ -89,8 +73,6 @@ def add_parser(sub):
     c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
-    # coordinates such as "-25,3" are values, not options (as for `skillbank edit`)
-    c._negative_number_matcher = _NEGATIVE_COORDINATES
     c.set_defaults(func=_reuse)
 
     c = cmds.add_parser("export", help="write the library to a folder of NPZ files and a manifest")

@@ -8,34 +8,15 @@ import sys
 from pathlib import Path
 
 from . import _cluster, _edit, _experiment, _library
+from ._options import add_segmentation_options
 
 __all__ = ["main", "build_parser"]
-
-
-def _size(value: str):
-    """Samples (``64``) or seconds (``0.1s``), checked later against the data."""
-    value = value.strip()
-    if value == "auto" or value.endswith("s"):
-        return value
-    try:
-        return int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected an integer number of samples or seconds like '0.1s', got {value!r}") from None
 
 
 def _add_segment(sub):
     p = sub.add_parser("segment", help="cut a demonstration into motion primitives")
     p.add_argument("input", help="demonstration file (.h5, .mat, .csv, .npz)")
-    p.add_argument("--demo", type=int, default=None, help="demonstration index inside multi-demo files")
-    p.add_argument("--group", default="normalized", help="group inside handwriting HDF5 files")
-    p.add_argument("--stream", action="append", default=None, help="stream to use (repeatable; default all)")
-    p.add_argument("--window", type=_size, default="auto", help="window in samples or seconds (0.1s)")
-    p.add_argument("--min-size", type=_size, default="auto", help="minimum segment size, samples or seconds")
-    p.add_argument("--threshold", type=float, default=0.4, help="minimum jerk-event prominence in (0, 1]")
-    p.add_argument("--grace", type=_size, default="auto", help="samples ignored at each end")
-    p.add_argument("--mode", choices=["deterministic", "sampling"], default="deterministic")
-    p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
+    add_segmentation_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None, help="write a summary figure to this file")
     p.add_argument("--out", type=Path, default=None, help="write each segment to this folder")
