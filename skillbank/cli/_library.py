@@ -199,8 +199,10 @@ def _reuse(args) -> int:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz
         writer(result.trajectory, args.out)
     if args.plot is not None:
-        _plot_reuse([used[i]["position"] for i in result.used if i in used],
-                    result.trajectory["position"], constraints, args.plot, title=f"skill {args.skill}")
+        from ..plotting import plot_edit
+
+        plot_edit(result.trajectory, args.plot, demos=[used[i] for i in result.used if i in used],
+                  constraints=constraints, title=f"skill {args.skill}")
     if args.json:
         print(json.dumps(result.to_dict()))
         return 0
@@ -213,46 +215,6 @@ def _reuse(args) -> int:
         if path is not None:
             print(f"  wrote {path}")
     return 0
-
-
-def _plot_reuse(candidates, Y, constraints, path, *, title=""):
-    """Used candidates (grey), the reproduction (blue), constraints (red), obstacles; x-y and x-z views."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle, Rectangle
-
-    from .._constraints import Box, Sphere
-
-    pairs = [(0, 1)] + ([(0, 2)] if Y.shape[1] >= 3 else [])
-    if Y.shape[1] < 2:
-        pairs = [(0, 0)]
-    fig, axes = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5), squeeze=False)
-    idx, pts = constraints.resolve(Y.shape[0])
-    for ax, (a, b) in zip(axes[0], pairs, strict=True):
-        for k, C in enumerate(candidates):
-            ax.plot(C[:, a], C[:, b], color="0.6", lw=1, label="used candidates" if k == 0 else None)
-        ax.plot(Y[:, a], Y[:, b], color="tab:blue", lw=2, label="reproduction")
-        if len(idx):
-            ax.scatter(pts[:, a], pts[:, b], color="tab:red", zorder=3, label="constraints")
-        for ob in constraints.obstacles:
-            if isinstance(ob, Sphere):
-                ax.add_patch(Circle((ob.center[a], ob.center[b]), ob.radius, color="tab:orange", alpha=0.4))
-            elif isinstance(ob, Box):
-                lo, hi = ob.lower, ob.upper
-                ax.add_patch(Rectangle((lo[a], lo[b]), hi[a] - lo[a], hi[b] - lo[b], color="tab:orange",
-                                       alpha=0.4))
-        ax.set_xlabel(f"dim {a}")
-        ax.set_ylabel(f"dim {b}")
-        ax.set_aspect("equal", adjustable="datalim")
-    axes[0][0].legend(loc="best", fontsize=8)
-    fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
 
 
 def _export(args) -> int:

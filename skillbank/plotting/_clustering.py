@@ -15,13 +15,13 @@ from matplotlib.lines import Line2D
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from .._validation import check_array
+from ._segmentation import _save
 
 __all__ = ["plot_cluster_comparison", "plot_rail_experiment"]
 
 # Red, green, blue first, as in the paper's figure; then matplotlib's tab10.
 _PALETTE = ("#e41a1c", "#2ca02c", "#1f3fd6", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
             "#bcbd22", "#17becf")
-_DPI = 150
 _MAX_POINTS = 200  # per drawn trajectory; plenty for a thumbnail
 
 
@@ -192,10 +192,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
         fig.legend(handles, class_names, loc="lower center", ncol=len(class_names), frameon=False)
     if title:
         fig.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI, bbox_inches="tight")
-    return path
+    return _save(fig, path)
 
 
 def plot_rail_experiment(result, path) -> Path:

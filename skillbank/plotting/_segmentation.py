@@ -50,6 +50,7 @@ def _check_segmented_stream(result: SegmentationResult, stream):
 
 
 def _save(fig: Figure, path) -> Path:
+    """Write ``fig`` to ``path`` (parents created); every plotting module saves through here."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=_DPI, bbox_inches="tight")
