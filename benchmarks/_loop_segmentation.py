@@ -117,9 +117,10 @@ def loop_gradient(t: list, f: list, edge_order: int = 2) -> list:
 
 
 def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust",
-                      grace: int = 0):
+                      grace: int = 0, jerk_norm=None):
     """Raw jerk norm and normalised windowed profile of one stream, with loops.
 
+    ``jerk_norm`` is the absolute jerk norm if already computed (:func:`loop_jerk_norm`).
     Returns ``(raw, profile)`` as numpy arrays of shape (n_steps,).
     """
     t = [float(v) for v in np.asarray(t, dtype=float)]
@@ -128,26 +129,10 @@ def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: 
         Y = Y[:, None]
     n, dims = Y.shape
 
-    # derivatives, one dimension (column) at a time
-    velocity = []
-    jerk = []
-    for d in range(dims):
-        column = [float(v) for v in Y[:, d]]
-        v = loop_gradient(t, column)
-        a = loop_gradient(t, v)
-        j = loop_gradient(t, a)
-        # skillbank takes the speed from np.gradient's default edge_order=1, which
-        # differs from the jerk's first derivative at the two end samples only
-        velocity.append(loop_gradient(t, column, edge_order=1))
-        jerk.append(j)
-
-    # jerk norm per sample
-    raw = [0.0] * n
-    for i in range(n):
-        total = 0.0
-        for d in range(dims):
-            total += jerk[d][i] * jerk[d][i]
-        raw[i] = math.sqrt(total)
+    # skillbank takes the speed from np.gradient's default edge_order=1, which
+    # differs from the jerk's first derivative at the two end samples only
+    velocity = [loop_gradient(t, [float(v) for v in Y[:, d]], edge_order=1) for d in range(dims)]
+    raw = list(loop_jerk_norm(t, Y) if jerk_norm is None else jerk_norm)
 
     # relative scale: divide by the local speed plus 5 % of the typical speed
     if scale == "relative":
@@ -341,11 +326,12 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
     profiles, raws, changepoints, curves, params = {}, {}, {}, {}, {}
     for name in names:
         p = _settings(n, t, window, min_size, threshold, grace, scale, normalize)
+        jerk_norm = loop_jerk_norm(t, demo[name])
         raw, profile = loop_jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
-                                         normalize=p["normalize"], grace=p["grace"])
+                                         normalize=p["normalize"], grace=p["grace"], jerk_norm=jerk_norm)
         cps, _ = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
                                      grace=p["grace"], **_window_argument(p["window"]))
-        cps = loop_refine(cps, loop_jerk_norm(t, demo[name]), half_width=max(2, p["window"] // 4))
+        cps = loop_refine(cps, jerk_norm, half_width=max(2, p["window"] // 4))
         profiles[name], raws[name], changepoints[name], params[name] = profile, raw, cps, p
         curves[name] = _gaussian_curve(cps, n, sigma=p["window"] / 2.0, floor=floor)
 
