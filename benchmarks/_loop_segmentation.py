@@ -9,10 +9,12 @@ samples, and the sliding-window mean sums the whole window at every sample
 * as the reference the benchmark compares the vectorised implementation with;
 * as an independent check of that implementation (``tests/segmentation/test_loop_baseline.py``).
 
-Only two pieces are shared with skillbank: ``numpy.percentile`` (for the
-typical speed) and :func:`skillbank.segmentation.detect_changepoints`
+Three pieces are shared with skillbank: ``numpy.percentile`` (for the
+typical speed), :func:`skillbank.segmentation.detect_changepoints`
 (the find_peaks / peak_widths changepoint rule, which runs on the profile and
-is not the hot path). Only ``mode="deterministic"`` is implemented.
+is not the hot path) and :func:`skillbank.segmentation.gate_changepoints`
+(the stop-or-turn gate, which loops over changepoints, not samples).
+Only ``mode="deterministic"`` is implemented.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import math
 
 import numpy as np
 
-from skillbank.segmentation import detect_changepoints, to_samples
+from skillbank.segmentation import detect_changepoints, gate_changepoints, to_samples
 
 __all__ = ["loop_segment", "loop_gradient", "loop_jerk_profile", "LoopResult"]
 
@@ -298,7 +300,8 @@ def _window_argument(window: int) -> dict:
     return {}
 
 
-def _settings(n: int, t: np.ndarray, window, min_size, threshold, grace, scale, normalize) -> dict:
+def _settings(n: int, t: np.ndarray, window, min_size, threshold, grace, scale, normalize,
+              stop_ratio=0.5, min_turn=45.0) -> dict:
     """Same 'auto' rules as MultimodalSegmenter.
 
     window: 4 % of n (at least 8); min_size: 2 x window; grace: window.
@@ -307,11 +310,12 @@ def _settings(n: int, t: np.ndarray, window, min_size, threshold, grace, scale, 
     min_size = 2 * window if min_size == "auto" else to_samples(min_size, t, name="min_size")
     grace = window if grace == "auto" else (0 if grace == 0 else to_samples(grace, t, name="grace"))
     return {"window": window, "min_size": min_size, "threshold": float(threshold), "grace": grace,
-            "scale": scale, "normalize": normalize}
+            "scale": scale, "normalize": normalize, "stop_ratio": stop_ratio, "min_turn": min_turn}
 
 
 def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshold=0.4, grace="auto",
-                 scale="relative", normalize="robust", floor=0.05, min_support=None) -> LoopResult:
+                 scale="relative", normalize="robust", stop_ratio=0.5, min_turn=45.0, floor=0.05,
+                 min_support=None) -> LoopResult:
     """Segment ``demo`` with the loop baseline; parameters as :func:`skillbank.segmentation.segment`.
 
     Returns
@@ -325,13 +329,18 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
 
     profiles, raws, changepoints, curves, params = {}, {}, {}, {}, {}
     for name in names:
-        p = _settings(n, t, window, min_size, threshold, grace, scale, normalize)
+        p = _settings(n, t, window, min_size, threshold, grace, scale, normalize, stop_ratio, min_turn)
         jerk_norm = loop_jerk_norm(t, demo[name])
         raw, profile = loop_jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
                                          normalize=p["normalize"], grace=p["grace"], jerk_norm=jerk_norm)
-        cps, _ = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
-                                     grace=p["grace"], **_window_argument(p["window"]))
-        cps = loop_refine(cps, jerk_norm, half_width=max(2, p["window"] // 4))
+        cps, strength = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
+                                            grace=p["grace"], **_window_argument(p["window"]))
+        cps = np.asarray(loop_refine(cps, jerk_norm, half_width=max(2, p["window"] // 4)), dtype=int)
+        if stop_ratio is not None:
+            cps, strength = gate_changepoints(cps, strength, t, demo[name], window=p["window"],
+                                              min_size=p["min_size"], grace=p["grace"],
+                                              stop_ratio=stop_ratio, min_turn=min_turn)
+            cps = _suppress_close(cps, strength, min_size=p["min_size"], n=n)
         profiles[name], raws[name], changepoints[name], params[name] = profile, raw, cps, p
         curves[name] = _gaussian_curve(cps, n, sigma=p["window"] / 2.0, floor=floor)
 

@@ -122,7 +122,8 @@ def _add(args) -> int:
             demo.metadata.setdefault("source", str(path))
         demos.extend(loaded)
     segmentation = {"streams": args.stream, "window": args.window, "min_size": args.min_size,
-                    "threshold": args.threshold, "grace": args.grace, "mode": args.mode,
+                    "threshold": args.threshold, "grace": args.grace, "stop_ratio": args.stop_ratio,
+                    "min_turn": args.min_turn, "mode": args.mode,
                     "random_state": args.seed}
     with _open(args) as lib:
         ids = lib.add_many(demos, segment=not args.whole, segmentation=segmentation, label=args.label,

@@ -31,7 +31,8 @@ def _run_segment(args) -> int:
     demo = io.load(args.input, index=args.demo, group=args.group)
     result = segment(
         demo, args.stream, window=args.window, min_size=args.min_size, threshold=args.threshold,
-        grace=args.grace, mode=args.mode, random_state=args.seed,
+        grace=args.grace, stop_ratio=args.stop_ratio, min_turn=args.min_turn, mode=args.mode,
+        random_state=args.seed,
     )
     written = []
     if args.out is not None:

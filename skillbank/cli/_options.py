@@ -23,6 +23,16 @@ def size(value: str):
             f"expected an integer number of samples or seconds like '0.1s', got {value!r}") from None
 
 
+def ratio_or_none(value: str):
+    """A number, or ``none`` to switch the stop-or-turn gate off."""
+    if value.strip().lower() == "none":
+        return None
+    try:
+        return float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1] or 'none', got {value!r}") from None
+
+
 def add_segmentation_options(p) -> None:
     """Input selection and :class:`~skillbank.segmentation.MultimodalSegmenter` parameters."""
     p.add_argument("--demo", type=int, default=None, help="demonstration index inside multi-demo files")
@@ -32,6 +42,11 @@ def add_segmentation_options(p) -> None:
     p.add_argument("--min-size", type=size, default="auto", help="minimum segment size, samples or seconds")
     p.add_argument("--threshold", type=float, default=0.4, help="minimum jerk-event prominence in (0, 1]")
     p.add_argument("--grace", type=size, default="auto", help="samples ignored at each end")
+    p.add_argument("--stop-ratio", type=ratio_or_none, default=0.5,
+                   help="keep a changepoint where the speed drops below this fraction of the movements' "
+                        "peak speed ('none': keep every jerk event, as in the paper)")
+    p.add_argument("--min-turn", type=float, default=45.0,
+                   help="or where the direction turns by at least this many degrees")
     p.add_argument("--mode", choices=["deterministic", "sampling"], default="deterministic")
     p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
 

@@ -1,6 +1,7 @@
 """Probabilistic multimodal segmentation of demonstrations into motion primitives."""
 
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
+from ._gate import gate_changepoints, smoothed_speed
 from ._keypoints import (
     changepoint_probability,
     combine_probabilities,
@@ -15,5 +16,5 @@ __all__ = [
     "MultimodalSegmenter", "SegmentationResult", "StreamSegmentation", "segment", "jerk", "jerk_profile",
     "windowed_mean", "normalize_profile", "detect_changepoints", "changepoint_probability",
     "combine_probabilities", "keypoints_deterministic", "keypoints_sampling", "to_samples",
-    "refine_to_jerk_centre",
+    "refine_to_jerk_centre", "gate_changepoints", "smoothed_speed",
 ]

@@ -97,9 +97,9 @@ def detect_changepoints(profile, *, threshold: float, min_size: int, grace: int,
 
     Examples
     --------
-    >>> p = np.zeros(200); p[95:105] = 1.0
-    >>> detect_changepoints(p, threshold=0.5, min_size=20, grace=5)[0].tolist()
-    [95]
+    >>> p = np.zeros(200); p[90:100] = np.linspace(0.1, 1.0, 10); p[100:110] = 1.0
+    >>> detect_changepoints(p, threshold=0.5, min_size=20, grace=5)[0].tolist()  # rises through 0.5
+    [94]
     """
     profile = np.asarray(profile, dtype=float)
     n = profile.shape[0]

@@ -9,7 +9,8 @@ import numpy as np
 
 from .._demonstration import Demonstration
 from .._validation import check_fraction, check_positive
-from ._changepoints import detect_changepoints, refine_to_jerk_centre
+from ._changepoints import detect_changepoints, refine_to_jerk_centre, suppress_close
+from ._gate import gate_changepoints
 from ._keypoints import (
     changepoint_probability,
     combine_probabilities,
@@ -21,7 +22,7 @@ from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
 
-_STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize")
+_STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize", "stop_ratio", "min_turn")
 _SECONDS = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*s\s*$")
 
 
@@ -74,6 +75,16 @@ class MultimodalSegmenter:
         local speed, making streams of any unit comparable.
     normalize : {"robust", "max"}, default="robust"
         ``"max"`` is the paper's; ``"robust"`` the median of the five highest peaks.
+    stop_ratio : float in [0, 1] or None, default=0.5
+        The stop-or-turn gate (:func:`gate_changepoints`): a jerk event is a
+        boundary only where the speed drops below this fraction of the peak
+        speed of the movements either side (it is then moved to the slowest
+        sample of a brief stop), or where the motion turns by ``min_turn``.
+        This removes the events that jerk alone finds in the middle of a
+        smooth movement. ``None`` keeps every event, as the paper does.
+    min_turn : float in [0, 180], default=45.0
+        Change of direction, in degrees, over one window either side of an
+        event, that makes it a boundary without a stop.
     stream_params : mapping, optional
         Per-stream overrides, e.g. ``{"force": {"threshold": 0.3}}``.
     mode : {"deterministic", "sampling"}, default="deterministic"
@@ -107,8 +118,8 @@ class MultimodalSegmenter:
 
     def __init__(
         self, *, window="auto", min_size="auto", threshold=0.4, grace="auto", scale="relative",
-        normalize="robust", stream_params=None, mode="deterministic", min_support=None,
-        n_samples=20, min_hits=3, floor=0.05, random_state=None,
+        normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, mode="deterministic",
+        min_support=None, n_samples=20, min_hits=3, floor=0.05, random_state=None,
     ):
         self.window = window
         self.min_size = min_size
@@ -116,6 +127,8 @@ class MultimodalSegmenter:
         self.grace = grace
         self.scale = scale
         self.normalize = normalize
+        self.stop_ratio = stop_ratio
+        self.min_turn = min_turn
         self.stream_params = stream_params
         self.mode = mode
         self.min_support = min_support
@@ -142,8 +155,12 @@ class MultimodalSegmenter:
         threshold = check_fraction(raw["threshold"], name="threshold")
         if threshold == 0:
             raise ValueError("threshold: expected a number in (0, 1], got 0")
+        stop_ratio = None if raw["stop_ratio"] is None else check_fraction(raw["stop_ratio"],
+                                                                          name="stop_ratio")
+        min_turn = check_fraction(raw["min_turn"], name="min_turn", low=0.0, high=180.0)
         return {"window": window, "min_size": min_size, "threshold": threshold, "grace": grace,
-                "scale": raw["scale"], "normalize": raw["normalize"]}
+                "scale": raw["scale"], "normalize": raw["normalize"], "stop_ratio": stop_ratio,
+                "min_turn": min_turn}
 
     def fit(self, demo: Demonstration, streams=None) -> MultimodalSegmenter:
         """Segment ``demo`` using ``streams`` (default: all of its streams).
@@ -183,6 +200,13 @@ class MultimodalSegmenter:
                                                 grace=p["grace"], window=p["window"])
             # the profile places an event to a sample or two; the raw jerk's centre pins it
             cps = refine_to_jerk_centre(cps, absj, half_width=max(2, p["window"] // 4))
+            if p["stop_ratio"] is not None:
+                cps, strength = gate_changepoints(
+                    cps, strength, t, demo[name], window=p["window"], min_size=p["min_size"],
+                    grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+                kept = suppress_close(cps, strength, min_size=p["min_size"], n_steps=n)
+                strength = strength[np.isin(cps, kept)]
+                cps = kept
             curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},

@@ -14,7 +14,7 @@ def _run(capsys, *argv):
     return code, out, err
 
 
-@pytest.mark.parametrize("index", [1, 3, 4])
+@pytest.mark.parametrize("index", range(5))
 def test_r_demos_give_three_segments(data_dir, capsys, index):
     path = str(data_dir / "seed" / "r_shape.h5")
     code, out, _ = _run(capsys, "segment", path, "--demo", str(index), "--json")
@@ -23,6 +23,16 @@ def test_r_demos_give_three_segments(data_dir, capsys, index):
     assert doc["n_segments"] == 3
     assert len(doc["keypoints"]) == len(doc["keypoint_times"]) == 2
     assert set(doc["changepoints"]) == {"position"}
+
+
+def test_paper_parameters_with_and_without_the_gate(data_dir, capsys):
+    path = str(data_dir / "seed" / "r_shape.h5")
+    paper = ["segment", path, "--demo", "3", "--window", "16", "--min-size", "64", "--threshold", "0.16",
+             "--json"]
+    code, out, _ = _run(capsys, *paper)
+    assert code == 0 and json.loads(out)["n_segments"] == 3
+    code, out, _ = _run(capsys, *paper, "--stop-ratio", "none")
+    assert code == 0 and json.loads(out)["n_segments"] > 3
 
 
 def test_three_button_gives_four_segments(data_dir, capsys, tmp_path):
@@ -60,11 +70,14 @@ def test_npz_input_all_streams_seconds_window_and_text_output(capsys, tmp_path):
         (["--threshold", "2"], r"threshold: expected a number in \[0.0, 1.0\], got 2.0"),
         (["--stream", "force"], r"streams: expected names among \['position'\]"),
         (["--mode", "magic"], r"argument --mode: invalid choice"),
+        (["--stop-ratio", "half"], r"argument --stop-ratio: expected a number in \[0, 1\] or 'none'"),
+        (["--stop-ratio", "2"], r"stop_ratio: expected a number in \[0.0, 1.0\], got 2.0"),
+        (["--min-turn", "270"], r"min_turn: expected a number in \[0.0, 180.0\], got 270.0"),
     ],
 )
 def test_bad_parameters_give_one_line_and_status_2(capsys, tmp_path, args, match):
     path = sio.write_csv(synthetic_multistream(), tmp_path / "demo.csv")
-    with pytest.raises(SystemExit) if args[0] in ("--window", "--mode") and args[1] in ("fast", "magic") \
+    with pytest.raises(SystemExit) if args[1] in ("fast", "magic", "half") \
             else _nullcontext():
         code = main(["segment", str(path), *args])
         assert code == 2
