@@ -5,7 +5,12 @@ import sys
 from pathlib import Path
 
 import skillbank.io as sio
-from skillbank.plotting import plot_jerk_profile, plot_keypoint_probability, plot_segments
+from skillbank.plotting import (
+    plot_jerk_profile,
+    plot_keypoint_probability,
+    plot_segment_grid,
+    plot_segments,
+)
 from skillbank.segmentation import segment
 
 here = Path(__file__).resolve().parent / "figures"
@@ -16,6 +21,9 @@ r = segment(r_demo, window=16, min_size=64, threshold=0.16)
 plot_jerk_profile(r, here / "r_changepoints.png")
 plot_keypoint_probability(r, here / "r_segment_probabilities.png")
 plot_segments(r, here / "r_segmented.png", invert_y=True)
+r_all = [segment(d) for d in sio.read_handwriting_h5(data / "seed/r_shape.h5")]
+plot_segment_grid(r_all, here / "r_all_defaults.png", invert_y=True,
+                  titles=[f"demo {i}: cuts {r.keypoints.tolist()}" for i, r in enumerate(r_all)])
 demo = sio.read_robot_h5(data / "seed/three_button_pressing_demo.h5")
 b = segment(demo, ["joints", "position", "force", "gripper"])
 plot_segments(b, here / "three_button_segmented.png", dims=3)

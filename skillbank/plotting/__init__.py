@@ -2,6 +2,7 @@
 
 from ._clustering import plot_cluster_comparison, plot_rail_experiment
 from ._editing import draw_edit, plot_edit
+from ._grid import plot_segment_grid
 from ._segmentation import (
     plot_jerk_profile,
     plot_keypoint_probability,
@@ -12,4 +13,5 @@ from ._segmentation import (
 __all__ = [
     "plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary",
     "plot_cluster_comparison", "plot_rail_experiment", "draw_edit", "plot_edit",
+    "plot_segment_grid",
 ]

@@ -122,3 +122,27 @@ def test_single_segment_without_keypoints(tmp_path):
     assert res.n_segments == 1
     for plot in (plot_jerk_profile, plot_keypoint_probability, plot_segments, plot_segmentation_summary):
         assert _is_png(plot(res, tmp_path / f"{plot.__name__}.png"))
+
+
+def test_plot_segment_grid(result, tmp_path):
+    from skillbank.plotting import plot_segment_grid
+
+    path = plot_segment_grid([result, result], tmp_path / "grid.png", titles=["a", "b"], invert_y=True)
+    assert _is_png(path)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"results": []}, r"results: expected at least one SegmentationResult, got none"),
+        ({"titles": ["only one", "two", "three"]}, r"titles: expected 1 titles, got 3"),
+        ({"stream": "force_x"}, r"stream: expected a stream with at least 2 columns"),
+        ({"results": [object()]}, r"result: expected a SegmentationResult, got object"),
+    ],
+)
+def test_plot_segment_grid_rejects(result, tmp_path, kwargs, match):
+    from skillbank.plotting import plot_segment_grid
+
+    args = {"results": [result], **kwargs}
+    with pytest.raises(ValueError, match=match):
+        plot_segment_grid(args.pop("results"), tmp_path / "g.png", **args)
