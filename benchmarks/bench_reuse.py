@@ -3,7 +3,8 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/bench_reuse.py [--classes reaching pressing] [--limit 10] [--all]
-        [--n-steps 200] [--ranks length endpoints] [--library] [--json PATH] [--data DIR]
+        [--n-steps 200] [--ranks shortlist length deformation endpoints] [--library] [--json PATH]
+        [--data DIR]
 
 For each held-out demonstration of a class, the library holds the other
 demonstrations of that class. The task is the held-out demonstration's start
@@ -16,9 +17,11 @@ Fréchet (metres).
 Compared, in the same run:
 
 - **skillbank** ``selection.reuse`` with each method (lte, ja, promp, elmap,
-  dmp) and each ranking: ``length`` (the paper's: shortest adapted curve
-  first) and ``endpoints`` (the candidate's own start and end nearest to the
-  requested ones first, then length). The candidates are adapted once per task
+  dmp) and each ranking: ``shortlist`` (the default: the 3 candidates the edit
+  deformed least, shortest adapted curve first), ``length`` (the paper's
+  curve length over all candidates: shortest adapted curve first),
+  ``deformation`` (least root-mean-square edit first) and ``endpoints`` (the
+  candidate's own start and end nearest to the requested ones first). The candidates are adapted once per task
   (``select_candidates``) and shared by the methods; a method's time is the
   adaptation time plus its own fit and reproduction.
 - **nearest**: the stored demonstration whose start and end are nearest the
@@ -28,8 +31,8 @@ Compared, in the same run:
 
 ``--library`` also runs the reuse through a real :class:`skillbank.library.Library`
 (one SQLite file per class, demonstrations stored whole under the class label;
-the held-out one removed and re-added around its turn) for the ``length``
-ranking with ProMP, as a check that the stored round trip gives the same result.
+the held-out one removed and re-added around its turn) with its default
+ranking and ProMP, as a check that the stored round trip gives the same result.
 
 Held-out demonstrations: ``--limit`` per class, evenly spread over the class
 (default 10), or all with ``--all``. No timing is asserted anywhere.
@@ -51,7 +54,7 @@ from skillbank import Constraints
 from skillbank.io import load_rail
 from skillbank.metrics import dtw_distance, frechet_distance
 from skillbank.representations import DMP, resample
-from skillbank.selection import METHODS, reproduce_selection, select_candidates
+from skillbank.selection import METHODS, RANKINGS, reproduce_selection, select_candidates
 
 CLASSES = ("reaching", "pushing", "pressing", "writing")
 
@@ -105,7 +108,7 @@ def run_class(name, arrays, held_out, t, *, ranks, methods, rng, library_check=N
         if library_check is not None:
             t0 = time.perf_counter()
             P = library_check(h, task)
-            record("skillbank Library.reuse promp (length)", P, time.perf_counter() - t0)
+            record("skillbank Library.reuse promp (shortlist, the default)", P, time.perf_counter() - t0)
     return rows
 
 
@@ -174,8 +177,8 @@ def main(argv=None) -> None:
     parser.add_argument("--limit", type=int, default=10, help="held-out demos per class (default 10)")
     parser.add_argument("--all", action="store_true", help="hold out every demonstration")
     parser.add_argument("--n-steps", type=int, default=200, help="samples per trajectory (default 200)")
-    parser.add_argument("--ranks", nargs="+", default=["length", "endpoints"],
-                        choices=["length", "endpoints", "deformation"])
+    parser.add_argument("--ranks", nargs="+", default=["shortlist", "length", "deformation", "endpoints"],
+                        choices=list(RANKINGS))
     parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=list(METHODS))
     parser.add_argument("--seed", type=int, default=0, help="seed of the random-demo DMP baseline")
     parser.add_argument("--library", action="store_true", help="also reuse through a real Library")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._options import METHODS, add_constraint_options, add_segmentation_options
+from ._options import METHODS, RANKINGS, add_constraint_options, add_segmentation_options
 
 __all__ = ["add_parser"]
 
@@ -67,8 +67,10 @@ def add_parser(sub):
     add_constraint_options(c)
     c.add_argument("--method", choices=METHODS, default="promp", help="representation (default promp)")
     c.add_argument("--k", type=int, default=None, help="candidates passed to the representation")
-    c.add_argument("--rank", choices=["length", "endpoints", "deformation"], default="length",
-                   help="candidate ranking: the paper's curve length (default), or endpoint distance")
+    c.add_argument("--rank", choices=list(RANKINGS), default="shortlist",
+                   help="candidate ranking (default shortlist: the least deformed candidates, "
+                        "shortest curve first; length: the paper's curve length over all)")
+    c.add_argument("--shortlist", type=int, default=3, help="shortlist size for --rank shortlist")
     c.add_argument("--seed", type=int, default=None, help="random seed")
     c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
@@ -194,7 +196,7 @@ def _reuse(args) -> int:
     with _open(args) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           random_state=args.seed)
+                           shortlist=args.shortlist, random_state=args.seed)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz

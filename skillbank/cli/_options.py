@@ -5,9 +5,11 @@ from __future__ import annotations
 import argparse
 import re
 
-__all__ = ["METHODS", "size", "add_segmentation_options", "add_constraint_options"]
+__all__ = ["METHODS", "RANKINGS", "size", "add_segmentation_options", "add_constraint_options"]
 
+# the CLI starts without importing skillbank.selection; a test checks these match it
 METHODS = ("lte", "ja", "promp", "elmap", "dmp")
+RANKINGS = ("shortlist", "length", "endpoints", "deformation")
 _NEGATIVE_COORDINATES = re.compile(r"^-(\d|\.\d)[\d.eE+\-,]*$")
 
 

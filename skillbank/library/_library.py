@@ -399,13 +399,15 @@ class Library:
             raise ValueError(f"skill: no primitive has {what}; labels in the library: {known}")
         return prims
 
-    def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "length",
-              random_state=None):
+    def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
+              shortlist: int = 3, random_state=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
-        ``rank="length"`` is the paper's ranking; ``"endpoints"`` prefers
-        candidates whose own start and goal are nearest the requested ones.
+        ``rank="shortlist"`` (default) orders the ``shortlist`` candidates
+        that the edit deformed least by the paper's curve length;
+        ``"length"`` orders all of them by curve length; ``"deformation"``
+        and ``"endpoints"`` by how far each candidate is from the task.
 
         Returns
         -------
@@ -420,7 +422,7 @@ class Library:
         from ..selection import reuse
 
         return reuse([p.demo for p in prims], constraints, method=method, k=k,
-                     ids=[p.id for p in prims], rank=rank, random_state=random_state)
+                     ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state)
 
     def export(self, folder):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

@@ -199,12 +199,14 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
 
 
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
-          rank: str = "length") -> ReuseResult:
+          rank: str = "shortlist", shortlist: int = 3) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
     2. Drop those that still collide or miss a constraint (``rejected`` says why).
-    3. Rank the rest by curve length, shortest first, as in the paper.
+    3. Rank the rest: by default the ``shortlist`` candidates the edit deformed
+       least, shortest adapted curve first (the paper's curve-length
+       criterion, among the candidates that fit the task), then the others.
     4. Fit the representation on the ``k`` best adapted candidates and reproduce the constraints.
 
     Parameters
@@ -236,8 +238,11 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         Time base of the reproduction; candidates are resampled to its length
         first. Default: each candidate keeps its own, the reproduction has the
         representation's default length.
-    rank : {"length", "endpoints", "deformation"}, default="length"
-        Ranking criterion, see :func:`select_candidates`; ``"length"`` is the paper's.
+    rank : {"shortlist", "length", "endpoints", "deformation"}, default="shortlist"
+        Ranking criterion, see :func:`select_candidates`; ``"length"`` applies
+        the paper's curve length to every candidate.
+    shortlist : int, default=3
+        Size of the shortlist for ``rank="shortlist"``.
 
     Returns
     -------
@@ -264,5 +269,5 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         raise ValueError(f"method: expected one of {list(METHODS)}, got {method!r}")
     if k is not None and method in _SINGLE:
         _check_k(k, method, 1)
-    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank)
+    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist)
     return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t)

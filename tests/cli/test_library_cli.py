@@ -129,3 +129,11 @@ def test_reuse_accepts_negative_coordinates(run, tmp_path):
     result = json.loads(out)
     np.testing.assert_allclose(result["trajectory"][0], [-0.5, -0.25], atol=1e-9)
     np.testing.assert_allclose(result["trajectory"][-1], [1.0, 0.0], atol=1e-9)
+
+
+def test_cli_lists_match_the_library():
+    from skillbank.cli._options import METHODS as CLI_METHODS
+    from skillbank.cli._options import RANKINGS as CLI_RANKINGS
+    from skillbank.selection import METHODS, RANKINGS
+
+    assert tuple(CLI_RANKINGS) == tuple(RANKINGS) and tuple(CLI_METHODS) == tuple(METHODS)

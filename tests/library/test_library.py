@@ -195,9 +195,9 @@ def test_reuse_passes_the_skill_primitives_to_selection(lib, two_skills, monkeyp
 
     seen = {}
 
-    def fake_reuse(primitives, constraints, *, method, k, ids, rank, random_state):
+    def fake_reuse(primitives, constraints, *, method, k, ids, rank, shortlist, random_state):
         seen.update(primitives=primitives, constraints=constraints, method=method, k=k, ids=ids,
-                    rank=rank, random_state=random_state)
+                    rank=rank, shortlist=shortlist, random_state=random_state)
         return "result"
 
     module = types.ModuleType("skillbank.selection")
@@ -209,7 +209,8 @@ def test_reuse_passes_the_skill_primitives_to_selection(lib, two_skills, monkeyp
     lib.label("bow", cluster=cluster)
     assert lib.reuse("bow", "C", method="ja", k=1, random_state=4) == "result"
     assert seen["ids"] == [7, 8, 9, 10, 11, 12] and seen["method"] == "ja" and seen["k"] == 1
-    assert seen["rank"] == "length"  # the paper's ranking by default
+    # the paper's curve length among the 3 least deformed candidates, by default
+    assert seen["rank"] == "shortlist" and seen["shortlist"] == 3
     assert all(isinstance(p, Demonstration) and p.n_steps == 60 for p in seen["primitives"])
     assert seen["primitives"][0].metadata["primitive_id"] == 7
     lib.reuse(cluster, "C")

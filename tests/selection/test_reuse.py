@@ -97,11 +97,11 @@ def test_demonstration_without_position_is_rejected():
         reuse([demo], Constraints(goal=[1.0, 0.0]), ids=[7])
 
 
-def test_ranking_is_by_adapted_curve_length():
+def test_length_ranking_is_by_adapted_curve_length():
     rng = np.random.default_rng(0)
     prims = arcs(rng.uniform(-0.6, 0.6, 8))
     task = Constraints(start=[0.1, 0.0], goal=[0.9, 0.2])
-    res = reuse(prims, task, method="lte")
+    res = reuse(prims, task, method="lte", rank="length")
     expected = sorted((path_length(lte(Y, task).Y), i) for i, Y in enumerate(prims))
     assert [i for i, _ in res.ranking] == [i for _, i in expected]
     np.testing.assert_allclose([x for _, x in res.ranking], [x for x, _ in expected], rtol=1e-12)
@@ -114,13 +114,32 @@ def test_other_rankings():
     prims = [arcs([0.1])[0] + [0.5, 0.0], arcs([0.3])[0], arcs([0.05])[0] + [0.0, 0.4]]
     task = Constraints(start=[0.0, 0.0], goal=[1.0, 0.0])
     # a translation does not change the Laplacian: the flattest arc stays the shortest
-    assert [i for i, _ in select_candidates(prims, task).ranking] == [2, 0, 1]
+    assert [i for i, _ in select_candidates(prims, task, rank="length").ranking] == [2, 0, 1]
     ends = select_candidates(prims, task, rank="endpoints")
     assert ends.ranking[0][0] == 1  # its ends are already the requested ones
     dist = [c.endpoint_distance for c in ends.candidates]
     assert dist == sorted(dist)
     deform = select_candidates(prims, task, rank="deformation")
     assert deform.candidates[0].id == 1 and deform.candidates[0].deformation == pytest.approx(0.0, abs=1e-12)
+
+
+def test_shortlist_ranking_orders_the_least_deformed_by_curve_length():
+    rng = np.random.default_rng(3)
+    # arcs of several heights, several of them far from the task's start and goal
+    prims = [Y + rng.uniform(-0.8, 0.8, 2) * (i % 2) for i, Y in enumerate(arcs(rng.uniform(-0.6, 0.6, 9)))]
+    task = Constraints(start=[0.0, 0.0], goal=[1.0, 0.1])
+    by_deformation = select_candidates(prims, task, rank="deformation").candidates
+    for m in (1, 3, 5):
+        ranked = select_candidates(prims, task, shortlist=m).candidates
+        head = sorted(by_deformation[:m], key=lambda c: c.length)
+        assert [c.id for c in ranked[:m]] == [c.id for c in head]
+        assert [c.id for c in ranked[m:]] == [c.id for c in by_deformation[m:]]
+    # the default: a shortlist of 3, and the paper's length decides within it
+    assert select_candidates(prims, task).rank == "shortlist"
+    res = reuse(prims, task, method="ja")
+    assert res.used == [min(by_deformation[:3], key=lambda c: c.length).id]
+    with pytest.raises(ValueError, match=r"shortlist: expected an integer > 0, got 0"):
+        select_candidates(prims, task, shortlist=0)
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -189,7 +208,8 @@ def test_lte_reuse_meets_any_end_points(y0, y1, x1):
         ({"ids": [1, 2]}, r"ids: expected one id per primitive \(3\), got 2"),
         ({"ids": [1, 2, 1]}, r"ids: expected distinct ids, got 1 more than once"),
         ({"ids": "abc"}, r"ids: expected a list of 3 ids, got str"),
-        ({"rank": "random"}, r"rank: expected one of \['length', 'endpoints', 'deformation'\], got 'random'"),
+        ({"rank": "random"},
+         r"rank: expected one of \['shortlist', 'length', 'endpoints', 'deformation'\], got 'random'"),
         ({"t": [0.0, 1.0]}, r"t: expected"),
     ],
 )
