@@ -93,16 +93,17 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
       ``c``, and no nearer to a neighbour than to ``c``, is a valley (not
       the edge of that range) and at most
       ``stop_ratio`` times the peak speed of the movement on either side (or
-      below 5 % of the stream's typical speed: it was at rest). The
-      changepoint moves to that speed minimum, refined on the raw speed.
+      below 5 % of the stream's typical speed: it was at rest). A brief stop
+      moves the changepoint to its slowest sample; a long rest keeps it where
+      the jerk put it, where the motion ends or starts (see
+      ``_stop_position``).
     * **turn**: the chords over one ``window`` before and after ``c`` differ
       in direction by at least ``min_turn`` degrees. The changepoint stays.
 
     Failing changepoints are dropped worst first (the worst of each run of
     neighbours per round) and the rest re-examined, because dropping one
     merges two movements and raises the peak speeds the others are compared
-    with. The loop runs over
-    changepoints, never over samples.
+    with. The loop runs over changepoints, never over samples.
 
     Parameters
     ----------
@@ -179,4 +180,7 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         r = np.where(failing, ratio, -np.inf)
         worst = failing & (r >= np.r_[-np.inf, r[:-1]]) & (r >= np.r_[r[1:], -np.inf])
         keep[idx[worst]] = False
-    return cps[keep], strength[keep]
+    # two stops moved onto the shared edge of their ranges: keep the first
+    cps, strength = cps[keep], strength[keep]
+    first = np.diff(cps, prepend=-1) > 0
+    return cps[first], strength[first]
