@@ -24,7 +24,9 @@ test: $(STAMP) lint
 	$(PY) -m pytest
 
 bench: $(STAMP)
+	$(PY) -m pip install --quiet -e '.[bench]'
 	$(PY) benchmarks/bench_segmentation.py
+	$(PY) benchmarks/bench_ruptures.py
 	$(PY) benchmarks/bench_clustering.py
 	$(PY) benchmarks/bench_editing.py
 
