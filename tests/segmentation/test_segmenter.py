@@ -210,6 +210,13 @@ def test_r_default_parameters_cut_at_the_two_corners(r_demos, index):
     assert np.abs(result.keypoints - R_CORNERS[index]).max() <= 30
 
 
+@pytest.mark.parametrize("threshold", [0.15, 0.25, 0.3])
+def test_r_corners_do_not_depend_on_the_threshold(r_demos, threshold):
+    # the gate, not a tuned threshold, is what keeps the bowl's jerk events out
+    for index, demo in enumerate(r_demos):
+        assert segment(demo, threshold=threshold).keypoints.tolist() == list(R_CORNERS[index])
+
+
 def test_r_demo_3_paper_parameters(r_demos):
     result = segment(r_demos[3], window=16, min_size=64, threshold=0.16)
     assert result.changepoints["position"].size == 2
