@@ -54,7 +54,9 @@ class MultimodalSegmenter:
 
     Each stream is segmented on its own: jerk (third time derivative) → norm
     over the dimensions → sliding-window mean → normalisation → changepoints
-    at the onset of every jerk event whose prominence reaches ``threshold``.
+    at the onset of every jerk event whose prominence reaches ``threshold`` →
+    the stop-or-turn gate, which keeps the events where the motion stops or
+    turns (``stop_ratio``, ``min_turn``).
     Each changepoint becomes a Gaussian with σ = window / 2; the per-stream
     curves are multiplied; keypoints are taken from the product.
 
