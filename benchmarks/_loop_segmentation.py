@@ -340,7 +340,6 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
             cps, strength = gate_changepoints(cps, strength, t, demo[name], window=p["window"],
                                               min_size=p["min_size"], grace=p["grace"],
                                               stop_ratio=stop_ratio, min_turn=min_turn)
-            cps = _suppress_close(cps, strength, min_size=p["min_size"], n=n)
         profiles[name], raws[name], changepoints[name], params[name] = profile, raw, cps, p
         curves[name] = _gaussian_curve(cps, n, sigma=p["window"] / 2.0, floor=floor)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._changepoints import suppress_close
 from ._profile import windowed_mean
 
 __all__ = ["gate_changepoints", "smoothed_speed"]
@@ -22,8 +23,15 @@ def smoothed_speed(t, Y, *, width: int) -> np.ndarray:
     >>> int(np.argmin(smoothed_speed(t, Y, width=3)[1:-1])) + 1
     3
     """
+    return _triangle(_speed(t, Y), width)
+
+
+def _speed(t, Y) -> np.ndarray:
     Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
-    v = np.linalg.norm(np.gradient(Y, np.asarray(t, dtype=float), axis=0), axis=1)
+    return np.linalg.norm(np.gradient(Y, np.asarray(t, dtype=float), axis=0), axis=1)
+
+
+def _triangle(v: np.ndarray, width: int) -> np.ndarray:
     odd = 2 * (max(1, int(width)) // 2) + 1
     return windowed_mean(windowed_mean(v, odd), odd) if odd > 1 else v
 
@@ -121,6 +129,7 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
     Returns
     -------
     changepoints, strength : ndarray
+        At least ``min_size`` apart and from either end.
 
     Examples
     --------
@@ -137,9 +146,9 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         return cps, strength
     Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
     n = Y.shape[0]
-    v_raw = np.linalg.norm(np.gradient(Y, np.asarray(t, dtype=float), axis=0), axis=1)
+    v_raw = _speed(t, Y)
     s = max(1, window // 8)
-    v = smoothed_speed(t, Y, width=2 * s + 1)
+    v = _triangle(v_raw, 2 * s + 1)
     at_rest = 0.05 * float(np.percentile(v, 95.0))
     keep = np.ones(cps.size, dtype=bool)
     while True:
@@ -180,7 +189,10 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         r = np.where(failing, ratio, -np.inf)
         worst = failing & (r >= np.r_[-np.inf, r[:-1]]) & (r >= np.r_[r[1:], -np.inf])
         keep[idx[worst]] = False
-    # two stops moved onto the shared edge of their ranges: keep the first
+    # two stops moved onto the shared edge of their ranges: keep the first; a
+    # moved stop may also have come closer than min_size to a neighbour or an end
     cps, strength = cps[keep], strength[keep]
     first = np.diff(cps, prepend=-1) > 0
-    return cps[first], strength[first]
+    cps, strength = cps[first], strength[first]
+    kept = suppress_close(cps, strength, min_size=min_size, n_steps=n)
+    return kept, strength[np.isin(cps, kept)]

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._demonstration import Demonstration
 from .._validation import check_fraction, check_positive
-from ._changepoints import detect_changepoints, refine_to_jerk_centre, suppress_close
+from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._gate import gate_changepoints
 from ._keypoints import (
     changepoint_probability,
@@ -206,9 +206,6 @@ class MultimodalSegmenter:
                 cps, strength = gate_changepoints(
                     cps, strength, t, demo[name], window=p["window"], min_size=p["min_size"],
                     grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
-                kept = suppress_close(cps, strength, min_size=p["min_size"], n_steps=n)
-                strength = strength[np.isin(cps, kept)]
-                cps = kept
             curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
