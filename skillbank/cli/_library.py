@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._options import METHODS, RANKINGS, add_constraint_options, add_segmentation_options
+from ._options import METHODS, RANKINGS, SHORTLIST, add_constraint_options, add_segmentation_options
 
 __all__ = ["add_parser"]
 
@@ -70,7 +70,7 @@ def add_parser(sub):
     c.add_argument("--rank", choices=list(RANKINGS), default="shortlist",
                    help="candidate ranking (default shortlist: the least deformed candidates, "
                         "shortest curve first; length: the paper's curve length over all)")
-    c.add_argument("--shortlist", type=int, default=3, help="shortlist size for --rank shortlist")
+    c.add_argument("--shortlist", type=int, default=SHORTLIST, help="shortlist size for --rank shortlist")
     c.add_argument("--seed", type=int, default=None, help="random seed")
     c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")

@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 import re
 
-__all__ = ["METHODS", "RANKINGS", "size", "add_segmentation_options", "add_constraint_options"]
+__all__ = ["METHODS", "RANKINGS", "SHORTLIST", "size", "add_segmentation_options", "add_constraint_options"]
 
 # the CLI starts without importing skillbank.selection; a test checks these match it
 METHODS = ("lte", "ja", "promp", "elmap", "dmp")
 RANKINGS = ("shortlist", "length", "endpoints", "deformation")
+SHORTLIST = 3
 _NEGATIVE_COORDINATES = re.compile(r"^-(\d|\.\d)[\d.eE+\-,]*$")
 
 

@@ -12,7 +12,7 @@ from .._demonstration import Demonstration
 from .._validation import check_positive
 from ..editing._lte import _segment_hits
 from ..representations import DMP, ElasticMap, JerkAccuracy, ProMP
-from ._candidates import Selection, select_candidates
+from ._candidates import SHORTLIST, Selection, select_candidates
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS", "DEFAULT_K"]
 
@@ -199,7 +199,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
 
 
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
-          rank: str = "shortlist", shortlist: int = 3) -> ReuseResult:
+          rank: str = "shortlist", shortlist: int = SHORTLIST) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.

@@ -132,8 +132,15 @@ def test_reuse_accepts_negative_coordinates(run, tmp_path):
 
 
 def test_cli_lists_match_the_library():
+    import inspect
+
     from skillbank.cli._options import METHODS as CLI_METHODS
     from skillbank.cli._options import RANKINGS as CLI_RANKINGS
+    from skillbank.cli._options import SHORTLIST as CLI_SHORTLIST
+    from skillbank.library import Library
     from skillbank.selection import METHODS, RANKINGS
+    from skillbank.selection._candidates import SHORTLIST
 
     assert tuple(CLI_RANKINGS) == tuple(RANKINGS) and tuple(CLI_METHODS) == tuple(METHODS)
+    # the library keeps skillbank.selection out of its import; its default must still agree
+    assert CLI_SHORTLIST == SHORTLIST == inspect.signature(Library.reuse).parameters["shortlist"].default
