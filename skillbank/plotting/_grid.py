@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._segmentation import _check_result, _colour, _runs, _save
+from ._segmentation import _check_result, _draw_segmented_path, _save
 
 __all__ = ["plot_segment_grid"]
 
@@ -53,11 +53,7 @@ def plot_segment_grid(results, path, *, stream: str = "position", invert_y: bool
         P = np.asarray(r.demonstration[stream], dtype=float)[:, :2].copy()
         if invert_y:
             P[:, 1] = -P[:, 1]
-        for label, a, b in _runs(r.labels):
-            ax.plot(*P[a:min(b + 1, P.shape[0])].T, color=_colour(label), lw=2.2)
-        kp = np.asarray(r.keypoints, dtype=int)
-        ax.scatter(*P[kp].T, color="k", s=22, zorder=5)
-        ax.plot(*P[:1].T, ls="none", marker="^", color="0.2", ms=6)
+        _draw_segmented_path(ax, P, r, lw=2.2, point_size=22, start_size=6)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xticks([])
         ax.set_yticks([])

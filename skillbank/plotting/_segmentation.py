@@ -95,6 +95,25 @@ def _draw_profile(ax, t, profile, cuts, *, markersize: float = 3.0) -> None:
         ax.set_ylim(lo - pad, hi + pad)
 
 
+def _draw_segmented_path(ax, P, result: SegmentationResult, *, lw: float, point_size: float,
+                         start_size: float) -> list[int]:
+    """Draw the path ``P`` (2 or 3 columns) coloured by segment, its keypoints and its start.
+
+    Returns the segment labels drawn, in order.
+    """
+    labels = []
+    for label, a, b in _runs(result.labels):
+        stop = min(b + 1, P.shape[0])  # join to the next segment's first sample
+        ax.plot(*P[a:stop].T, color=_colour(label), lw=lw, solid_capstyle="round")
+        labels.append(label)
+    kp = np.asarray(result.keypoints, dtype=int)
+    if kp.size:
+        extra = {"depthshade": False} if P.shape[1] == 3 else {}
+        ax.scatter(*P[kp].T, color="k", s=point_size, zorder=5, **extra)
+    ax.plot(*P[:1].T, ls="none", marker="^", color="0.2", ms=start_size)
+    return labels
+
+
 def plot_jerk_profile(result, path, *, stream=None) -> Path:
     """Plot one stream's normalised windowed jerk profile, coloured by its segments.
 
@@ -227,21 +246,12 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
     if invert_y:
         P[:, 1] = -P[:, 1]
 
-    labels = result.labels
     fig = Figure(figsize=(6.0, 6.0) if dims == 2 else (7.0, 6.5))
     ax = fig.add_subplot(projection="3d" if dims == 3 else None)
-    handles = []
-    for label, a, b in _runs(labels):
-        stop = min(b + 1, P.shape[0])
-        colour = _colour(label)
-        ax.plot(*P[a:stop].T, color=colour, lw=2.5, solid_capstyle="round")
-        handles.append(Line2D([], [], color=colour, lw=3, label=f"Segment {label + 1}"))
-    kp = np.asarray(result.keypoints, dtype=int)
-    if kp.size:
-        extra = {"depthshade": False} if dims == 3 else {}
-        ax.scatter(*P[kp].T, color="k", s=30, zorder=5, **extra)
+    labels = _draw_segmented_path(ax, P, result, lw=2.5, point_size=30, start_size=7)
+    handles = [Line2D([], [], color=_colour(label), lw=3, label=f"Segment {label + 1}") for label in labels]
+    if result.keypoints.size:
         handles.append(Line2D([], [], ls="none", marker="o", color="k", label="Keypoints"))
-    ax.plot(*P[:1].T, ls="none", marker="^", color="0.2", ms=7)
     handles.append(Line2D([], [], ls="none", marker="^", color="0.2", ms=7, label="Start"))
     if dims == 2:
         ax.set_aspect("equal", adjustable="datalim")
