@@ -30,7 +30,7 @@ import argparse
 import json
 import os
 import platform
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,9 @@ from sklearn.metrics import adjusted_rand_score
 from threadpoolctl import threadpool_limits
 
 from skillbank.clustering import ElasticClustering
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import best_of  # noqa: E402
 
 K = 4
 SIZES = (150, 1_500, 15_000, 150_000)
@@ -63,13 +66,6 @@ def blobs(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return centres(seed)[labels] + rng.normal(size=(n, 3)), labels
 
 
-def best_of(fn, repeats: int):
-    best, out = float("inf"), None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, out
 
 
 def run(quick: bool, threads: int = 1) -> dict:

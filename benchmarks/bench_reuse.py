@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import platform
 import sys
 import time
@@ -56,12 +55,12 @@ from skillbank.metrics import dtw_distance, frechet_distance
 from skillbank.representations import DMP, resample
 from skillbank.selection import METHODS, RANKINGS, reproduce_selection, select_candidates
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import data_dir  # noqa: E402
+
 CLASSES = ("reaching", "pushing", "pressing", "writing")
 
 
-def default_data() -> Path:
-    env = os.environ.get("SKILLBANK_DATA")
-    return Path(env) if env else (Path(__file__).resolve().parents[1] / ".." / "shared" / "data").resolve()
 
 
 def errors(P, Q, n):
@@ -186,7 +185,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     if args.n_steps < 3:
         parser.error(f"--n-steps: expected at least 3, got {args.n_steps}")
-    data = args.data or default_data()
+    data = args.data or data_dir()
     if not (data / "rail").is_dir():
         parser.error(f"--data: no rail/ folder in {data}; set SKILLBANK_DATA or pass --data")
     rng = np.random.default_rng(args.seed)

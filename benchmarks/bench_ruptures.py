@@ -30,7 +30,7 @@ import argparse
 import json
 import os
 import platform
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -39,16 +39,13 @@ from skillbank.experiments import synthetic_multistream
 from skillbank.io import read_handwriting_h5, read_robot_h5
 from skillbank.segmentation import segment
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import best_of, data_dir  # noqa: E402
+
 R_CORNERS = [(237, 680), (298, 764), (273, 708), (211, 629), (207, 684)]
 THREE_BUTTON = ["joints", "position", "force", "gripper"]
 
 
-def data_dir(arg) -> Path:
-    if arg is not None:
-        return Path(arg)
-    env = os.environ.get("SKILLBANK_DATA")
-    return Path(env) if env else (ROOT / ".." / "shared" / "data").resolve()
 
 
 def velocity_signal(demo, streams) -> np.ndarray:
@@ -61,13 +58,6 @@ def velocity_signal(demo, streams) -> np.ndarray:
     return (V - V.mean(axis=0)) / V.std(axis=0)
 
 
-def best_of(fn, repeats=3):
-    best, out = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def score(cuts, truth, n_segments_true) -> dict:
@@ -95,7 +85,7 @@ def methods(min_size: int, n_true_cuts: int, jump: int):
 
 def run_case(name, demo, streams, truth, n_segments_true) -> list:
     rows = []
-    t_s, res = best_of(lambda: segment(demo, streams))
+    t_s, res = best_of(lambda: segment(demo, streams), 3)
     min_size = int(min(s.params["min_size"] for s in res.streams.values()))
     rows.append({"case": name, "method": "skillbank (defaults)", "time_s": t_s,
                  **score(res.keypoints, truth, n_segments_true)})

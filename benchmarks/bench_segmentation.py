@@ -34,7 +34,6 @@ import json
 import os
 import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -46,17 +45,14 @@ from skillbank.io import read_handwriting_h5, read_robot_h5
 from skillbank.segmentation import segment
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import best_of, data_dir  # noqa: E402
 from _loop_segmentation import loop_segment  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 THREE_BUTTON_STREAMS = ["joints", "position", "force", "gripper"]
 SYNTHETIC_WINDOW = 100
 LOOP_BUDGET_S = 60.0
 
 
-def data_dir() -> Path:
-    env = os.environ.get("SKILLBANK_DATA")
-    return Path(env) if env else (ROOT / ".." / "shared" / "data").resolve()
 
 
 def synthetic_demo(n: int, *, seed: int = 0, n_corners: int = 5) -> Demonstration:
@@ -80,13 +76,6 @@ def synthetic_demo(n: int, *, seed: int = 0, n_corners: int = 5) -> Demonstratio
     return Demonstration(t, {"position": path})
 
 
-def best_of(fn, repeats: int) -> tuple[float, object]:
-    best, out = float("inf"), None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, out
 
 
 def _row(case, n, fast_s, loop_s, extrapolated, fast_kp, loop_kp, note=""):
