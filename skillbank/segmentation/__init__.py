@@ -8,7 +8,7 @@ from ._keypoints import (
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import jerk, jerk_profile, normalize_profile, windowed_mean
+from ._profile import jerk, jerk_profile, normalize_profile, speed_norm, windowed_mean
 from ._result import SegmentationResult, StreamSegmentation
 from ._segmenter import MultimodalSegmenter, segment, to_samples
 
@@ -16,5 +16,5 @@ __all__ = [
     "MultimodalSegmenter", "SegmentationResult", "StreamSegmentation", "segment", "jerk", "jerk_profile",
     "windowed_mean", "normalize_profile", "detect_changepoints", "changepoint_probability",
     "combine_probabilities", "keypoints_deterministic", "keypoints_sampling", "to_samples",
-    "refine_to_jerk_centre", "gate_changepoints", "smoothed_speed",
+    "refine_to_jerk_centre", "gate_changepoints", "smoothed_speed", "speed_norm",
 ]

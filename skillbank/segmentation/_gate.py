@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._changepoints import suppress_close
-from ._profile import windowed_mean
+from ._profile import speed_norm, windowed_mean
 
 __all__ = ["gate_changepoints", "smoothed_speed"]
 
@@ -23,12 +23,7 @@ def smoothed_speed(t, Y, *, width: int) -> np.ndarray:
     >>> int(np.argmin(smoothed_speed(t, Y, width=3)[1:-1])) + 1
     3
     """
-    return _triangle(_speed(t, Y), width)
-
-
-def _speed(t, Y) -> np.ndarray:
-    Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
-    return np.linalg.norm(np.gradient(Y, np.asarray(t, dtype=float), axis=0), axis=1)
+    return _triangle(speed_norm(t, Y), width)
 
 
 def _triangle(v: np.ndarray, width: int) -> np.ndarray:
@@ -89,7 +84,7 @@ def _stop_position(v, v_raw, span: tuple, c: int, *, low: float, side: float, at
 
 
 def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: int, grace: int,
-                      stop_ratio: float, min_turn: float):
+                      stop_ratio: float, min_turn: float, speed=None):
     """Keep the changepoints where the motion stops or turns, and pin stops to the stop.
 
     A jerk event marks a primitive boundary when the motion either comes
@@ -125,6 +120,8 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         Largest speed at the boundary, as a fraction of the slower side's peak.
     min_turn : float
         Smallest change of direction, in degrees, that makes a boundary.
+    speed : ndarray of shape (n_steps,), optional
+        :func:`speed_norm` of ``Y`` if already computed.
 
     Returns
     -------
@@ -146,7 +143,7 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         return cps, strength
     Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
     n = Y.shape[0]
-    v_raw = _speed(t, Y)
+    v_raw = speed_norm(t, Y) if speed is None else np.asarray(speed, dtype=float)
     s = max(1, window // 8)
     v = _triangle(v_raw, 2 * s + 1)
     at_rest = 0.05 * float(np.percentile(v, 95.0))

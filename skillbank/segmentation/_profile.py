@@ -100,8 +100,14 @@ def normalize_profile(m, *, method: str = "robust", grace: int = 0) -> np.ndarra
     return m / scale
 
 
+def speed_norm(t, Y) -> np.ndarray:
+    """Speed (norm of the first derivative on the real time stamps) per sample, shape (n_steps,)."""
+    Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
+    return np.linalg.norm(np.gradient(Y, np.asarray(t, dtype=float), axis=0), axis=1)
+
+
 def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust", grace: int = 0,
-                 jerk_norm=None):
+                 jerk_norm=None, speed=None):
     """Normalised sliding-window mean of the jerk norm of one stream.
 
     Parameters
@@ -121,6 +127,8 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
         Samples at each end left out of the normalisation.
     jerk_norm : ndarray of shape (n_steps,), optional
         The jerk norm of ``Y`` if already computed (it is not recomputed).
+    speed : ndarray of shape (n_steps,), optional
+        :func:`speed_norm` of ``Y`` if already computed.
 
     Returns
     -------
@@ -139,7 +147,7 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
     j = np.linalg.norm(jerk(t, Y), axis=1) if jerk_norm is None else np.asarray(jerk_norm, dtype=float)
     if scale == "relative":
         Yc = np.asarray(Y, dtype=float).reshape(len(j), -1)
-        speed = np.linalg.norm(np.gradient(Yc, np.asarray(t, dtype=float), axis=0), axis=1)
+        speed = speed_norm(t, Yc) if speed is None else np.asarray(speed, dtype=float)
         typical = np.percentile(speed, 95.0)
         # speeds at the round-off level of the signal's magnitude are a held
         # signal (e.g. a gripper that never moves), not motion

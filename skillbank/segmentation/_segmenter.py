@@ -17,7 +17,7 @@ from ._keypoints import (
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import jerk, jerk_profile
+from ._profile import jerk, jerk_profile, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
@@ -196,8 +196,11 @@ class MultimodalSegmenter:
                     f"demo: expected at least {max(4, 2 * p['min_size'])} samples to segment stream "
                     f"{name!r} with min_size={p['min_size']}, got {n}")
             absj = np.linalg.norm(jerk(t, demo[name]), axis=1)
+            # one speed serves both the relative scale and the gate
+            needs_speed = p["scale"] == "relative" or p["stop_ratio"] is not None
+            speed = speed_norm(t, demo[name]) if needs_speed else None
             j, prof = jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
-                                   normalize=p["normalize"], grace=p["grace"], jerk_norm=absj)
+                                   normalize=p["normalize"], grace=p["grace"], jerk_norm=absj, speed=speed)
             cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
                                                 grace=p["grace"], window=p["window"])
             # the profile places an event to a sample or two; the raw jerk's centre pins it
@@ -205,7 +208,7 @@ class MultimodalSegmenter:
             if p["stop_ratio"] is not None:
                 cps, strength = gate_changepoints(
                     cps, strength, t, demo[name], window=p["window"], min_size=p["min_size"],
-                    grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+                    grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"], speed=speed)
             curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
