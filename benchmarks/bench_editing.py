@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import scipy
 
-from skillbank._constraints import Constraints
+from skillbank.core import Constraints
 from skillbank.editing import lte
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

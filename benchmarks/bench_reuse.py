@@ -29,7 +29,7 @@ Compared, in the same run:
 - **dmp-random**: a DMP learned from one stored demonstration drawn at random
   (seeded), reproduced with the requested start and goal.
 
-``--library`` also runs the reuse through a real :class:`skillbank.library.Library`
+``--library`` also runs the reuse through a real :class:`skillbank.pipeline.Library`
 (one SQLite file per class, demonstrations stored whole under the class label;
 the held-out one removed and re-added around its turn) with its default
 ranking and ProMP, as a check that the stored round trip gives the same result.
@@ -52,7 +52,8 @@ import numpy as np
 from skillbank import Constraints
 from skillbank.io import load_rail
 from skillbank.metrics import dtw_distance, frechet_distance
-from skillbank.representations import DMP, resample
+from skillbank.core import resample
+from skillbank.representations import DMP
 from skillbank.selection import METHODS, RANKINGS, reproduce_selection, select_candidates
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -114,7 +115,7 @@ def run_class(name, arrays, held_out, t, *, ranks, methods, rng, library_check=N
 def library_checker(folder, name, demos, t):
     """A function ``(held_out, task) -> trajectory`` that reuses through a real Library."""
     from skillbank import Demonstration
-    from skillbank.library import Library
+    from skillbank.pipeline import Library
 
     lib = Library(Path(folder) / f"{name}.sqlite")
     stored = [Demonstration.from_array(resample(d["position"], t.shape[0]), t, metadata={"source": str(i)})

@@ -26,8 +26,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import skillbank.io as sio
-from skillbank._constraints import Constraints
-from skillbank.editing import LaplacianEditor
+from skillbank.core import Constraints
+from skillbank.representations import LaplacianEditor
 from skillbank.metrics import angular_similarity, curvature_deviation, frechet_distance
 from skillbank.plotting._editing import draw_edit
 from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP

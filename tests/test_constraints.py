@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skillbank._constraints import Box, Constraints, Sphere, ViaPoint
+from skillbank.core import OBSTACLES, Box, Constraints, Sphere, ViaPoint, parse_obstacle
 
 coords = st.floats(-100, 100, allow_nan=False)
 
@@ -78,18 +78,57 @@ def test_signed_distance_properties(d, data):
     # Outside, the distance equals the distance to the clamped point.
     outside = ~np.all((Y >= lo) & (Y <= hi), axis=1)
     assert np.allclose(sd[outside], np.linalg.norm(Y - np.clip(Y, lo, hi), axis=1)[outside])
-    # Exterior points are at the requested clearance.
+    # Pushed out across the path, samples inside land at the requested clearance.
     for ob in (Sphere(center, r), box):
-        out = ob.exterior_point(Y, margin=0.5)
-        assert np.all(ob.signed_distance(out) > 0.5 - 1e-9 * (1 + np.abs(Y).max()))
+        inner = Y[ob.signed_distance(Y) < 0]
+        if inner.size:
+            T = np.zeros_like(inner)
+            T[:, 0] = 1.0  # the path runs along the first axis
+            out = ob.push_out(inner, T, 0.5)
+            tol = 1e-9 * (1 + np.abs(Y).max() + r)
+            assert np.all(ob.signed_distance(out) > 0.5 - tol)
+            if d > 1:  # across the path: the coordinate along it is kept
+                assert np.allclose(out[:, 0], inner[:, 0])
+
+
+@settings(max_examples=80, deadline=None)
+@given(d=st.integers(1, 3), data=st.data())
+def test_segment_hits_match_dense_sampling(d, data):
+    """The closed-form segment test agrees with checking 2001 samples along each segment."""
+    pts = np.array(data.draw(st.lists(points(d), min_size=2, max_size=6)))
+    lo = np.array(data.draw(points(d)))
+    obstacles = [Sphere(data.draw(points(d)), data.draw(st.floats(0.1, 5))),
+                 Box(lo, lo + np.array(data.draw(st.lists(st.floats(0.1, 5), min_size=d, max_size=d))))]
+    s = np.linspace(0.0, 1.0, 2001)[:, None]
+    for ob in obstacles:
+        hits = ob.segment_hits(pts)
+        for i in range(len(pts) - 1):
+            dense = pts[i] + s * (pts[i + 1] - pts[i])
+            depth = ob.signed_distance(dense).min()
+            if depth < -1e-6 * ob.size:  # clearly through the inside
+                assert hits[i]
+            elif depth > 1e-3 * ob.size + 1e-9:  # clearly outside, beyond the sampling resolution
+                assert not hits[i]
+        assert ob.collides(pts) == bool(hits.any() or (ob.signed_distance(pts) < 0).any())
+
+
+def test_obstacle_spec_round_trip_and_registry():
+    for ob in (Sphere([0.5, -1.0, 2.0], 0.25), Box([0.0, 0.0], [1.0, 2.0])):
+        assert parse_obstacle(ob.spec()) == ob
+        assert OBSTACLES[ob.kind] is type(ob)
+        lo, hi = ob.bounds()
+        assert np.all(ob.signed_distance(np.vstack(ob.outline())) > -1e-9)  # the outline is on or outside
+        assert np.all(np.vstack(ob.outline()) >= lo - 1e-12) and np.all(np.vstack(ob.outline()) <= hi + 1e-12)
 
 
 def test_box_and_sphere_known_values():
     box = Box([0, 0, 0], [2, 2, 2])
     assert box.signed_distance([[1, 1, 1], [3, 1, 1], [3, 3, 1], [1, 1.5, 1]]).tolist() == pytest.approx(
         [-1, 1, np.sqrt(2), -0.5])
-    assert Sphere([0, 0], 1).exterior_point([[0.0, 0.0]], margin=0.5).tolist() == [[1.5, 0.0]]
-    assert box.exterior_point([[1.0, 0.2, 1.0]], margin=0.1).tolist() == [[1.0, -0.1, 1.0]]
+    # a sample at the centre is pushed normal to the tangent
+    assert Sphere([0, 0], 1).push_out(np.zeros((1, 2)), np.array([[0.0, 1.0]]), 0.5).tolist() == [[1.5, 0.0]]
+    assert box.push_out(np.array([[1.0, 0.2, 1.0]]), np.array([[1.0, 0.0, 0.0]]), 0.1).tolist() == [
+        [1.0, -0.1, 1.0]]
     assert Sphere([0.0], 1.0).signed_distance([2.0]).tolist() == [1.0]
 
 
@@ -117,37 +156,6 @@ def test_with_defaults_and_check_dims():
         Constraints(obstacles=[Sphere([0, 0, 0], 1)]).with_defaults(Y)
 
 
-def test_from_cli():
-    c = Constraints.from_cli(start="0,0,0", goal="1, 1, 1", via=["0.5:0.5,0.5,0.9"],
-                             obstacle=["sphere:0.5,0.5,0.5,0.1", "BOX:0,0,0,0.2,0.2,0.2"])
-    assert c.n_dims == 3 and c.via[0].phase == 0.5 and c.obstacles[0].radius == 0.1
-    assert c.obstacles[1].upper.tolist() == [0.2, 0.2, 0.2]
-    c2 = Constraints.from_cli(goal="1,2", via="0.3:1,1", obstacle="box:0,0,1,1", start_velocity="0,1")
-    assert c2.n_dims == 2 and c2.start_velocity.tolist() == [0, 1] and isinstance(c2.obstacles[0], Box)
-    assert Constraints.from_cli().is_empty
-
-
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(start="0,0", goal="1,1,1"), r"same number of dimensions.*start has 2, goal has 3"),
-    (dict(start="0,x"), r"start: expected a number, got 'x'"),
-    (dict(start="0,,1"), r"start: expected comma-separated numbers"),
-    (dict(goal=""), r"goal: expected comma-separated numbers"),
-    (dict(start="0,inf"), r"start: expected a finite number"),
-    (dict(via=["0.5"]), r"via: expected 'PHASE:X,Y\[,Z\]'"),
-    (dict(via=["1.5:0,0"]), r"ViaPoint phase: expected a number in \[0.0, 1.0\], got 1.5"),
-    (dict(via=["a:0,0"]), r"via phase: expected a number, got 'a'"),
-    (dict(obstacle=["cone:0,0,1"]), r"obstacle: expected 'sphere:X,Y\[,Z\],R' or 'box:"),
-    (dict(obstacle=["sphere"]), r"obstacle: expected 'sphere"),
-    (dict(obstacle=["sphere:1"]), r"a sphere needs a center and a radius, got 1"),
-    (dict(obstacle=["sphere:0,0,-1"]), r"sphere radius: expected a number > 0, got -1.0"),
-    (dict(obstacle=["box:0,0,1"]), r"a box needs an even number of values.*got 3"),
-    (dict(obstacle=["box:1,1,0,0"]), r"expected lower < upper in every coordinate"),
-])
-def test_from_cli_errors(kwargs, match):
-    with pytest.raises(ValueError, match=match):
-        Constraints.from_cli(**kwargs)
-
-
 @pytest.mark.parametrize("build, match", [
     (lambda: ViaPoint([0, 0]), r"exactly one of index or phase"),
     (lambda: ViaPoint([0, 0], index=1, phase=0.5), r"exactly one of index or phase"),
@@ -162,7 +170,8 @@ def test_from_cli_errors(kwargs, match):
     (lambda: Constraints(via=[(1.2, [0, 0])]), r"via\[0\]: ViaPoint phase: expected a number in"),
     (lambda: Constraints(via=[[0, 0, 0]]), r"via\[0\]: expected a ViaPoint or a \(phase, position\) pair"),
     (lambda: Constraints(via="0.5:1,1"), r"via: expected a sequence, got str"),
-    (lambda: Constraints(obstacles=["sphere:0,0,1"]), r"obstacles\[0\]: expected a Sphere or Box, got str"),
+    (lambda: Constraints(obstacles=["sphere:0,0,1"]),
+     r"obstacles\[0\]: expected an Obstacle \(Sphere, Box, ...\), got str"),
     (lambda: Constraints(start=[0, 0], via=[(0.5, [1, 1, 1])]), r"start has 2, via\[0\] has 3"),
     (lambda: Constraints(goal=[0, 0], end_velocity=[1]), r"goal has 2, end_velocity has 1"),
     (lambda: Constraints(start=[0, 0], via=[ViaPoint([1, 1], index=0)]).resolve(5),

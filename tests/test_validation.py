@@ -4,8 +4,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from skillbank import check_array, check_time
-from skillbank._validation import check_fraction, check_positive
+from skillbank.core._validation import check_array, check_fraction, check_positive, check_time
 
 
 def test_check_array_converts_and_keeps_values():

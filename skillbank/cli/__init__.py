@@ -1,4 +1,4 @@
-"""Command-line interface: ``skillbank segment``, ``skillbank demo``."""
+"""The command line: ``skillbank segment | demo | cluster | experiment | library | edit``."""
 
 from ._main import build_parser, main
 

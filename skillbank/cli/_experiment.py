@@ -61,13 +61,11 @@ def _table(summary: dict) -> list[str]:
 
 def run(args) -> int:
     """Run the experiment named by ``args.experiment``; returns the exit status."""
-    from ..experiments._rail import rail_experiment
+    from ..experiments import plot_rail_experiment, rail_experiment  # the whole stack, when it runs
 
     result = rail_experiment(args.data, mode=args.mode, classes=args.classes, random_state=args.seed)
     summary = result.summary()
     if args.plot is not None:
-        from ..plotting._clustering import plot_rail_experiment
-
         plot_rail_experiment(result, args.plot)
     if args.json:
         print(json.dumps(summary))

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
-from ._options import METHODS, RANKINGS, SHORTLIST, add_constraint_options, add_segmentation_options
+from ._options import (
+    add_constraint_options,
+    add_segmentation_options,
+    constraints_from_args,
+    segmentation_params,
+)
 
 __all__ = ["add_parser"]
 
@@ -65,12 +71,14 @@ def add_parser(sub):
     c.add_argument("db", type=Path)
     c.add_argument("--skill", required=True, help="a label, or a cluster id")
     add_constraint_options(c)
-    c.add_argument("--method", choices=METHODS, default="promp", help="representation (default promp)")
+    c.add_argument("--method", default="promp",
+                   help="a representation of skillbank.representations.REPRESENTATIONS (default promp)")
     c.add_argument("--k", type=int, default=None, help="candidates passed to the representation")
-    c.add_argument("--rank", choices=list(RANKINGS), default="shortlist",
+    c.add_argument("--rank", default="shortlist",
                    help="candidate ranking (default shortlist: the least deformed candidates, "
                         "shortest curve first; length: the paper's curve length over all)")
-    c.add_argument("--shortlist", type=int, default=SHORTLIST, help="shortlist size for --rank shortlist")
+    c.add_argument("--shortlist", type=int, default=argparse.SUPPRESS,
+                   help="shortlist size for --rank shortlist (default: skillbank.selection.SHORTLIST)")
     c.add_argument("--seed", type=int, default=None, help="random seed")
     c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
@@ -95,26 +103,29 @@ def add_parser(sub):
     return p
 
 
-def _open(args, *, create=False):
-    from ..library import Library
+def _library(location, **kwargs):
+    # The pipeline pulls in scikit-learn; imported when a library command runs, not for --help.
+    from ..pipeline import Library
 
-    return Library(args.db, create=create)
+    return Library(location, **kwargs)
+
+
+def _open(args, *, create=False):
+    return _library(args.db, create=create)
 
 
 def _init(args) -> int:
-    from ..library import Library
-
     if args.db.exists():
-        Library(args.db, create=False).close()  # validates; an existing library is left as it is
+        _library(args.db, create=False).close()  # validates; an existing library is left as it is
         print(f"{args.db}: library already exists")
         return 0
-    Library(args.db).close()
+    _library(args.db).close()
     print(f"created library {args.db}")
     return 0
 
 
 def _add(args) -> int:
-    from .. import io
+    from .. import io  # h5py and scipy.io readers, only when files are read
 
     demos = []
     for path in args.files:
@@ -123,10 +134,7 @@ def _add(args) -> int:
         for demo in loaded:
             demo.metadata.setdefault("source", str(path))
         demos.extend(loaded)
-    segmentation = {"streams": args.stream, "window": args.window, "min_size": args.min_size,
-                    "threshold": args.threshold, "grace": args.grace, "stop_ratio": args.stop_ratio,
-                    "min_turn": args.min_turn, "mode": args.mode,
-                    "random_state": args.seed}
+    segmentation = {"streams": args.stream, **segmentation_params(args)}
     with _open(args) as lib:
         ids = lib.add_many(demos, segment=not args.whole, segmentation=segmentation, label=args.label,
                            assign=args.assign, progress=True)
@@ -189,20 +197,20 @@ def _skill(lib, name: str):
 
 
 def _reuse(args) -> int:
-    from .. import io
-    from .._constraints import Constraints
+    from .. import io  # the writers, only when a result is written
 
-    constraints = Constraints.from_cli(start=args.start, goal=args.goal, via=args.via, obstacle=args.obstacle)
+    constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle)
+    options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
     with _open(args) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           shortlist=args.shortlist, random_state=args.seed)
+                           random_state=args.seed, **options)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz
         writer(result.trajectory, args.out)
     if args.plot is not None:
-        from ..plotting import plot_edit
+        from ..plotting import plot_edit  # matplotlib only when a figure is asked for
 
         plot_edit(result.trajectory, args.plot, demos=[used[i] for i in result.used if i in used],
                   constraints=constraints, title=f"skill {args.skill}")

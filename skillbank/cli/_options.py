@@ -1,17 +1,28 @@
-"""Options shared by several commands: segmentation parameters and task constraints."""
+"""Argument syntax shared by several commands: segmentation options and task constraints.
+
+This module only turns strings into values; what the values mean is defined
+in the library (:class:`~skillbank.segmentation.MultimodalSegmenter`,
+:class:`~skillbank.core.Constraints`, :func:`~skillbank.core.parse_obstacle`).
+Options left out on the command line are left out of the call too, so the
+library's defaults apply and are written in one place.
+"""
 
 from __future__ import annotations
 
 import argparse
 import re
 
-__all__ = ["METHODS", "RANKINGS", "SHORTLIST", "size", "add_segmentation_options", "add_constraint_options"]
+from ..core import Constraints, ViaPoint, parse_obstacle
 
-# the CLI starts without importing skillbank.selection; a test checks these match it
-METHODS = ("lte", "ja", "promp", "elmap", "dmp")
-RANKINGS = ("shortlist", "length", "endpoints", "deformation")
-SHORTLIST = 3
-_NEGATIVE_COORDINATES = re.compile(r"^-(\d|\.\d)[\d.eE+\-,]*$")
+__all__ = [
+    "size", "ratio_or_none", "add_segmentation_options", "segmentation_params", "add_constraint_options",
+    "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
+]
+
+#: Options whose values are coordinates and may start with a minus sign ("-25,3").
+CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity")
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
+_SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "mode")
 
 
 def size(value: str):
@@ -36,26 +47,58 @@ def ratio_or_none(value: str):
         raise argparse.ArgumentTypeError(f"expected a number in [0, 1] or 'none', got {value!r}") from None
 
 
+def join_negative_values(argv, options=CONSTRAINT_OPTIONS) -> list:
+    """Write ``--start -25,3`` as ``--start=-25,3`` so that argparse takes the value, not an option.
+
+    argparse reads a token starting with ``-`` as an option unless it looks
+    like one plain negative number; coordinates like ``-25,3`` do not.
+
+    Examples
+    --------
+    >>> join_negative_values(["edit", "a.csv", "--goal", "-1,2", "--json"])
+    ['edit', 'a.csv', '--goal=-1,2', '--json']
+    """
+    argv = list(argv)
+    out, i = [], 0
+    while i < len(argv):
+        token = argv[i]
+        if token in options and i + 1 < len(argv) and _NEGATIVE_VALUE.match(argv[i + 1]):
+            out.append(f"{token}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(token)
+        i += 1
+    return out
+
+
 def add_segmentation_options(p) -> None:
     """Input selection and :class:`~skillbank.segmentation.MultimodalSegmenter` parameters."""
+    keep = argparse.SUPPRESS  # an option not given is not passed: the segmenter's default applies
     p.add_argument("--demo", type=int, default=None, help="demonstration index inside multi-demo files")
     p.add_argument("--group", default="normalized", help="group inside handwriting HDF5 files")
     p.add_argument("--stream", action="append", default=None, help="stream to use (repeatable; default all)")
-    p.add_argument("--window", type=size, default="auto", help="window in samples or seconds (0.1s)")
-    p.add_argument("--min-size", type=size, default="auto", help="minimum segment size, samples or seconds")
-    p.add_argument("--threshold", type=float, default=0.4, help="minimum jerk-event prominence in (0, 1]")
-    p.add_argument("--grace", type=size, default="auto", help="samples ignored at each end")
-    p.add_argument("--stop-ratio", type=ratio_or_none, default=0.5,
+    p.add_argument("--window", type=size, default=keep, help="window in samples or seconds (0.1s)")
+    p.add_argument("--min-size", type=size, default=keep, help="minimum segment size, samples or seconds")
+    p.add_argument("--threshold", type=float, default=keep, help="minimum jerk-event prominence in (0, 1]")
+    p.add_argument("--grace", type=size, default=keep, help="samples ignored at each end")
+    p.add_argument("--stop-ratio", type=ratio_or_none, default=keep,
                    help="keep a changepoint where the speed drops below this fraction of the movements' "
                         "peak speed ('none': keep every jerk event, as in the paper)")
-    p.add_argument("--min-turn", type=float, default=45.0,
+    p.add_argument("--min-turn", type=float, default=keep,
                    help="or where the direction turns by at least this many degrees")
-    p.add_argument("--mode", choices=["deterministic", "sampling"], default="deterministic")
+    p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep)
     p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
 
 
+def segmentation_params(args) -> dict:
+    """The segmenter keyword arguments given on the command line (and the seed)."""
+    params = {k: getattr(args, k) for k in _SEGMENTER_KEYS if hasattr(args, k)}
+    params["random_state"] = args.seed
+    return params
+
+
 def add_constraint_options(p) -> None:
-    """``--start``, ``--goal``, ``--via`` and ``--obstacle``, parsed by ``Constraints.from_cli``."""
+    """``--start``, ``--goal``, ``--via`` and ``--obstacle`` (see :func:`constraints_from_args`)."""
     p.add_argument("--start", default=None, metavar="X,Y[,Z]", help="new initial point")
     p.add_argument("--goal", default=None, metavar="X,Y[,Z]", help="new final point")
     p.add_argument("--via", action="append", default=[], metavar="PHASE:X,Y[,Z]",
@@ -63,6 +106,53 @@ def add_constraint_options(p) -> None:
     p.add_argument("--obstacle", action="append", default=[], metavar="sphere:X,Y,Z,R|box:...",
                    help="region to avoid: sphere:X,Y[,Z],R or box:XMIN,YMIN[,ZMIN],XMAX,YMAX[,ZMAX] "
                         "(repeatable)")
-    # Let coordinates such as "-25,3" through as values (argparse only knows "-25" as a number);
-    # "--start=-25,3" works either way.
-    p._negative_number_matcher = _NEGATIVE_COORDINATES
+
+
+def _number(text: str, name: str, whole) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{name}: expected a number, got {text.strip()!r} in {whole!r}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise ValueError(f"{name}: expected a finite number, got {text.strip()!r} in {whole!r}")
+    return value
+
+
+def _numbers(text: str, name: str, whole) -> list[float]:
+    parts = text.split(",")
+    if not text.strip() or any(not p.strip() for p in parts):
+        raise ValueError(f"{name}: expected comma-separated numbers like '0.1,0.2,0.3', got {whole!r}")
+    return [_number(p, name, whole) for p in parts]
+
+
+def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_velocity=None,
+                          end_velocity=None):
+    """Build :class:`~skillbank.core.Constraints` from command-line strings.
+
+    Parameters
+    ----------
+    start, goal, start_velocity, end_velocity : str, optional
+        ``"X,Y[,Z...]"``.
+    via : sequence of str
+        ``"PHASE:X,Y[,Z...]"`` with PHASE in [0, 1].
+    obstacle : sequence of str
+        Obstacle specs, see :func:`skillbank.core.parse_obstacle`.
+
+    Examples
+    --------
+    >>> c = constraints_from_args(start="0,0", goal="1,1", via=["0.5:0.5,0.9"],
+    ...                           obstacle=["sphere:0.5,0.5,0.1"])
+    >>> c.n_dims, len(c.via), c.obstacles[0].radius
+    (2, 1, 0.1)
+    """
+    via, obstacle = ([v] if isinstance(v, str) else v for v in (via, obstacle))
+    vias = []
+    for text in via or ():
+        phase, sep, coords = str(text).partition(":")
+        if not sep:
+            raise ValueError(f"via: expected 'PHASE:X,Y[,Z]', got {text!r}")
+        vias.append(ViaPoint(_numbers(coords, "via", text), phase=_number(phase, "via phase", text)))
+    obstacles = [parse_obstacle(str(text)) for text in (obstacle or ())]
+    given = dict(start=start, goal=goal, start_velocity=start_velocity, end_velocity=end_velocity)
+    vec = {k: None if v is None else _numbers(str(v), k, v) for k, v in given.items()}
+    return Constraints(via=vias, obstacles=obstacles, **vec)

@@ -11,18 +11,20 @@ Examples
 2
 """
 
-from ._dtw import DTWFeatures, dtw_distance
+from ._dtw import DTWFeatures
 from ._elastic import ElasticClustering
-from ._features import (
-    AngularSimilarityFeatures,
-    TrajectoryFeatures,
-    angular_similarity,
-    resample_trajectories,
-)
+from ._features import AngularSimilarityFeatures, TrajectoryFeatures
 from ._heading import HeadingFeatures, heading_directions
+from ._primitive import (
+    FEATURE_KINDS,
+    TRAJECTORY_FEATURES,
+    nearest_centre,
+    primitive_features,
+    trajectory_features,
+)
 
 __all__ = [
-    "ElasticClustering", "AngularSimilarityFeatures", "HeadingFeatures", "heading_directions",
-    "TrajectoryFeatures", "DTWFeatures",
-    "angular_similarity", "dtw_distance", "resample_trajectories",
+    "ElasticClustering", "AngularSimilarityFeatures", "HeadingFeatures", "TrajectoryFeatures", "DTWFeatures",
+    "heading_directions", "primitive_features", "trajectory_features", "nearest_centre", "FEATURE_KINDS",
+    "TRAJECTORY_FEATURES",
 ]

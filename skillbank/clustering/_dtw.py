@@ -1,4 +1,4 @@
-"""Dynamic time warping, batched over trajectories, and DTW landmark features."""
+"""DTW landmark features (the DTW itself is :func:`skillbank.metrics.dtw_many`)."""
 
 from __future__ import annotations
 
@@ -6,86 +6,11 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from .._validation import check_fraction, check_positive
-from ._features import as_trajectories, resampled_input
+from ..core._validation import check_fraction, check_positive
+from ..metrics import dtw_many
+from ._features import resampled_input
 
-__all__ = ["dtw_distance", "DTWFeatures"]
-
-
-def _band(n_rows: int, n_cols: int, window: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """Column range [lo, hi] allowed on each row (Sakoe-Chiba band around the diagonal)."""
-    if window is None:
-        return np.zeros(n_rows, dtype=np.intp), np.full(n_rows, n_cols - 1, dtype=np.intp)
-    centre = np.arange(n_rows) * ((n_cols - 1) / max(n_rows - 1, 1))
-    radius = max(1.0, window * max(n_rows, n_cols))
-    lo = np.clip(np.floor(centre - radius), 0, n_cols - 1).astype(np.intp)
-    hi = np.clip(np.ceil(centre + radius), 0, n_cols - 1).astype(np.intp)
-    return lo, hi
-
-
-def dtw_many(Q: np.ndarray, R: np.ndarray, window: float | None = None) -> np.ndarray:
-    """DTW cost of every trajectory in ``Q`` (n, n_rows, d) against one trajectory ``R`` (n_cols, d).
-
-    The local cost is the Euclidean distance between samples; the result is
-    the smallest sum of local costs along a monotone warping path. Each row of
-    the cost table is computed for all ``n`` trajectories at once: with
-    ``P`` the running sum of the row's local costs, the left-to-right
-    recurrence ``D[i, j] = min(b[j], c[i, j] + D[i, j-1])`` is
-    ``P[j] + cummin(b - P)[j]``, so no loop runs over columns or trajectories.
-
-    Examples
-    --------
-    >>> R = np.array([[0.0], [1.0], [2.0]])
-    >>> dtw_many(np.array([[[0.0], [0.0], [1.0], [2.0]]]), R).tolist()
-    [0.0]
-    """
-    n, n_rows, _ = Q.shape
-    n_cols = R.shape[0]
-    lo, hi = _band(n_rows, n_cols, window)
-    cols = np.arange(n_cols)
-    prev = None
-    for i in range(n_rows):
-        diff = Q[:, i, None, :] - R[None, :, :]
-        cost = np.sqrt(np.einsum("ncd,ncd->nc", diff, diff))
-        outside = (cols < lo[i]) | (cols > hi[i])
-        cost[:, outside] = 0.0
-        P = np.cumsum(cost, axis=1)
-        if prev is None:
-            b = np.full((n, n_cols), np.inf)
-            b[:, 0] = cost[:, 0]
-        else:
-            b = cost + np.minimum(prev, np.concatenate([np.full((n, 1), np.inf), prev[:, :-1]], axis=1))
-        b[:, outside] = np.inf
-        row = P + np.minimum.accumulate(b - P, axis=1)
-        row[:, outside] = np.inf
-        prev = row
-    return prev[:, -1]
-
-
-def dtw_distance(A, B, *, window=None) -> float:
-    """DTW distance between two trajectories (lengths may differ).
-
-    Parameters
-    ----------
-    A : array-like of shape (n_a, n_dims) or Demonstration
-    B : array-like of shape (n_b, n_dims) or Demonstration
-    window : float in (0, 1], optional
-        Sakoe-Chiba band half-width as a fraction of the longer length.
-
-    Returns
-    -------
-    float
-        Sum of Euclidean sample distances along the best warping path.
-
-    Examples
-    --------
-    >>> dtw_distance([[0.0], [1.0], [2.0]], [[0.0], [1.0], [1.0], [2.0]])
-    0.0
-    """
-    a, b = as_trajectories([A, B], name="A, B")
-    if window is not None:
-        window = check_fraction(window, name="window")
-    return float(dtw_many(a[None], b, window)[0])
+__all__ = ["DTWFeatures"]
 
 
 class DTWFeatures(TransformerMixin, BaseEstimator):

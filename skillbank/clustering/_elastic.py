@@ -8,7 +8,7 @@ from sklearn.base import BaseEstimator, ClusterMixin
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
-from .._validation import check_array, check_positive
+from ..core._validation import check_array, check_positive
 from ._em import (
     assign,
     cluster_sums,
@@ -18,6 +18,7 @@ from ._em import (
     solve_capped,
     solve_paper,
 )
+from ._primitive import nearest_centre
 
 __all__ = ["ElasticClustering"]
 
@@ -357,8 +358,7 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         """
         check_is_fitted(self, "cluster_centers_")
         X = self._check_X(X, reset=False)
-        shift = self.cluster_centers_.mean(axis=0)  # centred for accurate distances
-        return assign(X - shift, self.cluster_centers_ - shift)[0].astype(np.intp)
+        return nearest_centre(X, self.cluster_centers_)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

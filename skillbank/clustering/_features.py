@@ -7,13 +7,11 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.decomposition import PCA
 from sklearn.utils.validation import check_is_fitted
 
-from .._demonstration import Demonstration
-from .._validation import check_array, check_positive
+from ..core import Demonstration, resample_many
+from ..core._validation import check_array, check_positive
+from ..metrics import angular_similarity_matrix
 
-# One implementation of the angular similarity, in metrics; re-exported here under its old name.
-from ..metrics._shape import angular_similarity, angular_similarity_matrix
-
-__all__ = ["angular_similarity", "AngularSimilarityFeatures", "TrajectoryFeatures", "resample_trajectories"]
+__all__ = ["AngularSimilarityFeatures", "TrajectoryFeatures", "as_trajectories", "resampled_input"]
 
 
 def as_trajectories(X, *, name: str = "X", with_time: bool = False):
@@ -122,52 +120,6 @@ class AngularSimilarityFeatures(TransformerMixin, BaseEstimator):
                         dtype=object)
 
 
-def resample_trajectories(trajs, times, n_points: int, by: str = "arc_length") -> np.ndarray:
-    """Resample trajectories of any lengths to ``n_points`` each, in one vectorised pass.
-
-    ``by="arc_length"`` spaces the samples evenly along the path (a trajectory
-    that never moves falls back to time); ``by="time"`` evenly in time.
-
-    Returns
-    -------
-    ndarray of shape (n_trajectories, n_points, n_dims)
-
-    Examples
-    --------
-    >>> Y = np.array([[0.0], [1.0], [3.0]])
-    >>> resample_trajectories([Y], [np.arange(3.0)], 4)[0].ravel().tolist()
-    [0.0, 1.0, 2.0, 3.0]
-    """
-    lengths = np.array([a.shape[0] for a in trajs])
-    Y = np.concatenate(trajs)
-    owner = np.repeat(np.arange(len(trajs)), lengths)
-    first = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    # Per-sample progress in [0, 1] within its own trajectory.
-    t = np.concatenate(times).astype(float)
-    span_t = t[first + lengths - 1] - t[first]
-    by_time = (t - t[first][owner]) / np.where(span_t > 0, span_t, 1.0)[owner]
-    if by == "arc_length":
-        step = np.zeros(Y.shape[0])
-        step[1:] = np.linalg.norm(np.diff(Y, axis=0), axis=1)
-        step[first] = 0.0
-        cum = np.cumsum(step)
-        cum -= cum[first][owner]
-        total = cum[first + lengths - 1]
-        progress = np.where((total > 0)[owner], cum / np.where(total > 0, total, 1.0)[owner], by_time)
-    else:
-        progress = by_time
-    # One global monotone key: trajectory index + progress; query n_points per trajectory.
-    key = 2.0 * owner + progress
-    q = (2.0 * np.arange(len(trajs))[:, None] + np.linspace(0.0, 1.0, n_points)[None, :]).ravel()
-    start_of = np.repeat(first, n_points)
-    hi = np.minimum(np.searchsorted(key, q, side="left"), start_of + np.repeat(lengths, n_points) - 1)
-    lo = np.maximum(hi - 1, start_of)
-    gap = key[hi] - key[lo]
-    w = np.where(gap > 0, (q - key[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
-    out = Y[lo] + np.clip(w, 0.0, 1.0)[:, None] * (Y[hi] - Y[lo])
-    return out.reshape(len(trajs), n_points, Y.shape[1])
-
-
 def resampled_input(estimator, X, *, reset: bool, by: str) -> np.ndarray:
     """The featurisers' common input step: check ``n_points``, read the
     trajectories, record or check their dimension, resample to ``(n, n_points, d)``."""
@@ -180,7 +132,7 @@ def resampled_input(estimator, X, *, reset: bool, by: str) -> np.ndarray:
     elif trajs[0].shape[1] != estimator.n_features_in_:
         raise ValueError(f"X: expected trajectories with {estimator.n_features_in_} dimensions, "
                          f"got {trajs[0].shape[1]}")
-    return resample_trajectories(trajs, times, int(n_points), by)
+    return resample_many(trajs, times, int(n_points), by)
 
 
 class FlatPCAMixin:
@@ -270,3 +222,4 @@ class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
                              "start, so PCA has no variance to keep; pass n_components=None")
         self.pca_ = PCA(n_components=self.n_components, random_state=self.random_state)
         return self.pca_.fit_transform(F)
+

@@ -3,7 +3,7 @@
 Examples
 --------
 >>> import numpy as np
->>> from skillbank._constraints import Constraints, Sphere
+>>> from skillbank.core import Constraints, Sphere
 >>> s = np.linspace(0.0, 1.0, 200)
 >>> Y = np.column_stack([s, np.zeros_like(s)])
 >>> res = lte(Y, Constraints(obstacles=[Sphere([0.5, 0.0], 0.1)]))
@@ -11,8 +11,7 @@ Examples
 (True, False)
 """
 
-from ._editor import LaplacianEditor
-from ._laplacian import LaplacianSystem, laplacian_matrix
-from ._lte import EditResult, laplacian_edit, lte
+from ._laplacian import LaplacianSystem
+from ._lte import EditResult, lte
 
-__all__ = ["lte", "laplacian_edit", "EditResult", "LaplacianEditor", "LaplacianSystem", "laplacian_matrix"]
+__all__ = ["lte", "EditResult", "LaplacianSystem"]

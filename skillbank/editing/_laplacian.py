@@ -21,45 +21,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import cho_solve_banded, cholesky_banded
 
-__all__ = ["LaplacianSystem", "laplacian_matrix"]
+from ..core import neighbour_weights
 
-
-def _neighbour_weights(n: int, t=None):
-    """Weights ``a_i, b_i`` (``a_i + b_i = 1``) of the previous and next samples in row ``i``.
-
-    Uniform (1/2, 1/2) without time stamps; with ``t``, inversely proportional to
-    the time steps so that a constant-velocity path has zero Laplacian.
-    """
-    if t is None or n < 3:
-        a = np.full(n, 0.5)
-    else:
-        dt = np.diff(t)
-        a = np.full(n, 0.5)
-        a[1:-1] = dt[1:] / (dt[:-1] + dt[1:])
-    return a, 1.0 - a
-
-
-def laplacian_matrix(n: int, t=None):
-    """The path Laplacian ``L`` as a sparse ``(n, n)`` matrix.
-
-    Interior rows ``P_i - a_i P_{i-1} - b_i P_{i+1}``; the end rows are the
-    one-neighbour rows ``P_0 - P_1`` and ``P_{n-1} - P_{n-2}``.
-
-    Examples
-    --------
-    >>> laplacian_matrix(4).toarray()[1].tolist()
-    [-0.5, 1.0, -0.5, 0.0]
-    """
-    import scipy.sparse as sp
-
-    a, b = _neighbour_weights(n, t)
-    if n == 1:
-        return sp.csr_matrix((1, 1))
-    lower = -a[1:].copy()
-    upper = -b[:-1].copy()
-    upper[0] = -1.0
-    lower[-1] = -1.0
-    return sp.diags([lower, np.ones(n), upper], [-1, 0, 1], format="csr")
+__all__ = ["LaplacianSystem"]
 
 
 class LaplacianSystem:
@@ -86,7 +50,7 @@ class LaplacianSystem:
         if n < 2:
             self._chol = None
             return
-        a, b = _neighbour_weights(n, t)
+        a, b = neighbour_weights(n, t)
         m = n - 1
         diag = np.zeros(m)
         diag[0] += 1.0

@@ -6,12 +6,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._constraints import Box, Constraints
-from .._demonstration import Demonstration
-from .._validation import check_array, check_positive, check_time
+from ..core import Constraints, Demonstration
+from ..core._validation import check_array, check_positive, check_time
 from ._laplacian import LaplacianSystem
 
-__all__ = ["EditResult", "lte", "laplacian_edit"]
+__all__ = ["EditResult", "lte"]
 
 
 @dataclass
@@ -81,71 +80,16 @@ def _velocity_points(c: Constraints, n: int, t):
     return extra
 
 
+# Default clearance of the via-points pushed out of an obstacle, as a fraction of its size
+# (Obstacle.size): enough that the next solve does not slide the path straight back in.
+_MARGIN = 0.1
+
+
 def _tangents(P, rows):
     n = P.shape[0]
     T = P[np.minimum(rows + 1, n - 1)] - P[np.maximum(rows - 1, 0)]
     norm = np.linalg.norm(T, axis=1)
     return T / np.where(norm > 0, norm, 1.0)[:, None]
-
-
-def _push_out(ob, P, rows, margin):
-    """Move samples ``rows`` out of ``ob`` across the path (normal to its tangent), ``margin`` clear.
-
-    Pushing along the path would only bunch samples up and leave a jump; pushing
-    across it keeps their spacing and so the shape.
-    """
-    Y, T = P[rows], _tangents(P, rows)
-    if isinstance(ob, Box):
-        d = Y.shape[1]
-        lo, hi = Y - ob.lower, ob.upper - Y
-        depth = np.minimum(lo, hi)
-        if d > 1:  # not along the axis the path mostly follows
-            depth[np.arange(len(rows)), np.argmax(np.abs(T), axis=1)] = np.inf
-        axis = np.argmin(depth, axis=1)
-        k = np.arange(len(rows))
-        out = Y.copy()
-        out[k, axis] = np.where(lo[k, axis] <= hi[k, axis], ob.lower[axis] - margin, ob.upper[axis] + margin)
-        return out
-    D = Y - ob.center
-    U = D - T * np.einsum("ij,ij->i", D, T)[:, None]  # away from the centre, across the path
-    length = np.linalg.norm(U, axis=1)
-    flat = length <= 1e-9 * ob.radius
-    if flat.any():  # through the centre: any direction normal to the tangent
-        axis = np.argmin(np.abs(T[flat]), axis=1)
-        V = np.zeros((int(flat.sum()), Y.shape[1]))
-        V[np.arange(len(axis)), axis] = 1.0
-        V -= T[flat] * np.einsum("ij,ij->i", V, T[flat])[:, None]
-        U[flat] = V
-        length[flat] = np.linalg.norm(V, axis=1)
-    U /= np.where(length > 0, length, 1.0)[:, None]
-    # Y + s U on the sphere of radius r + margin; Y is inside, so one root is positive.
-    b = np.einsum("ij,ij->i", U, D)
-    s_ = -b + np.sqrt(b * b - (np.einsum("ij,ij->i", D, D) - (ob.radius + margin) ** 2))
-    return Y + s_[:, None] * U
-
-
-def _segment_hits(ob, P) -> np.ndarray:
-    """Segments ``P[i] -> P[i+1]`` that pass through the inside of ``ob``; shape (n - 1,)."""
-    A, B = P[:-1], P[1:]
-    V = B - A
-    if isinstance(ob, Box):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t1, t2 = (ob.lower - A) / V, (ob.upper - A) / V
-        still = V == 0
-        inside_slab = (A > ob.lower) & (A < ob.upper)
-        t_lo = np.where(still, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2))
-        t_hi = np.where(still, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2))
-        enter, leave = np.maximum(t_lo.max(axis=1), 0.0), np.minimum(t_hi.min(axis=1), 1.0)
-        return enter < leave
-    W = ob.center - A
-    vv = np.einsum("ij,ij->i", V, V)
-    s_ = np.clip(np.einsum("ij,ij->i", W, V) / np.where(vv > 0, vv, 1.0), 0.0, 1.0)
-    closest = A + s_[:, None] * V - ob.center
-    return np.einsum("ij,ij->i", closest, closest) < ob.radius**2
-
-
-def _size(ob) -> float:
-    return ob.radius if not isinstance(ob, Box) else 0.5 * float(np.min(ob.upper - ob.lower))
 
 
 def _pushes(P, sd, fixed, obstacles, margins):
@@ -167,7 +111,7 @@ def _pushes(P, sd, fixed, obstacles, margins):
         if pinned.any():
             return [], (int(starts[np.argmax(pinned)]), j)
         rows = np.array([s + np.argmin(depth[s:e]) for s, e in zip(starts, stops, strict=True)])
-        out = _push_out(ob, P, rows, margins[j])
+        out = ob.push_out(P[rows], _tangents(P, rows), margins[j])
         for i, p in zip(rows, out, strict=True):
             pushes.setdefault(int(i), p)
     return sorted(pushes.items()), None
@@ -241,7 +185,7 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
     user = np.zeros(n, dtype=bool)
     user[idx] = True
     obstacles = c.obstacles if avoid_obstacles else ()
-    margins = [_size(ob) * 0.1 if margin is None else margin for ob in obstacles]
+    margins = [_MARGIN * ob.size if margin is None else margin for ob in obstacles]
     system = LaplacianSystem(n, t)
     added: dict[int, np.ndarray] = {}
     message, blocked, n_iter = "", None, 0
@@ -267,12 +211,11 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
     vel_error = c.velocity_error(P, t)
     collision = c.collides(P) if c.obstacles else False
     crossing = None
-    if not collision and c.obstacles and n > 1:
+    if collision and not c.collision_mask(P).any():  # no sample inside: a segment crosses
         for j, ob in enumerate(c.obstacles):
-            hits = np.flatnonzero(_segment_hits(ob, P))
+            hits = np.flatnonzero(ob.segment_hits(P))
             if hits.size:
                 crossing = (int(hits[0]), j, hits.size)
-                collision = True
                 break
     scale = max(1.0, float(np.abs(Y).max()))
     dt_min = float(np.diff(t).min()) if n > 1 else 1.0
@@ -305,5 +248,3 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
         added=sorted(added.items()),
     )
 
-
-laplacian_edit = lte

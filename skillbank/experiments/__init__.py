@@ -7,6 +7,7 @@ from ._rail import (
     RailExperimentResult,
     composition,
     count_misclustered,
+    plot_rail_experiment,
     rail_experiment,
     run_rail_experiment,
 )
@@ -14,5 +15,5 @@ from ._rail import (
 __all__ = [
     "run_segmentation_demo", "run_library_demo", "synthetic_multistream", "PAPER_REPRESENTATIVES",
     "RailExperimentResult",
-    "composition", "count_misclustered", "rail_experiment", "run_rail_experiment",
+    "composition", "count_misclustered", "plot_rail_experiment", "rail_experiment", "run_rail_experiment",
 ]

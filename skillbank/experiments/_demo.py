@@ -6,8 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
 from ..io import load_lasa, write_json
+from ..plotting import plot_keypoint_probability, plot_segmentation_summary, plot_segments
 from ..segmentation import segment
 
 __all__ = ["run_segmentation_demo", "synthetic_multistream"]
@@ -54,8 +55,6 @@ def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:
     dict
         ``{"out": str, "summary": str, "items": [...]}``.
     """
-    from ..plotting import plot_keypoint_probability, plot_segmentation_summary, plot_segments
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     items = []

@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import textwrap
 import time
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._constraints import Constraints, Sphere
-from .._demonstration import Demonstration
+from ..core import Constraints, Demonstration, Sphere
+from ..io import load, load_lasa, load_rail, write_json
+from ..pipeline import Library
+from ..plotting import draw_edit
+from ._demo import run_segmentation_demo, synthetic_multistream
 
 __all__ = ["run_library_demo"]
 
@@ -100,9 +105,6 @@ def _goal_task(lib, skill, method, offset, what) -> _Task:
 
 
 def _lasa_setup(lib, random_state) -> tuple:
-    from ..io import load_lasa
-    from ._demo import synthetic_multistream
-
     shapes = [_lift(d) for s in LASA_SHAPES for d in load_lasa(s)]
     lib.add_many(shapes, segment=False, assign="none", source="lasa")
     robot = [synthetic_multistream(random_state=random_state + k) for k in range(3)]
@@ -123,8 +125,6 @@ def _lasa_setup(lib, random_state) -> tuple:
 
 
 def _rail_setup(lib, data: Path, random_state) -> tuple:
-    from ..io import load, load_rail
-
     rail = load_rail(data / "rail", classes=list(RAIL_CLASSES))
     # every demonstration: with 10 per class the clusters merge (2 skills at 53-67 % majority);
     # with all of them elastic clustering separates the three classes (88-98 %)
@@ -155,8 +155,6 @@ def _rail_setup(lib, data: Path, random_state) -> tuple:
 
 
 def _plot_clusters(lib, rows, path) -> Path:
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(7, 5.5))
     ax = fig.add_subplot(projection="3d")
     colours = {r["cluster"]: f"C{k % 10}" for k, r in enumerate(rows)}
@@ -182,12 +180,6 @@ def _planar(c: Constraints) -> Constraints:
 
 
 def _plot_reuse(lib, task, res, path) -> Path:
-    import textwrap
-
-    from matplotlib.figure import Figure
-
-    from ..plotting import draw_edit
-
     stored = [p.demo["position"] for p in lib.primitives(label=task.skill)]
     used = [c["position"] for c in res.candidates]
     Y, c = res.trajectory["position"], task.constraints
@@ -271,9 +263,6 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
     >>> [r["skill"] for r in res["reuse"]]  # doctest: +SKIP
     ['WShape', 'place']
     """
-    from ..io import write_json
-    from ..library import Library
-
     t0 = time.perf_counter()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -306,8 +295,6 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         summary = lib.summary()
     seg = None
     if segmentation:
-        from ._demo import run_segmentation_demo
-
         seg = run_segmentation_demo(out / "segmentation")
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),

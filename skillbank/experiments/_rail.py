@@ -7,6 +7,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from sklearn.cluster import AgglomerativeClustering
+from sklearn.metrics import adjusted_rand_score
+from sklearn.preprocessing import minmax_scale
+
+from ..clustering import AngularSimilarityFeatures, ElasticClustering, HeadingFeatures
+from ..io import load_rail
+from ..plotting import plot_cluster_comparison
 
 __all__ = [
     "RailExperimentResult",
@@ -78,8 +85,6 @@ class RailExperimentResult:
 
     def summary(self) -> dict:
         """Per method: compositions, n_clusters, misclustered, ari; n_demos; timing."""
-        from sklearn.metrics import adjusted_rand_score
-
         out = {
             "mode": self.mode,
             "classes": list(self.classes),
@@ -130,9 +135,6 @@ def _rail_folder(data_dir) -> Path:
 
 def _paper_features(folder, demos_by_class, classes):
     """Angular similarity to the paper's representatives, min-max normalised per column."""
-    from ..clustering import AngularSimilarityFeatures
-    from ..io import load_rail
-
     reps = []
     for name, index in PAPER_REPRESENTATIVES.items():
         demos = demos_by_class.get(name)
@@ -144,9 +146,7 @@ def _paper_features(folder, demos_by_class, classes):
         reps.append(demos[index]["position"])
     trajs = [d["position"] for c in classes for d in demos_by_class[c]]
     raw = AngularSimilarityFeatures(representatives=reps).fit_transform(trajs)
-    span = raw.max(axis=0) - raw.min(axis=0)
-    scaled = (raw - raw.min(axis=0)) / np.where(span > 0, span, 1.0)
-    return raw, scaled
+    return raw, minmax_scale(raw)  # per column; a constant column maps to 0
 
 
 def rail_experiment(data_dir, *, mode: str = "default", classes=("reaching", "pushing", "writing"),
@@ -159,11 +159,6 @@ def rail_experiment(data_dir, *, mode: str = "default", classes=("reaching", "pu
     >>> result.summary()["elastic"]["misclustered"]  # doctest: +SKIP
     20
     """
-    from sklearn.cluster import AgglomerativeClustering
-
-    from ..clustering import ElasticClustering
-    from ..io import load_rail
-
     if mode not in _MODES:
         raise ValueError(f"mode: expected one of {list(_MODES)}, got {mode!r}")
     names = _check_classes(classes)
@@ -184,8 +179,6 @@ def rail_experiment(data_dir, *, mode: str = "default", classes=("reaching", "pu
                         "min-max normalised per column for elastic clustering")
         elastic = ElasticClustering(stretch=1.2, criterion="paper", random_state=random_state)
     else:
-        from ..clustering import HeadingFeatures
-
         featuriser = HeadingFeatures(random_state=random_state)
         features = agg_input = featuriser.fit_transform(demos)
         feature_text = (f"HeadingFeatures(n_points={featuriser.n_points}, n_components="
@@ -269,3 +262,35 @@ def run_rail_experiment(data_dir, *, mode: str = "default", classes=("reaching",
     ([[60, 20, 0], [0, 40, 0], [0, 0, 30]], 22)
     """
     return rail_experiment(data_dir, mode=mode, classes=classes, random_state=random_state).summary()
+
+
+def plot_rail_experiment(result, path) -> Path:
+    """The RAIL figure: ground truth, elastic and agglomerative clusters, features and trajectories.
+
+    Parameters
+    ----------
+    result : RailExperimentResult
+        From :func:`skillbank.experiments.rail_experiment`.
+    path : str or path-like
+
+    Returns
+    -------
+    pathlib.Path
+
+    Examples
+    --------
+    >>> plot_rail_experiment(rail_experiment("data/rail", mode="paper"), "rail.png")  # doctest: +SKIP
+    PosixPath('rail.png')
+    """
+    if not isinstance(result, RailExperimentResult):
+        raise ValueError(f"result: expected a RailExperimentResult, got {type(result).__name__}")
+    summary = result.summary()
+    labelings = {
+        f"{m} ({summary[m]['misclustered']} misclustered)": result.labels[m] for m in result.labels
+    }
+    return plot_cluster_comparison(
+        result.features, labelings, path, trajectories=result.trajectories,
+        classes=result.class_index, class_names=[c.capitalize() for c in result.classes],
+        max_clusters_shown=max(len(result.classes), 3),
+        title=f"RAIL clustering, {result.mode} mode ({result.n_demos} demonstrations)",
+    )

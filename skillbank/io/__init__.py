@@ -17,11 +17,20 @@ Examples
 
 from ._detect import detect_format, load, load_all
 from ._errors import FormatError
+from ._folders import load_folder, load_positions
 from ._handwriting_h5 import read_handwriting_h5
 from ._lasa import lasa_shapes, load_lasa
 from ._rail import load_rail, read_rail_file
 from ._robot_h5 import read_robot_h5
-from ._tabular import read_csv, read_npz, to_jsonable, write_csv, write_json, write_npz
+from ._tabular import (
+    read_csv,
+    read_feature_matrix,
+    read_npz,
+    to_jsonable,
+    write_csv,
+    write_json,
+    write_npz,
+)
 
 __all__ = [
     "FormatError",
@@ -32,6 +41,7 @@ __all__ = [
     "load_lasa",
     "lasa_shapes",
     "read_csv",
+    "read_feature_matrix",
     "write_csv",
     "read_npz",
     "write_npz",
@@ -40,4 +50,6 @@ __all__ = [
     "detect_format",
     "load",
     "load_all",
+    "load_folder",
+    "load_positions",
 ]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
 from ._errors import HDF5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
 
 __all__ = ["read_handwriting_h5", "HANDWRITING_GROUPS"]

@@ -10,7 +10,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
 from ._errors import drop_repeated_times
 
 __all__ = ["lasa_shapes", "load_lasa"]

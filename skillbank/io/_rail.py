@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
 from ._errors import MAT5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
 
 __all__ = ["read_rail_file", "load_rail", "RAIL_CLASSES"]

@@ -7,10 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
+from ..core._validation import check_array
 from ._errors import ZIP_MAGICS, FormatError, as_file, expect_magic, reading
 
-__all__ = ["read_csv", "write_csv", "read_npz", "write_npz", "write_json", "to_jsonable"]
+__all__ = [
+    "read_csv", "read_feature_matrix", "write_csv", "read_npz", "write_npz", "write_json", "to_jsonable",
+]
 
 
 def _check_demo(demo) -> None:
@@ -18,20 +21,44 @@ def _check_demo(demo) -> None:
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
 
 
-def _csv_problem(lines: list[str], width: int) -> str:
+def _csv_problem(lines: list[str], width: int, header: bool = True) -> str:
     """Find the first malformed data row, for an error message numpy cannot give."""
-    for lineno, line in enumerate(lines[1:], start=2):
+    first = 2 if header else 1
+    for lineno, line in enumerate(lines[first - 1:], start=first):
         if not line.strip():
             continue
         cells = line.split(",")
         if len(cells) != width:
-            return f"line {lineno}: expected {width} values as in the header, found {len(cells)}"
+            what = "in the header" if header else "in the first row"
+            return f"line {lineno}: expected {width} values as {what}, found {len(cells)}"
         for col, cell in enumerate(cells, start=1):
             try:
                 float(cell)
             except ValueError:
                 return f"line {lineno}, column {col}: expected a number, found {cell.strip()[:30]!r}"
     return "expected a numeric table"
+
+
+def _table(p, lines: list[str], header: bool) -> np.ndarray:
+    """The numeric rows of a comma-separated table (after a header row when ``header``)."""
+    rows = lines[1:] if header else lines
+    width = len(lines[0].split(","))
+    try:
+        table = np.loadtxt(rows, delimiter=",", dtype=float, ndmin=2)
+    except ValueError:
+        raise FormatError(p, _csv_problem(lines, width, header)) from None
+    if table.shape[1] != width:
+        raise FormatError(p, _csv_problem(lines, width, header))
+    return table
+
+
+def _text_lines(p) -> list[str]:
+    with reading(p, "expected a UTF-8 text file"):
+        text = p.read_text(encoding="utf-8-sig")
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    return lines
 
 
 def read_csv(path) -> Demonstration:
@@ -59,11 +86,7 @@ def read_csv(path) -> Demonstration:
     [[1.0, 0.0], [0.0, 1.0]]
     """
     p = as_file(path)
-    with reading(p, "expected a UTF-8 text file"):
-        text = p.read_text(encoding="utf-8-sig")
-    lines = text.splitlines()
-    while lines and not lines[-1].strip():
-        lines.pop()
+    lines = _text_lines(p)
     if not lines:
         raise FormatError(p, "expected a header row starting with 't', found an empty file")
     header = [cell.strip() for cell in lines[0].split(",")]
@@ -73,15 +96,51 @@ def read_csv(path) -> Demonstration:
         raise FormatError(p, "line 1: expected 't' and at least one data column, found only 't'")
     if len(lines) < 2:
         raise FormatError(p, "expected at least one data row after the header, found none")
-    try:
-        table = np.loadtxt(lines[1:], delimiter=",", dtype=float, ndmin=2)
-    except ValueError:
-        raise FormatError(p, _csv_problem(lines, len(header))) from None
-    if table.shape[1] != len(header):
-        raise FormatError(p, _csv_problem(lines, len(header)))
+    table = _table(p, lines, header=True)
     metadata = {"source": str(p), "format": "csv", "columns": header[1:]}
     with reading(p, "invalid data"):
         return Demonstration(table[:, 0], {"position": table[:, 1:]}, metadata)
+
+
+def read_feature_matrix(path) -> np.ndarray:
+    """A feature matrix ``(n_samples, n_features)`` from ``.npy`` (no pickles) or ``.csv`` (header optional).
+
+    Raises
+    ------
+    FormatError
+        If the file cannot be parsed as a 2-D finite numeric matrix (the
+        message gives the first bad line).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "f.csv")
+    >>> _ = open(path, "w").write("a,b\\n1,2\\n3,4\\n")
+    >>> read_feature_matrix(path).tolist()
+    [[1.0, 2.0], [3.0, 4.0]]
+    """
+    p = as_file(path)
+    suffix = p.suffix.lower()
+    if suffix == ".npy":
+        with reading(p, "expected a numeric .npy array"):
+            data = np.load(p, allow_pickle=False)
+    elif suffix in (".csv", ".txt"):
+        lines = [line for line in _text_lines(p) if line.strip()]
+        if not lines:
+            raise FormatError(p, "expected a numeric feature matrix, found an empty file")
+        try:
+            [float(cell) for cell in lines[0].split(",")]
+            header = False
+        except ValueError:
+            header = True
+        if header and len(lines) < 2:
+            raise FormatError(p, "expected data rows after the header, found none")
+        data = _table(p, lines, header=header)
+    else:
+        suffix = p.suffix or "(none)"
+        raise FormatError(p, f"expected a feature matrix (.csv, .npy), got extension {suffix!r}")
+    with reading(p, "expected a 2-D finite numeric matrix"):
+        return check_array(data, name="features", ndim=2, min_samples=1)
 
 
 def write_csv(demo, path, *, stream: str | None = None) -> Path:

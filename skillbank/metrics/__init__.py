@@ -9,8 +9,8 @@ Examples
 (0.5, 2.0)
 """
 
-from ._distances import dtw_distance, frechet_distance
-from ._report import constraint_report
+from ._distances import dtw_distance, dtw_many, frechet_distance
+from ._report import comparison_metrics, constraint_report
 from ._shape import (
     angular_similarity,
     angular_similarity_matrix,
@@ -21,7 +21,7 @@ from ._shape import (
 )
 
 __all__ = [
-    "frechet_distance", "dtw_distance", "swept_error_area", "angular_similarity", "angular_similarity_matrix",
-    "curvature_deviation",
-    "jerk_cost", "path_length", "constraint_report",
+    "frechet_distance", "dtw_distance", "dtw_many", "swept_error_area", "angular_similarity",
+    "angular_similarity_matrix", "curvature_deviation", "jerk_cost", "path_length", "constraint_report",
+    "comparison_metrics",
 ]

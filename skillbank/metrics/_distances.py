@@ -1,4 +1,4 @@
-"""Curve distances computed by dynamic programming over anti-diagonals.
+"""Curve distances by dynamic programming: discrete Fréchet over anti-diagonals, DTW by rows.
 
 Both recurrences make cell ``(i, j)`` depend on ``(i-1, j)``, ``(i, j-1)`` and
 ``(i-1, j-1)`` only, so every cell of an anti-diagonal ``i + j = k`` depends on
@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_array
+from ..core import Demonstration
+from ..core._validation import check_array, check_fraction
 
-__all__ = ["frechet_distance", "dtw_distance"]
+__all__ = ["frechet_distance", "dtw_distance", "dtw_many"]
 
 
 def _pair(P, Q):
+    P, Q = (x["position"] if isinstance(x, Demonstration) and "position" in x else x for x in (P, Q))
     P = check_array(P, name="P", ndim=(1, 2), as_2d=True)
     Q = check_array(Q, name="Q", ndim=(1, 2), as_2d=True)
     if P.shape[1] != Q.shape[1]:
@@ -69,16 +71,71 @@ def frechet_distance(P, Q) -> float:
     return _antidiagonal_dp(P, Q, np.maximum)
 
 
-def dtw_distance(P, Q) -> float:
+def _band(n_rows: int, n_cols: int, window: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """Column range [lo, hi] allowed on each row (Sakoe-Chiba band around the diagonal)."""
+    if window is None:
+        return np.zeros(n_rows, dtype=np.intp), np.full(n_rows, n_cols - 1, dtype=np.intp)
+    centre = np.arange(n_rows) * ((n_cols - 1) / max(n_rows - 1, 1))
+    radius = max(1.0, window * max(n_rows, n_cols))
+    lo = np.clip(np.floor(centre - radius), 0, n_cols - 1).astype(np.intp)
+    hi = np.clip(np.ceil(centre + radius), 0, n_cols - 1).astype(np.intp)
+    return lo, hi
+
+
+def dtw_many(Q: np.ndarray, R: np.ndarray, window: float | None = None) -> np.ndarray:
+    """DTW cost of every trajectory in ``Q`` (n, n_rows, d) against one trajectory ``R`` (n_cols, d).
+
+    The local cost is the Euclidean distance between samples; the result is
+    the smallest sum of local costs along a monotone warping path
+    (``D[i, j] = |Q_i - R_j| + min(D[i-1, j], D[i, j-1], D[i-1, j-1])``). Each
+    row of the cost table is computed for all ``n`` trajectories at once: with
+    ``P`` the running sum of the row's local costs, the left-to-right
+    recurrence ``D[i, j] = min(b[j], c[i, j] + D[i, j-1])`` is
+    ``P[j] + cummin(b - P)[j]``, so no loop runs over columns or trajectories,
+    and only one row is kept (memory linear in the lengths).
+
+    Examples
+    --------
+    >>> R = np.array([[0.0], [1.0], [2.0]])
+    >>> dtw_many(np.array([[[0.0], [0.0], [1.0], [2.0]]]), R).tolist()
+    [0.0]
+    """
+    n, n_rows, _ = Q.shape
+    n_cols = R.shape[0]
+    lo, hi = _band(n_rows, n_cols, window)
+    cols = np.arange(n_cols)
+    prev = None
+    for i in range(n_rows):
+        diff = Q[:, i, None, :] - R[None, :, :]
+        cost = np.sqrt(np.einsum("ncd,ncd->nc", diff, diff))
+        outside = (cols < lo[i]) | (cols > hi[i])
+        cost[:, outside] = 0.0
+        P = np.cumsum(cost, axis=1)
+        if prev is None:
+            b = np.full((n, n_cols), np.inf)
+            b[:, 0] = cost[:, 0]
+        else:
+            b = cost + np.minimum(prev, np.concatenate([np.full((n, 1), np.inf), prev[:, :-1]], axis=1))
+        b[:, outside] = np.inf
+        row = P + np.minimum.accumulate(b - P, axis=1)
+        row[:, outside] = np.inf
+        prev = row
+    return prev[:, -1]
+
+
+def dtw_distance(P, Q, *, window=None) -> float:
     """Dynamic time warping distance: least total Euclidean cost of a monotone alignment.
 
     ``D[i, j] = |P_i - Q_j| + min(D[i-1, j], D[i, j-1], D[i-1, j-1])``, and the
-    result is ``D[n-1, m-1]`` (not normalised by the path length).
+    result is ``D[n-1, m-1]`` (not normalised by the path length). Lengths may
+    differ. Computed by :func:`dtw_many`, in memory linear in the lengths.
 
     Parameters
     ----------
     P : array-like of shape (n, n_dims)
     Q : array-like of shape (m, n_dims)
+    window : float in (0, 1], optional
+        Sakoe-Chiba band half-width as a fraction of the longer length; None for no band.
 
     Returns
     -------
@@ -90,4 +147,6 @@ def dtw_distance(P, Q) -> float:
     1.0
     """
     P, Q = _pair(P, Q)
-    return _antidiagonal_dp(P, Q, np.add)
+    if window is not None:
+        window = check_fraction(window, name="window")
+    return float(dtw_many(P[None], Q, window)[0])

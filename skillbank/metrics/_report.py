@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._constraints import Constraints
-from .._validation import check_array
+from ..core import Constraints, resample
+from ..core._validation import check_array
+from ._distances import dtw_distance, frechet_distance
+from ._shape import angular_similarity, curvature_deviation, jerk_cost, path_length, swept_error_area
 
-__all__ = ["constraint_report"]
+__all__ = ["constraint_report", "comparison_metrics"]
 
 
 def constraint_report(Y, constraints, t=None) -> dict:
@@ -25,13 +27,14 @@ def constraint_report(Y, constraints, t=None) -> dict:
     dict
         ``position_error`` (largest distance to a positional target),
         ``velocity_error`` (largest boundary-velocity error), ``collision``
-        (a sample strictly inside an obstacle), ``n_colliding`` (such samples),
+        (:meth:`Constraints.collides`: a sample strictly inside an obstacle or
+        a segment through one), ``n_colliding`` (samples strictly inside),
         ``min_signed_distance`` (per obstacle, negative when penetrated) and
         ``clearance`` (smallest of those, ``inf`` without obstacles).
 
     Examples
     --------
-    >>> from skillbank._constraints import Constraints, Sphere
+    >>> from skillbank.core import Constraints, Sphere
     >>> c = Constraints(goal=[1.0, 0.0], obstacles=[Sphere([0.5, 0.0], 0.25)])
     >>> r = constraint_report([[0.0, 0.0], [0.5, 0.1], [1.0, 0.0]], c)
     >>> r["collision"], r["n_colliding"], round(r["clearance"], 3)
@@ -47,8 +50,43 @@ def constraint_report(Y, constraints, t=None) -> dict:
     return {
         "position_error": constraints.position_error(Y),
         "velocity_error": constraints.velocity_error(Y, t) if constraints.has_velocity else 0.0,
-        "collision": bool(inside.any()),
+        "collision": constraints.collides(Y),
         "n_colliding": int(inside.sum()),
         "min_signed_distance": [float(v) for v in per_obstacle],
         "clearance": float(per_obstacle.min()) if per_obstacle.size else float("inf"),
     }
+
+
+def comparison_metrics(Y, t, reference, constraints) -> dict:
+    """Shape and quality of ``Y`` (times ``t``) against the ``reference`` demonstration's positions.
+
+    ``frechet`` and ``dtw`` compare the curves as they are; ``angular_similarity``,
+    ``swept_error_area`` and ``curvature_deviation`` compare them sample by
+    sample (the reproduction resampled to the reference's length if needed).
+    ``clearance`` (smallest signed distance to an obstacle) only with obstacles.
+    Fréchet and DTW take time proportional to the product of the lengths
+    (memory linear in them); everything else is linear.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skillbank import Constraints
+    >>> s = np.linspace(0.0, 1.0, 20)
+    >>> m = comparison_metrics(np.c_[s, s], s, np.c_[s, s], Constraints())
+    >>> m["frechet"], round(m["path_length"], 6)
+    (0.0, 1.414214)
+    """
+    same = Y if Y.shape[0] == reference.shape[0] else resample(Y, reference.shape[0])
+    metrics = {
+        "frechet": frechet_distance(Y, reference),
+        "dtw": dtw_distance(Y, reference),
+        "swept_error_area": swept_error_area(same, reference),
+        "angular_similarity": angular_similarity(same, reference),
+        "curvature_deviation": curvature_deviation(same, reference),
+        "path_length": path_length(Y),
+        "demo_path_length": path_length(reference),
+        "jerk_cost": jerk_cost(Y, t) if Y.shape[0] >= 4 else 0.0,
+    }
+    if constraints.obstacles:
+        metrics["clearance"] = float(constraints.signed_distances(Y).min())
+    return {k: float(v) for k, v in metrics.items()}

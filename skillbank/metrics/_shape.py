@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._demonstration import Demonstration
-from .._validation import check_array, check_time
-from ..editing._laplacian import laplacian_matrix
+from ..core import Demonstration, laplacian_matrix
+from ..core._validation import check_array, check_time
 
 __all__ = [
     "swept_error_area", "angular_similarity", "angular_similarity_matrix", "curvature_deviation",
@@ -147,7 +146,7 @@ def curvature_deviation(P, Q, t=None) -> float:
 
     The Laplacian coordinate of a sample is the sample minus the weighted mean
     of its neighbours (the operator that LTE keeps, see
-    :func:`skillbank.editing.laplacian_matrix`); it measures local curvature and
+    :func:`skillbank.core.laplacian_matrix`); it measures local curvature and
     ignores translation. Returns ``mean_i |(L P)_i - (L Q)_i|``.
 
     Parameters

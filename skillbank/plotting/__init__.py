@@ -1,6 +1,6 @@
 """Figures of segmentation results, drawn with matplotlib (no pyplot state)."""
 
-from ._clustering import plot_cluster_comparison, plot_rail_experiment
+from ._clustering import plot_cluster_comparison
 from ._editing import draw_edit, plot_edit
 from ._grid import plot_segment_grid
 from ._segmentation import (
@@ -12,6 +12,6 @@ from ._segmentation import (
 
 __all__ = [
     "plot_jerk_profile", "plot_keypoint_probability", "plot_segments", "plot_segmentation_summary",
-    "plot_cluster_comparison", "plot_rail_experiment", "draw_edit", "plot_edit",
+    "plot_cluster_comparison", "draw_edit", "plot_edit",
     "plot_segment_grid",
 ]

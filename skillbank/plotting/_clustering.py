@@ -14,10 +14,10 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-from .._validation import check_array
+from ..core._validation import check_array
 from ._segmentation import _save
 
-__all__ = ["plot_cluster_comparison", "plot_rail_experiment"]
+__all__ = ["plot_cluster_comparison"]
 
 # Red, green, blue first, as in the paper's figure; then matplotlib's tab10.
 _PALETTE = ("#e41a1c", "#2ca02c", "#1f3fd6", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
@@ -193,38 +193,3 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
     if title:
         fig.suptitle(title)
     return _save(fig, path)
-
-
-def plot_rail_experiment(result, path) -> Path:
-    """The RAIL figure: ground truth, elastic and agglomerative clusters, features and trajectories.
-
-    Parameters
-    ----------
-    result : RailExperimentResult
-        From :func:`skillbank.experiments.rail_experiment`.
-    path : str or path-like
-
-    Returns
-    -------
-    pathlib.Path
-
-    Examples
-    --------
-    >>> from skillbank.experiments import rail_experiment  # doctest: +SKIP
-    >>> plot_rail_experiment(rail_experiment("data/rail", mode="paper"), "rail.png")  # doctest: +SKIP
-    PosixPath('rail.png')
-    """
-    from ..experiments._rail import RailExperimentResult
-
-    if not isinstance(result, RailExperimentResult):
-        raise ValueError(f"result: expected a RailExperimentResult, got {type(result).__name__}")
-    summary = result.summary()
-    labelings = {
-        f"{m} ({summary[m]['misclustered']} misclustered)": result.labels[m] for m in result.labels
-    }
-    return plot_cluster_comparison(
-        result.features, labelings, path, trajectories=result.trajectories,
-        classes=result.class_index, class_names=[c.capitalize() for c in result.classes],
-        max_clusters_shown=max(len(result.classes), 3),
-        title=f"RAIL clustering, {result.mode} mode ({result.n_demos} demonstrations)",
-    )

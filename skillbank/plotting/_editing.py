@@ -11,11 +11,10 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle, Rectangle
+from matplotlib.patches import Polygon
 
-from .._constraints import Box, Constraints, Sphere
-from .._demonstration import Demonstration
-from .._validation import check_array
+from ..core import Constraints, Demonstration
+from ..core._validation import check_array
 
 __all__ = ["draw_edit", "plot_edit"]
 
@@ -40,27 +39,15 @@ def _line(ax, Y, **kw):
     return ax.plot(*Y.T, **kw)
 
 
-def _sphere(ax, ob: Sphere, three_d: bool):
+def _obstacle(ax, ob, three_d: bool):
+    """Draw any obstacle from its outline: a filled polygon in 2-D, a wireframe in 3-D."""
+    lines = ob.outline()
     if not three_d:
-        ax.add_patch(Circle(ob.center, ob.radius, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE))
+        for poly in lines:
+            ax.add_patch(Polygon(poly, closed=True, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE))
         return
-    u, v = np.meshgrid(np.linspace(0.0, 2 * np.pi, 24), np.linspace(0.0, np.pi, 12))
-    c, r = ob.center, ob.radius
-    ax.plot_wireframe(c[0] + r * np.cos(u) * np.sin(v), c[1] + r * np.sin(u) * np.sin(v),
-                      c[2] + r * np.cos(v), color=_OBSTACLE, alpha=0.35, linewidth=0.5)
-
-
-def _box(ax, ob: Box, three_d: bool):
-    lo, hi = ob.lower, ob.upper
-    if not three_d:
-        ax.add_patch(Rectangle(lo, *(hi - lo), facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE))
-        return
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    # The 12 edges join corners that differ in exactly one coordinate (one bit of the index).
-    for i in range(8):
-        for bit in (1, 2, 4):
-            if not i & bit:
-                ax.plot(*corners[[i, i | bit]].T, color=_OBSTACLE, alpha=0.7, linewidth=1.0)
+    for line in lines:
+        ax.plot(*line.T, color=_OBSTACLE, alpha=0.5, linewidth=0.6)
 
 
 def _extent(ax, points: np.ndarray, three_d: bool):
@@ -101,7 +88,7 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
     --------
     >>> import numpy as np
     >>> from matplotlib.figure import Figure
-    >>> from skillbank._constraints import Constraints, Sphere
+    >>> from skillbank.core import Constraints, Sphere
     >>> s = np.linspace(0.0, 1.0, 50)
     >>> ax = Figure().add_subplot()
     >>> _ = draw_edit(ax, np.c_[s, s], demo=np.c_[s, 0 * s],
@@ -131,10 +118,8 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
         _line(ax, D, color=_DEMO, linestyle="--", linewidth=1.2, label="demonstration")
     _line(ax, R, color=_REPRO, linewidth=1.8, label="reproduction")
     for ob in c.obstacles:
-        (_sphere if isinstance(ob, Sphere) else _box)(ax, ob, three_d)
-        lo, hi = ((ob.center - ob.radius, ob.center + ob.radius) if isinstance(ob, Sphere)
-                  else (ob.lower, ob.upper))
-        points.append(np.stack([lo, hi]))
+        _obstacle(ax, ob, three_d)
+        points.append(np.stack(ob.bounds()))
     markers = [("start", c.start, "s"), ("goal", c.goal, "*")]
     markers += [("via-point" if k == 0 else None, v.position, "D") for k, v in enumerate(c.via)]
     for label, p, marker in markers:

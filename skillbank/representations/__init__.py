@@ -6,8 +6,10 @@ stream, or arrays ``(n_steps, n_dims)``) and generates with
 :class:`~skillbank.Demonstration` that meets the
 :class:`~skillbank.Constraints` (start, goal, via-points; obstacles by
 post-editing with Laplacian trajectory editing, see
-:class:`Representation`).
+:class:`Representation`). :data:`REPRESENTATIONS` maps the method names of
+``reuse`` and the command line to these classes.
 
+- :class:`LaplacianEditor`: one demonstration, edited as it is (LTE); avoids obstacles itself.
 - :class:`JerkAccuracy`: one demonstration; accuracy-smoothness trade-off.
 - :class:`ProMP`: several demonstrations; Gaussian over trajectories.
 - :class:`ElasticMap`: one or more; elastic polyline fitted by EM.
@@ -24,13 +26,15 @@ Examples
 [1.0, 1.2]
 """
 
-from ._base import Representation, as_constraints, resample
+from ._base import Representation
 from ._dmp import DMP
 from ._elastic_map import ElasticMap
-from ._jerk_accuracy import JerkAccuracy, jerk_accuracy_system
-from ._promp import ProMP, gaussian_basis
+from ._jerk_accuracy import JerkAccuracy
+from ._lte import LaplacianEditor
+from ._promp import ProMP
+from ._registry import REPRESENTATIONS, fit_reproduce, representation
 
 __all__ = [
-    "Representation", "JerkAccuracy", "ProMP", "ElasticMap", "DMP", "as_constraints", "resample",
-    "jerk_accuracy_system", "gaussian_basis",
+    "Representation", "LaplacianEditor", "JerkAccuracy", "ProMP", "ElasticMap", "DMP", "REPRESENTATIONS",
+    "representation", "fit_reproduce",
 ]

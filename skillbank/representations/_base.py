@@ -9,59 +9,28 @@ obstacle post-editing step.
 
 Obstacles
 ---------
-None of the representations avoids obstacles by itself. When the constraints
-hold obstacles, :meth:`Representation._avoid_obstacles` hands the reproduction
-to Laplacian trajectory editing (``skillbank.editing.lte``), which deforms it
-around the obstacles while keeping its start, goal and via-points. That is the
-only coupling with :mod:`skillbank.editing`; when that module is not available
-the request fails with an :class:`ImportError` instead of silently returning
-a colliding trajectory.
+Only :class:`~skillbank.representations.LaplacianEditor` avoids obstacles by
+itself (``avoids_obstacles = True``). For the others, when the constraints
+hold obstacles, :meth:`Representation._avoid_obstacles` hands the
+reproduction to Laplacian trajectory editing (``skillbank.editing.lte``),
+which deforms it around the obstacles while keeping its start, goal and
+via-points; the outcome is in the reproduction's ``metadata["edit"]``.
 """
 
 from __future__ import annotations
 
-import importlib
 import warnings
+from typing import ClassVar
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.exceptions import NotFittedError
 
-from .._constraints import Constraints
-from .._demonstration import Demonstration
-from .._validation import check_array, check_positive
+from ..core import Constraints, Demonstration, resample
+from ..core._validation import check_array, check_positive
+from ..editing import lte
 
-__all__ = ["Representation", "resample", "as_constraints"]
-
-
-def resample(Y: np.ndarray, n_steps: int) -> np.ndarray:
-    """Linearly resample ``Y`` (n, n_dims) to ``n_steps`` samples evenly spaced in phase.
-
-    Examples
-    --------
-    >>> resample(np.array([[0.0], [2.0]]), 3).ravel().tolist()
-    [0.0, 1.0, 2.0]
-    """
-    n = Y.shape[0]
-    if n == n_steps:
-        return Y.copy()
-    if n == 1:
-        return np.repeat(Y, n_steps, axis=0)
-    src = np.linspace(0.0, 1.0, n)
-    dst = np.linspace(0.0, 1.0, n_steps)
-    j = np.clip(np.searchsorted(src, dst, side="right") - 1, 0, n - 2)
-    w = ((dst - src[j]) * (n - 1))[:, None]
-    return (1.0 - w) * Y[j] + w * Y[j + 1]
-
-
-def _uniform(t: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """``Y`` sampled at ``t`` re-interpolated onto an even grid with the same end points."""
-    if t.shape[0] < 3:
-        return Y.copy()
-    grid = np.linspace(t[0], t[-1], t.shape[0])
-    if np.allclose(t, grid, rtol=0.0, atol=1e-9 * max(t[-1] - t[0], 1e-300)):
-        return Y.copy()
-    return np.column_stack([np.interp(grid, t, col) for col in Y.T])
+__all__ = ["Representation", "as_constraints", "edit_summary"]
 
 
 def as_constraints(constraints) -> Constraints:
@@ -84,10 +53,11 @@ def as_constraints(constraints) -> Constraints:
 class Representation(BaseEstimator):
     """Base class: demonstration handling, time base, constraints and output.
 
-    Subclasses set ``_single_demo`` (True when the method learns from exactly
-    one demonstration), ``_min_samples``, implement ``_fit(Ys)`` on a list of
-    arrays resampled to a uniform time grid, and ``_reproduce(constraints,
-    n_steps)`` returning an ``(n_steps, n_dims)`` array.
+    Subclasses implement ``_fit(Ys)`` on a list of arrays resampled to a
+    uniform time grid and ``_reproduce(constraints, n_steps)`` returning an
+    ``(n_steps, n_dims)`` array, and describe themselves with the class
+    attributes below (read by selection and the command line through the
+    registry, :data:`~skillbank.representations.REPRESENTATIONS`).
 
     Attributes
     ----------
@@ -109,9 +79,36 @@ class Representation(BaseEstimator):
     ((10,), (4, 2))
     """
 
-    _single_demo = False
-    _min_samples = 2
+    # What selection, the pipeline and the command line need to know about a method; the
+    # registry (``REPRESENTATIONS``) maps names to classes and these describe each class.
+    #: Learns from exactly one demonstration (else from one or more).
+    single_demo: ClassVar[bool] = False
+    #: How many candidates reuse hands it by default.
+    default_k: ClassVar[int] = 1
+    #: Fewest samples a demonstration (and a reproduction) may have.
+    min_samples: ClassVar[int] = 2
+    #: Which constraints it meets itself; reuse follows the others through the edited candidates.
+    supports_via: ClassVar[bool] = True
+    supports_start_velocity: ClassVar[bool] = True
+    supports_end_velocity: ClassVar[bool] = True
+    #: True when the method avoids obstacles itself; otherwise its reproduction is post-edited
+    #: with Laplacian trajectory editing (:meth:`_avoid_obstacles`).
+    avoids_obstacles: ClassVar[bool] = False
     _stream = "position"
+
+    @classmethod
+    def unsupported(cls, constraints: Constraints) -> list[str]:
+        """Names of the constraints given in ``constraints`` that this method cannot meet itself.
+
+        Examples
+        --------
+        >>> from skillbank.representations import DMP
+        >>> DMP.unsupported(Constraints(goal=[1.0], via=[(0.5, [0.2])]))
+        ['via']
+        """
+        given = {"via": bool(constraints.via), "start_velocity": constraints.start_velocity is not None,
+                 "end_velocity": constraints.end_velocity is not None}
+        return [k for k, on in given.items() if on and not getattr(cls, f"supports_{k}")]
 
     # ----------------------------------------------------------------- input
     def _demos(self, demos):
@@ -126,7 +123,7 @@ class Representation(BaseEstimator):
         if len(demos) == 0:
             raise ValueError("demos: expected at least one demonstration, got an empty list")
         name = type(self).__name__
-        if self._single_demo and len(demos) != 1:
+        if self.single_demo and len(demos) != 1:
             raise ValueError(f"demos: {name} learns from exactly one demonstration, got {len(demos)}")
         pairs = []
         for k, demo in enumerate(demos):
@@ -140,9 +137,9 @@ class Representation(BaseEstimator):
             else:
                 Y = check_array(demo, name=label, ndim=2)
                 t = np.arange(Y.shape[0], dtype=float)
-            if Y.shape[0] < self._min_samples:
+            if Y.shape[0] < self.min_samples:
                 raise ValueError(
-                    f"{label}: {name} needs at least {self._min_samples} samples, got {Y.shape[0]}"
+                    f"{label}: {name} needs at least {self.min_samples} samples, got {Y.shape[0]}"
                 )
             if pairs and Y.shape[1] != pairs[0][1].shape[1]:
                 raise ValueError(
@@ -173,7 +170,7 @@ class Representation(BaseEstimator):
         stop = float(np.mean([t[-1] for t, _ in pairs]))
         self.t_ = np.linspace(start, stop, n_ref)
         self._durations = [float(t[-1] - t[0]) for t, _ in pairs]
-        self._fit([_uniform(t, Y) for t, Y in pairs])
+        self._fit([resample(Y, Y.shape[0], t=t) for t, Y in pairs])
         return self
 
     # ---------------------------------------------------------------- output
@@ -185,9 +182,9 @@ class Representation(BaseEstimator):
         if n_steps is None:
             return int(self.t_.shape[0])
         n_steps = check_positive(n_steps, name="n_steps", integer=True)
-        if n_steps < self._min_samples:
+        if n_steps < self.min_samples:
             raise ValueError(
-                f"n_steps: {type(self).__name__} needs at least {self._min_samples} samples, got {n_steps}"
+                f"n_steps: {type(self).__name__} needs at least {self.min_samples} samples, got {n_steps}"
             )
         return n_steps
 
@@ -236,35 +233,21 @@ class Representation(BaseEstimator):
         Y = self._reproduce(constraints, n_steps)
         metadata = {"representation": type(self).__name__}
         t = self._time(n_steps)
-        Y = self._avoid_obstacles(Y, t, constraints, metadata)
+        if constraints.obstacles and not self.avoids_obstacles:
+            Y = self._avoid_obstacles(Y, t, constraints, metadata)
         return Demonstration(t, {"position": Y}, metadata)
 
     def _avoid_obstacles(self, Y: np.ndarray, t: np.ndarray, constraints: Constraints,
                          metadata: dict) -> np.ndarray:
         """Post-edit ``Y`` around obstacles with Laplacian trajectory editing.
 
-        Does nothing without obstacles. Otherwise calls
-        ``skillbank.editing.lte(Y, constraints, t=t)``, stores its ``success``,
-        ``collision`` and ``message`` in ``metadata["obstacle_editing"]`` and
-        warns (``UserWarning``) when the edit did not succeed.
+        Calls ``skillbank.editing.lte(Y, constraints, t=t)`` (missing start and
+        goal held at the reproduction's own), records the outcome in
+        ``metadata["edit"]`` (see :func:`edit_summary`) and warns
+        (``UserWarning``) when the edit did not succeed.
         """
-        if not constraints.obstacles:
-            return Y
-        try:
-            editing = importlib.import_module("skillbank.editing")
-            lte = editing.lte
-        except (ImportError, AttributeError) as exc:
-            raise ImportError(
-                f"constraints: {type(self).__name__} does not avoid obstacles itself; it post-edits the "
-                f"reproduction with skillbank.editing.lte, which is not available ({exc})"
-            ) from None
-        full = constraints.with_defaults(Y)
-        result = lte(Y, full, t=t)
-        metadata["obstacle_editing"] = {
-            "success": bool(result.success),
-            "collision": bool(result.collision),
-            "message": str(result.message),
-        }
+        result = lte(Y, constraints.with_defaults(Y), t=t)
+        metadata["edit"] = edit_summary(result)
         if not result.success:
             warnings.warn(
                 f"{type(self).__name__}: obstacle editing did not succeed: {result.message}",
@@ -272,3 +255,10 @@ class Representation(BaseEstimator):
                 stacklevel=3,
             )
         return np.asarray(result.Y, dtype=float)
+
+
+def edit_summary(result) -> dict:
+    """The JSON-able outcome of an LTE edit, as stored in a reproduction's ``metadata["edit"]``."""
+    return {"success": bool(result.success), "message": str(result.message),
+            "collision": bool(result.collision), "constraint_error": float(result.constraint_error),
+            "velocity_error": float(result.velocity_error), "n_iter": int(result.n_iter)}

@@ -6,7 +6,7 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import lfilter, lfiltic
 
-from .._validation import check_positive
+from ..core._validation import check_positive
 from ._base import Representation
 
 __all__ = ["DMP"]
@@ -79,7 +79,9 @@ class DMP(Representation):
     (500, 2)
     """
 
-    _min_samples = 3
+    min_samples = 3
+    supports_via = False
+    supports_end_velocity = False
 
     def __init__(self, *, n_basis=50, alpha=50.0, beta=None, alpha_phase=8.0, reg=1e-8):
         self.n_basis = n_basis

@@ -7,8 +7,9 @@ import scipy.sparse as sp
 from scipy.linalg import solveh_banded
 from scipy.spatial import cKDTree
 
-from .._validation import check_array, check_positive
-from ._base import Representation, resample
+from ..core import resample
+from ..core._validation import check_array, check_positive
+from ._base import Representation
 
 __all__ = ["ElasticMap"]
 
@@ -105,7 +106,10 @@ class ElasticMap(Representation):
     [1.1, 0.2]
     """
 
-    _min_samples = 3
+    default_k = 3
+    min_samples = 3
+    supports_start_velocity = False
+    supports_end_velocity = False
 
     def __init__(self, *, n_nodes=None, stretch=1e-6, bend=1e-6, phase_weight=10.0, max_iter=200,
                  tol=1e-6):
@@ -130,8 +134,8 @@ class ElasticMap(Representation):
             n_nodes = self.t_.shape[0]
         else:
             n_nodes = check_positive(self.n_nodes, name="n_nodes", integer=True)
-            if n_nodes < self._min_samples:
-                raise ValueError(f"n_nodes: expected at least {self._min_samples} nodes, got {n_nodes}")
+            if n_nodes < self.min_samples:
+                raise ValueError(f"n_nodes: expected at least {self.min_samples} nodes, got {n_nodes}")
         pooled = np.vstack(Ys)
         self.spread_ = float(np.sqrt(max(pooled.var(axis=0).sum(), np.finfo(float).tiny)))
         phases = np.concatenate([np.linspace(0.0, 1.0, Y.shape[0]) for Y in Ys])
@@ -161,7 +165,7 @@ class ElasticMap(Representation):
         """
         self._check_fitted()
         nodes = np.asarray(nodes, dtype=float)
-        nodes = check_array(nodes, name="nodes", n_dims=self.n_dims_, min_samples=self._min_samples)
+        nodes = check_array(nodes, name="nodes", n_dims=self.n_dims_, min_samples=self.min_samples)
         stretch, bend, _, _ = self._params()
         dist, _ = cKDTree(self._augment(nodes)).query(self._points)
         K = _smoothness(nodes.shape[0], stretch, bend)

@@ -7,8 +7,9 @@ import scipy.sparse as sp
 from scipy.linalg import solveh_banded
 from scipy.sparse.linalg import splu
 
-from .._validation import check_fraction
-from ._base import Representation, resample
+from ..core import resample
+from ..core._validation import check_fraction
+from ._base import Representation
 
 __all__ = ["JerkAccuracy", "jerk_accuracy_system"]
 
@@ -121,8 +122,8 @@ class JerkAccuracy(Representation):
     True
     """
 
-    _single_demo = True
-    _min_samples = 7
+    single_demo = True
+    min_samples = 7
 
     def __init__(self, *, lam=1.0 - 1e-10, derivatives="demo"):
         self.lam = lam

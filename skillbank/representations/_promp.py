@@ -6,7 +6,7 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 from sklearn.utils import check_random_state
 
-from .._validation import check_positive
+from ..core._validation import check_positive
 from ._base import Representation, as_constraints
 
 __all__ = ["ProMP", "gaussian_basis"]
@@ -108,7 +108,8 @@ class ProMP(Representation):
     True
     """
 
-    _min_samples = 2
+    default_k = 3
+    min_samples = 2
 
     def __init__(self, *, n_basis=25, width=None, reg=1e-6, cov_reg=1e-2, obs_noise=1e-12,
                  random_state=None):

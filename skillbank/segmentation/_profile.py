@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_array, check_time
+from ..core._validation import check_array, check_time
 
 __all__ = ["jerk", "jerk_profile", "windowed_mean", "normalize_profile"]
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._demonstration import Demonstration
+from ..core import Demonstration
 
 __all__ = ["StreamSegmentation", "SegmentationResult"]
 

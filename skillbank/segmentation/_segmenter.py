@@ -7,8 +7,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .._demonstration import Demonstration
-from .._validation import check_fraction, check_positive
+from ..core import Demonstration
+from ..core._validation import check_fraction, check_positive
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._gate import gate_changepoints
 from ._keypoints import (

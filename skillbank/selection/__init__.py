@@ -18,10 +18,10 @@ Examples
 (['b'], [1.2, 0.1])
 """
 
-from ._candidates import RANKINGS, Candidate, Selection, select_candidates
-from ._reuse import DEFAULT_K, METHODS, ReuseResult, reproduce_selection, reuse
+from ._candidates import RANKINGS, SHORTLIST, Candidate, Selection, select_candidates
+from ._reuse import METHODS, ReuseResult, reproduce_selection, reuse
 
 __all__ = [
     "reuse", "ReuseResult", "select_candidates", "reproduce_selection", "Selection", "Candidate",
-    "METHODS", "DEFAULT_K", "RANKINGS",
+    "METHODS", "RANKINGS", "SHORTLIST",
 ]

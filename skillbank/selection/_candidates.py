@@ -11,17 +11,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._constraints import Constraints
-from .._demonstration import Demonstration
-from .._validation import check_array, check_positive, check_time
+from ..core import Constraints, Demonstration, resample
+from ..core._validation import check_array, check_positive, check_time
 from ..editing import lte
-from ..representations import resample
 
-__all__ = ["Candidate", "Selection", "select_candidates", "RANKINGS", "MIN_SAMPLES"]
+__all__ = ["Candidate", "Selection", "select_candidates", "RANKINGS", "SHORTLIST"]
 
 RANKINGS = ("shortlist", "length", "endpoints", "deformation")
 SHORTLIST = 3  # candidates the paper's curve-length criterion chooses among, by default
-MIN_SAMPLES = 3  # DMP and ElasticMap need three samples; a shorter primitive cannot be reused.
 
 
 @dataclass
@@ -107,7 +104,7 @@ def _check_ids(ids, n: int) -> list:
     return ids
 
 
-def _arrays(primitives, ids, t):
+def _arrays(primitives, ids, t, min_samples):
     """``(id, t, Y)`` per primitive, rejections for unusable shapes, and the checked ids."""
     if isinstance(primitives, (Demonstration, np.ndarray)) or not isinstance(primitives, (list, tuple)):
         raise ValueError(
@@ -127,8 +124,8 @@ def _arrays(primitives, ids, t):
         else:
             Y = check_array(prim, name=f"primitives[{k}]", ndim=2)
             tk = np.arange(Y.shape[0], dtype=float)
-        if Y.shape[0] < MIN_SAMPLES:
-            rejected[pid] = f"too short: {Y.shape[0]} sample(s), need at least {MIN_SAMPLES}"
+        if Y.shape[0] < min_samples:
+            rejected[pid] = f"too short: {Y.shape[0]} sample(s), need at least {min_samples}"
             continue
         if t is not None:
             Y, tk = resample(Y, t.shape[0]), t
@@ -137,7 +134,7 @@ def _arrays(primitives, ids, t):
 
 
 def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = "shortlist",
-                      shortlist: int = SHORTLIST, **lte_params) -> Selection:
+                      shortlist: int = SHORTLIST, min_samples: int = 2, **lte_params) -> Selection:
     """Adapt every candidate to ``constraints`` with LTE, drop the failures, rank the rest.
 
     Parameters
@@ -165,6 +162,9 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
         requested ones first (curve length breaks ties).
     shortlist : int, default=3
         Size of the shortlist for ``rank="shortlist"``.
+    min_samples : int, default=2
+        Shorter candidates are rejected; :func:`reuse` passes what its
+        representation needs (``Representation.min_samples``).
     **lte_params
         Passed to :func:`skillbank.editing.lte` (e.g. ``margin``, ``max_iter``).
 
@@ -187,9 +187,10 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
     if rank not in RANKINGS:
         raise ValueError(f"rank: expected one of {list(RANKINGS)}, got {rank!r}")
     shortlist = check_positive(shortlist, name="shortlist", integer=True)
+    min_samples = max(2, check_positive(min_samples, name="min_samples", integer=True))
     if t is not None:
-        t = check_time(t, name="t", min_samples=MIN_SAMPLES)
-    items, rejected, ids = _arrays(primitives, ids, t)
+        t = check_time(t, name="t", min_samples=min_samples)
+    items, rejected, ids = _arrays(primitives, ids, t, min_samples)
     n_dims = constraints.n_dims
     if n_dims is None and items:
         n_dims = items[0][2].shape[1]

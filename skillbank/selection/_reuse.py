@@ -7,20 +7,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._constraints import Constraints
-from .._demonstration import Demonstration
-from .._validation import check_positive
-from ..editing._lte import _segment_hits
-from ..representations import DMP, ElasticMap, JerkAccuracy, ProMP
+from ..core import Demonstration
+from ..core._validation import check_positive
+from ..representations import REPRESENTATIONS, representation
 from ._candidates import SHORTLIST, Selection, select_candidates
 
-__all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS", "DEFAULT_K"]
+__all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
 
-METHODS = ("lte", "ja", "promp", "elmap", "dmp")
-# How many demonstrations each representation learns from by default (paper: single for JA,
-# multiple for ProMP, either for elastic maps). LTE returns the best adapted candidate itself.
-DEFAULT_K = {"lte": 1, "ja": 1, "dmp": 1, "promp": 3, "elmap": 3}
-_SINGLE = ("lte", "ja")
+#: The method names, in the registry's order (``skillbank.representations.REPRESENTATIONS``).
+METHODS = tuple(REPRESENTATIONS)
+_WORDS = {"via": "via-points", "start_velocity": "start velocity", "end_velocity": "end velocity"}
 
 
 @dataclass
@@ -93,31 +89,14 @@ def _json_id(i):
     return i if isinstance(i, str) else str(i)
 
 
-def _collides(constraints: Constraints, Y: np.ndarray) -> bool:
-    if not constraints.obstacles:
-        return False
-    if constraints.collides(Y):
-        return True
-    return any(bool(_segment_hits(ob, Y).any()) for ob in constraints.obstacles) if Y.shape[0] > 1 else False
-
-
 def _check_k(k, method: str, n_usable: int) -> int:
+    cls = representation(method)
     if k is None:
-        return min(DEFAULT_K[method], n_usable)
+        return min(cls.default_k, n_usable)
     k = check_positive(k, name="k", integer=True)
-    if method in _SINGLE and k != 1:
+    if cls.single_demo and k != 1:
         raise ValueError(f"k: method {method!r} uses exactly one candidate, got k={k}")
     return min(k, n_usable)
-
-
-def _model(method: str, random_state):
-    if method == "ja":
-        return JerkAccuracy()
-    if method == "promp":
-        return ProMP(random_state=random_state)
-    if method == "elmap":
-        return ElasticMap()
-    return DMP()
 
 
 def reproduce_selection(selection: Selection, constraints, *, method: str = "promp", k=None,
@@ -150,8 +129,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     >>> [reproduce_selection(sel, c, method=m).k for m in ("ja", "promp")]
     [1, 3]
     """
-    if method not in METHODS:
-        raise ValueError(f"method: expected one of {list(METHODS)}, got {method!r}")
+    cls = representation(method)
     if not isinstance(selection, Selection):
         raise ValueError(f"selection: expected a Selection, got {type(selection).__name__}")
     if not selection.candidates:
@@ -160,29 +138,26 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     k = _check_k(k, method, len(selection.candidates))
     chosen = selection.candidates[:k]
     notes = []
-    if method == "lte":
-        best = chosen[0]
-        time, Y = best.t, best.adapted
-    else:
-        model = _model(method, random_state)
-        task = constraints
-        if method == "dmp" and (constraints.via or constraints.end_velocity is not None):
-            # A DMP cannot take via-points; its demonstrations were edited through them already.
-            task = Constraints(start=constraints.start, goal=constraints.goal,
-                               start_velocity=constraints.start_velocity, obstacles=constraints.obstacles)
-            notes.append("dmp: via-points / end velocity are followed only through the adapted "
-                         "demonstration")
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", UserWarning)
-            model.fit([c.demo() for c in chosen])
-            n_steps = None if t is None else len(t)
-            out = model.reproduce(task, n_steps=n_steps)
-        notes += [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
-        time = out.t if t is None else np.asarray(t, dtype=float)
-        Y = out["position"]
+    task = constraints
+    missing = cls.unsupported(constraints)
+    if missing:
+        # The candidates were edited through these already; the method follows them from there.
+        task = constraints.replace(**{name: () if name == "via" else None for name in missing})
+        what = " and ".join(_WORDS[name] for name in missing)
+        notes.append(f"{method}: {what} followed only through the adapted demonstration")
+    model = cls()
+    if "random_state" in model.get_params():
+        model.set_params(random_state=random_state)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        model.fit([c.demo() for c in chosen])
+        out = model.reproduce(task, n_steps=None if t is None else len(t))
+    notes += [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    time = out.t if t is None else np.asarray(t, dtype=float)
+    Y = out["position"]
     error = constraints.position_error(Y)
     vel_error = constraints.velocity_error(Y, time)
-    collision = _collides(constraints, Y)
+    collision = constraints.collides(Y) if constraints.obstacles else False
     used = [c.id for c in chosen]
     message = (f"{method} from {k} of {len(selection.candidates)} usable candidate(s) "
                f"({len(selection.rejected)} rejected, ranked by {selection.rank}); constraint error "
@@ -216,7 +191,9 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     constraints : Constraints
         Start, goal, via-points, boundary velocities and obstacles of the new task.
     method : {"lte", "ja", "promp", "elmap", "dmp"}, default="promp"
-        ``"lte"`` returns the best adapted candidate itself; the others learn
+        Names of :data:`~skillbank.representations.REPRESENTATIONS`. ``"lte"``
+        (:class:`~skillbank.representations.LaplacianEditor`) returns the best
+        adapted candidate as it is; the others learn
         :class:`~skillbank.representations.JerkAccuracy`,
         :class:`~skillbank.representations.ProMP`,
         :class:`~skillbank.representations.ElasticMap` or
@@ -265,9 +242,9 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     >>> res.used, res.collision, res.constraint_error < 1e-6
     ([0, 1, 2], False, True)
     """
-    if method not in METHODS:
-        raise ValueError(f"method: expected one of {list(METHODS)}, got {method!r}")
-    if k is not None and method in _SINGLE:
+    cls = representation(method)
+    if k is not None and cls.single_demo:
         _check_k(k, method, 1)
-    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist)
+    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
+                                  min_samples=cls.min_samples)
     return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t)

@@ -14,7 +14,7 @@ import pytest
 
 import skillbank
 import skillbank.io as sio
-from skillbank._constraints import Constraints
+from skillbank.cli._options import constraints_from_args
 from skillbank.metrics import dtw_distance, frechet_distance
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -62,7 +62,7 @@ def _inputs(files, method):
 
 
 def _json(cli, *argv):
-    code, out, err = cli("edit", *argv, "--json")
+    code, out, err = cli("edit", *argv, "--json", "--metrics")
     assert code == 0, err
     doc = json.loads(out)
     assert set(doc) == {"trajectory", "constraint_error", "collision", "metrics"}
@@ -102,7 +102,7 @@ def test_unchanged_constraints_reproduce_the_demo(cli, files, method):
 @pytest.mark.parametrize("method", METHODS)
 def test_obstacle_avoided(cli, files, method):
     sphere, box = "sphere:0.0,1.0,0.15", "box:-1.0,0.7,-0.8,0.9"
-    c = Constraints.from_cli(obstacle=[sphere, box])
+    c = constraints_from_args(obstacle=[sphere, box])
     assert c.collision_mask(arc(0)["position"]).sum() > 10  # the demo runs through both
     doc, Y = _json(cli, *_inputs(files, method), "--method", method, "--goal", "-1.25,0.0",
                    "--obstacle", sphere, "--obstacle", box)
@@ -141,20 +141,29 @@ def test_out_and_plot(cli, files, tmp_path, suffix):
 
 def test_text_output(cli, files, tmp_path):
     plot = tmp_path / "e.png"
-    code, out, err = cli("edit", files[0], "--method", "ja", "--goal", "-1.3,0.0", "--plot", plot)
+    argv = ["--method", "ja", "--goal", "-1.3,0.0"]
+    code, out, err = cli("edit", files[0], *argv, "--plot", plot, "--metrics")
     assert code == 0 and err == ""
     lines = out.splitlines()
     assert lines[0] == "ja: 1 demonstration(s) -> 200 samples, 2 dimensions"
     assert lines[1].startswith("  constraint error ") and lines[1].endswith("collision no")
     assert "frechet" in lines[2] and lines[-1] == f"  wrote {plot}"
+    # the quadratic-time comparison only on request
+    code, out, _ = cli("edit", files[0], "--method", "ja", "--goal", "-1.3,0.0")
+    assert code == 0 and len(out.splitlines()) == 2 and "frechet" not in out
+    code, out, _ = cli("edit", files[0], "--goal", "-1.3,0.0", "--json")
+    assert "metrics" not in json.loads(out)
 
 
 @pytest.mark.parametrize("argv, match", [
     (["missing.csv"], r"input: no such file: '.*missing\.csv'"),
     (["{0}", "--goal", "1,2,3"], r"constraints: goal has 3 dimensions but the trajectory has 2"),
-    (["{0}", "{1}", "--method", "ja"], r"--method ja \(the jerk-accuracy model\) adapts one demonstration, "
-                                       r"got 2 files"),
-    (["{0}", "{1}"], r"--method lte \(Laplacian trajectory editing\) adapts one demonstration"),
+    (["{0}", "{1}", "--method", "ja"],
+     r"input: method 'ja' \(JerkAccuracy\) adapts one demonstration, got 2; "
+     r"use one of \['promp', 'elmap', 'dmp'\] for several"),
+    (["{0}", "{1}"], r"input: method 'lte' \(LaplacianEditor\) adapts one demonstration"),
+    (["{0}", "--method", "spline"], r"method: expected one of \['lte', 'ja', 'promp', 'elmap', 'dmp'\], "
+                                    r"got 'spline'"),
     (["{0}", "--method", "dmp", "--via", "0.5:0,1"], r"DMP does not support via-points"),
     (["{0}", "--via", "1.5:0,1"], r"ViaPoint phase: expected .*1\.5"),
     (["{0}", "--via", "0,1"], r"via: expected 'PHASE:X,Y\[,Z\]'"),
@@ -177,12 +186,6 @@ def test_errors_exit_2_with_one_line(cli, files, tmp_path, argv, match):
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and err.startswith("skillbank edit: error: ")
     assert re.search(match, err), err
-
-
-def test_usage_error_for_unknown_method(cli, files):
-    with pytest.raises(SystemExit) as exc:
-        cli("edit", files[0], "--method", "spline")
-    assert exc.value.code == 2
 
 
 # -- real data --------------------------------------------------------------------------------------
@@ -213,7 +216,7 @@ def test_real_robot_3d_with_obstacles(cli, data_dir, tmp_path):
     box = "box:" + _coords([*lo, *hi])
     plot = tmp_path / "robot.png"
     doc, Y = _json(cli, path, "--obstacle", sphere, "--obstacle", box, "--plot", plot)
-    c = Constraints.from_cli(obstacle=[sphere, box])
+    c = constraints_from_args(obstacle=[sphere, box])
     assert c.collides(demo) and not c.collides(Y) and doc["collision"] is False
     assert Y.shape == demo.shape and np.abs(Y[[0, -1]] - demo[[0, -1]]).max() < 1e-12
     assert plot.read_bytes()[:8] == PNG_MAGIC

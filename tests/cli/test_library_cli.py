@@ -131,16 +131,11 @@ def test_reuse_accepts_negative_coordinates(run, tmp_path):
     np.testing.assert_allclose(result["trajectory"][-1], [1.0, 0.0], atol=1e-9)
 
 
-def test_cli_lists_match_the_library():
-    import inspect
+def test_cli_and_library_share_one_list_of_methods(cli):
+    """The CLI keeps no list of its own: an unknown method is refused with the registry's names."""
+    from skillbank.representations import REPRESENTATIONS
+    from skillbank.selection import METHODS
 
-    from skillbank.cli._options import METHODS as CLI_METHODS
-    from skillbank.cli._options import RANKINGS as CLI_RANKINGS
-    from skillbank.cli._options import SHORTLIST as CLI_SHORTLIST
-    from skillbank.library import Library
-    from skillbank.selection import METHODS, RANKINGS
-    from skillbank.selection._candidates import SHORTLIST
-
-    assert tuple(CLI_RANKINGS) == tuple(RANKINGS) and tuple(CLI_METHODS) == tuple(METHODS)
-    # the library keeps skillbank.selection out of its import; its default must still agree
-    assert CLI_SHORTLIST == SHORTLIST == inspect.signature(Library.reuse).parameters["shortlist"].default
+    assert METHODS == tuple(REPRESENTATIONS)
+    code, _, err = cli("edit", "missing.csv", "--method", "nope")
+    assert code == 2 and err.strip().endswith(f"method: expected one of {list(REPRESENTATIONS)}, got 'nope'")

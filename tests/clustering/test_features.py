@@ -12,10 +12,9 @@ from skillbank.clustering import (
     DTWFeatures,
     ElasticClustering,
     TrajectoryFeatures,
-    angular_similarity,
-    dtw_distance,
-    resample_trajectories,
 )
+from skillbank.core import resample_many as resample_trajectories
+from skillbank.metrics import angular_similarity, dtw_distance
 
 
 def random_walks(n, n_steps, n_dims=3, seed=0):

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from sklearn.cluster import AgglomerativeClustering
 
-from skillbank.clustering import AngularSimilarityFeatures, ElasticClustering, angular_similarity
+from skillbank.clustering import AngularSimilarityFeatures, ElasticClustering
 from skillbank.io import load_rail
+from skillbank.metrics import angular_similarity
 
 CLASSES = ["reaching", "pushing", "writing"]
 

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skillbank._constraints import Constraints, ViaPoint
-from skillbank.editing import LaplacianSystem, laplacian_edit, laplacian_matrix, lte
+from skillbank.core import Constraints, ViaPoint, laplacian_matrix
+from skillbank.editing import LaplacianSystem, lte
 
 
 def wave(n, d=3):
@@ -184,6 +184,3 @@ def test_error_paths(build, match):
     with pytest.raises(ValueError, match=match):
         build(wave(50))
 
-
-def test_alias():
-    assert laplacian_edit is lte

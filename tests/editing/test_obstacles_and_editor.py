@@ -5,9 +5,10 @@ import pytest
 from sklearn.exceptions import NotFittedError
 
 from skillbank import Demonstration
-from skillbank._constraints import Box, Constraints, Sphere
-from skillbank.editing import LaplacianEditor, lte
+from skillbank.core import Box, Constraints, Sphere
+from skillbank.editing import lte
 from skillbank.metrics import constraint_report, frechet_distance
+from skillbank.representations import LaplacianEditor
 
 
 def wave(n):
@@ -67,7 +68,7 @@ def test_segment_through_a_thin_wall_is_a_collision():
     # Two samples straddle a wall thinner than the sampling step: no sample is inside.
     Y = np.column_stack([np.linspace(0, 1, 6), np.zeros(6)])
     c = Constraints(obstacles=[Box([0.45, -1.0], [0.55, 1.0])])
-    assert not c.collides(Y)
+    assert not c.collision_mask(Y).any() and c.collides(Y)  # one definition: samples and segments
     res = lte(Y, c)
     assert not res.success and res.collision and "segment(s) cross obstacle 0" in res.message
 
@@ -84,7 +85,7 @@ def test_editor_fit_reproduce():
     demo = Demonstration(t, {"position": wave(400)}, {"label": "reach"})
     editor = LaplacianEditor(max_iter=20)
     assert editor.fit([demo]) is editor
-    assert editor.n_steps_ == 400 and editor.n_dims_ == 3 and editor.get_params()["max_iter"] == 20
+    assert editor.Y_.shape == (400, 3) and editor.n_dims_ == 3 and editor.get_params()["max_iter"] == 20
     P = lte(demo, Constraints(goal=GOAL)).Y
     c = Constraints(goal=GOAL, obstacles=[Sphere(P[200], 0.08)])
     out = editor.reproduce(c)
@@ -100,11 +101,13 @@ def test_editor_fit_reproduce():
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda: LaplacianEditor().fit([wave(10), wave(10)]), r"LaplacianEditor edits one demonstration, got 2"),
-    (lambda: LaplacianEditor(stream="joints").fit(Demonstration.from_array(wave(10))),
-     r"expected a Demonstration with a 'joints' stream"),
-    (lambda: LaplacianEditor().fit(wave(1)), r"demos: expected at least 2 samples"),
-    (lambda: LaplacianEditor().fit(wave(10)).reproduce(n_steps=1), r"n_steps: expected at least 2"),
+    (lambda: LaplacianEditor().fit([wave(10), wave(10)]),
+     r"LaplacianEditor learns from exactly one demonstration, got 2"),
+    (lambda: LaplacianEditor().fit(Demonstration.from_array(wave(10), name="joints")),
+     r"expected a 'position' stream, got streams \['joints'\]"),
+    (lambda: LaplacianEditor().fit(wave(1)), r"demos\[0\]: LaplacianEditor needs at least 2 samples, got 1"),
+    (lambda: LaplacianEditor().fit(wave(10)).reproduce(n_steps=1),
+     r"n_steps: LaplacianEditor needs at least 2 samples, got 1"),
     (lambda: LaplacianEditor().fit(wave(10)).reproduce(n_steps=2.5), r"n_steps: expected an integer"),
     (lambda: LaplacianEditor(weight=-1, hard=False).fit(wave(10)).reproduce(),
      r"weight: expected a number > 0"),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from skillbank.experiments._library_demo import run_library_demo
-from skillbank.library import Library
+from skillbank.pipeline import Library
 
 
 def check_result(res, out):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from skillbank import Demonstration
-from skillbank.library import Library
+from skillbank.pipeline import Library
 
 _CTX = multiprocessing.get_context("fork")
 
@@ -81,7 +81,7 @@ def test_process_killed_in_the_middle_of_an_add(tmp_path):
         assert lib.check() == "ok"
         assert lib.demonstration_ids() == [1]
         for table in ("demonstrations", "streams", "primitives", "provenance"):
-            assert lib.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0] == 1, table  # noqa: S608
+            assert lib.store.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0] == 1, table  # noqa: S608
         did = lib.add(_small_demo(9, 9), segment=False, source="killed")
         [prim] = lib.primitives(source="killed")
         assert prim.demonstration_id == did and prim.n_steps == 20
@@ -184,13 +184,13 @@ def test_migrates_a_version_1_library(tmp_path):
     conn.close()
 
     with Library(path) as lib:
-        assert lib.conn.execute("PRAGMA user_version").fetchone()[0] == 2
+        assert lib.store.conn.execute("PRAGMA user_version").fetchone()[0] == 2
         assert lib.check() == "ok"
         assert lib.provenance(1) == {"unknown": True, "migrated_from_schema": 1}
         prims = lib.primitives()
         assert [(p.id, p.cluster, p.label) for p in prims] == [(1, 0, "head"), (2, 1, "tail")]
         assert np.array_equal(prims[1].demo["position"], Y[12:])
-        assigned = lib.conn.execute("SELECT assigned FROM cluster_members ORDER BY primitive_id").fetchall()
+        assigned = lib.store.conn.execute("SELECT assigned FROM cluster_members ORDER BY primitive_id").fetchall()
         assert assigned == [("fit",), ("fit",)]
         # The migrated library takes new demonstrations, assigned with the old version's featuriser:
         # resampled to 2 points, x of the start (about 5) minus 0.5 -> nearest centre +1 -> cluster 1.

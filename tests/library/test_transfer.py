@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from skillbank import Demonstration
-from skillbank.library import Library
+from skillbank.pipeline import Library
 
 
 def _everything(lib):
     """Every table's content, arrays compared by value."""
-    conn = lib.conn
+    conn = lib.store.conn
     out = {}
     for table, order in (("demonstrations", "id"), ("streams", "demonstration_id, position"),
                          ("primitives", "id"), ("cluster_versions", "version"),

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skillbank._constraints import Box, Constraints, Sphere
+from skillbank.core import Box, Constraints, Sphere
 from skillbank.metrics import (
     angular_similarity,
     constraint_report,

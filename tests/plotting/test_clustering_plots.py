@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skillbank.experiments._rail import rail_experiment
-from skillbank.plotting._clustering import _display_order, plot_cluster_comparison, plot_rail_experiment
+from skillbank.experiments import plot_rail_experiment, rail_experiment
+from skillbank.plotting._clustering import _display_order, plot_cluster_comparison
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

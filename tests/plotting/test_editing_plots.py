@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle, Rectangle
+from matplotlib.patches import Polygon
 
 from skillbank import Demonstration
-from skillbank._constraints import Box, Constraints, Sphere
+from skillbank.core import Box, Constraints, Sphere
 from skillbank.plotting._editing import draw_edit, plot_edit
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -31,8 +31,10 @@ def test_2d_draws_everything():
     for name in ("reproduction", "demonstration", "demonstrations", "start", "goal", "via-point"):
         assert name in labels
     np.testing.assert_allclose(ax.get_lines()[labels.index("reproduction")].get_xydata(), rep)
-    kinds = [type(p) for p in ax.patches]
-    assert kinds.count(Circle) == 1 and kinds.count(Rectangle) == 1
+    # each obstacle is drawn from its own outline, a filled polygon in 2-D
+    assert [type(p) for p in ax.patches] == [Polygon, Polygon]
+    for patch, ob in zip(ax.patches, c.obstacles, strict=True):
+        np.testing.assert_allclose(patch.get_xy(), ob.outline()[0])
     # Equal scale, and everything (obstacles, the shifted demos) inside the view.
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     assert x1 - x0 == pytest.approx(y1 - y0)
@@ -47,8 +49,10 @@ def test_3d_file(tmp_path):
     assert out == tmp_path / "edit3d.png" and out.read_bytes()[:8] == PNG_MAGIC
     ax = Figure().add_subplot(projection="3d")
     draw_edit(ax, demo, constraints=c, legend=False)
-    # 1 path + 1 goal marker + 12 box edges (the sphere is a wireframe collection).
-    assert len(ax.get_lines()) == 14 and ax.get_legend() is None
+    # 1 path + 1 goal marker + the obstacles' wireframes (their outline() polylines)
+    n_wire = sum(len(ob.outline()) for ob in c.obstacles)
+    assert n_wire == 19 + 12  # sphere: 7 parallels and 12 meridians; box: 12 edges
+    assert len(ax.get_lines()) == 2 + n_wire and ax.get_legend() is None
 
 
 def test_svg_and_pdf(tmp_path):

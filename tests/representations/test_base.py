@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-import sys
-import types
-
 import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
 from skillbank import Demonstration
-from skillbank._constraints import Constraints, Sphere
-from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP, as_constraints, resample
+from skillbank.core import Constraints, Sphere, resample
+from skillbank.editing import lte
+from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP
+from skillbank.representations._base import as_constraints, edit_summary
 
 ALL = [JerkAccuracy, ProMP, ElasticMap, DMP]
 
@@ -67,7 +66,7 @@ def test_input_errors(cls, arc):
         cls().fit(Demonstration(arc.t, {"joints": arc["position"]}))
     with pytest.raises(ValueError, match=r"demos\[0\]: expected finite values"):
         cls().fit(np.array([[0.0, np.nan]] * 10))
-    too_few = cls._min_samples - 1
+    too_few = cls.min_samples - 1
     message = rf"demos\[0\]: {cls.__name__} needs at least \d+ samples, got {too_few}"
     with pytest.raises(ValueError, match=message):
         cls().fit(np.zeros((too_few, 2)))
@@ -102,68 +101,39 @@ def test_as_constraints():
 
 
 # ------------------------------------------------------------------ obstacles
-def _fake_editing(monkeypatch, success=True):
-    calls = []
-
-    def lte(Y, constraints, *, t=None):
-        calls.append((Y.copy(), constraints, t))
-        return types.SimpleNamespace(Y=Y + 1.0, collision=not success, success=success,
-                                     message="ok" if success else "still inside obstacles[0]")
-
-    module = types.ModuleType("skillbank.editing")
-    module.lte = lte
-    monkeypatch.setitem(sys.modules, "skillbank.editing", module)
-    return calls
-
-
-def test_obstacles_are_post_edited_with_lte(monkeypatch, arc):
-    calls = _fake_editing(monkeypatch)
+def test_obstacles_are_post_edited_with_lte(arc):
+    """Post-editing is exactly LTE of the plain reproduction with its own start and goal held."""
     model = JerkAccuracy().fit(arc)
-    plain = model.reproduce()["position"]
-    c = Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)])
+    plain = model.reproduce()
+    c = Constraints(obstacles=[Sphere(plain["position"][150], 0.1)])
     out = model.reproduce(c)
-    assert len(calls) == 1
-    Y_in, given, t = calls[0]
-    np.testing.assert_allclose(Y_in, plain, atol=1e-9)
-    np.testing.assert_allclose(t, arc.t)
-    # The editor gets start and goal filled in, so it keeps the reproduction's end points.
-    np.testing.assert_allclose(given.start, plain[0])
-    np.testing.assert_allclose(given.goal, plain[-1])
-    assert given.obstacles == c.obstacles
-    np.testing.assert_allclose(out["position"], plain + 1.0, atol=1e-9)
-    assert out.metadata["obstacle_editing"] == {"success": True, "collision": False, "message": "ok"}
+    expected = lte(plain["position"], c.with_defaults(plain["position"]), t=plain.t)
+    np.testing.assert_array_equal(out["position"], expected.Y)
+    assert out.metadata["edit"] == edit_summary(expected) and out.metadata["edit"]["success"]
 
 
-def test_failed_obstacle_editing_warns(monkeypatch, arc):
-    _fake_editing(monkeypatch, success=False)
-    with pytest.warns(UserWarning, match="obstacle editing did not succeed: still inside obstacles"):
-        out = ProMP().fit(arc).reproduce(Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)]))
-    assert out.metadata["obstacle_editing"]["success"] is False
+def test_failed_obstacle_editing_warns(arc):
+    model = ProMP().fit(arc)
+    goal = model.reproduce()["position"][-1]
+    # the goal, a hard constraint, lies inside the obstacle: no collision-free edit exists
+    with pytest.warns(UserWarning, match="obstacle editing did not succeed: sample .* is pinned"):
+        out = model.reproduce(Constraints(obstacles=[Sphere(goal, 0.1)]))
+    assert out.metadata["edit"]["success"] is False and out.metadata["edit"]["collision"] is True
 
 
-def test_obstacles_without_editing_module_fail_loudly(monkeypatch, arc):
-    monkeypatch.setitem(sys.modules, "skillbank.editing", types.ModuleType("skillbank.editing"))
-    with pytest.raises(ImportError, match="does not avoid obstacles itself"):
-        DMP().fit(arc).reproduce(Constraints(obstacles=[Sphere([0.0, 1.0], 0.1)]))
-
-
-def test_no_obstacles_does_not_touch_editing(monkeypatch, arc):
-    calls = _fake_editing(monkeypatch)
-    ElasticMap().fit(arc).reproduce(Constraints(goal=[0.0, 0.0]))
-    assert calls == []
+def test_no_obstacles_no_edit(arc):
+    out = ElasticMap().fit(arc).reproduce(Constraints(goal=[0.0, 0.0]))
+    assert "edit" not in out.metadata and out.metadata["representation"] == "ElasticMap"
 
 
 @pytest.mark.parametrize("cls", ALL)
 def test_real_lte_moves_the_reproduction_out_of_an_obstacle(cls, arc):
-    editing = pytest.importorskip("skillbank.editing")
-    if not hasattr(editing, "lte"):
-        pytest.skip("skillbank.editing.lte is not available")
     model = cls().fit(arc)
     plain = model.reproduce()["position"]
     sphere = Sphere(plain[150], 0.15)
     c = Constraints(goal=plain[-1] + [0.05, 0.0], obstacles=[sphere])
     assert c.collides(plain)
     out = model.reproduce(c)
-    assert out.metadata["obstacle_editing"]["success"]
+    assert out.metadata["edit"]["success"]
     assert not c.collides(out["position"])
     assert c.position_error(out["position"]) < 1e-6

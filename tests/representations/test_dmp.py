@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from skillbank._constraints import Constraints
+from skillbank.core import Constraints
 from skillbank.representations import DMP
 
 

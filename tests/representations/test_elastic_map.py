@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from skillbank._constraints import Constraints, ViaPoint
+from skillbank.core import Constraints, ViaPoint
 from skillbank.representations import ElasticMap
 
 

@@ -8,7 +8,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from skillbank import Demonstration
-from skillbank._constraints import Constraints, ViaPoint
+from skillbank.core import Constraints, ViaPoint
 from skillbank.representations import JerkAccuracy
 
 

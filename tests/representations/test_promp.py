@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skillbank._constraints import Constraints, ViaPoint
-from skillbank.representations import ProMP, gaussian_basis
+from skillbank.core import Constraints, ViaPoint
+from skillbank.representations import ProMP
+from skillbank.representations._promp import gaussian_basis
 
 
 def _demos(n_demos=6, n=80, seed=0):

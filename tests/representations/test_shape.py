@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skillbank._constraints import Constraints
+from skillbank.core import Constraints
 from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP
 
 # method -> (max reproduction error in mm, curvature deviation after a 5 % start/goal move)

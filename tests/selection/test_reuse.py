@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from skillbank import Box, Constraints, Demonstration, Sphere
 from skillbank.editing import lte
 from skillbank.metrics import path_length
+from skillbank.representations import REPRESENTATIONS, ElasticMap
 from skillbank.selection import (
-    DEFAULT_K,
     METHODS,
     ReuseResult,
     reproduce_selection,
@@ -85,7 +85,7 @@ def test_candidate_pinned_inside_obstacle_and_missing_constraint_reasons():
 
 def test_short_and_wrong_dimension_candidates_are_rejected():
     good = arcs([0.2])[0]
-    res = reuse([good[:2], np.c_[good, good[:, :1]], good], Constraints(goal=[1.0, 0.3]), method="lte")
+    res = reuse([good[:1], np.c_[good, good[:, :1]], good], Constraints(goal=[1.0, 0.3]), method="lte")
     assert res.used == [2]
     assert "too short" in res.rejected[0]
     assert "3 dimensions, the task has 2" in res.rejected[1]
@@ -145,9 +145,9 @@ def test_shortlist_ranking_orders_the_least_deformed_by_curve_length():
 @pytest.mark.parametrize("method", METHODS)
 def test_k_defaults_per_method(method):
     res = reuse(arcs([0.1, 0.2, 0.3, 0.4, 0.5]), Constraints(goal=[1.0, 0.1]), method=method)
-    assert res.k == DEFAULT_K[method] == len(res.used)
+    assert res.k == REPRESENTATIONS[method].default_k == len(res.used)
     assert res.used == [i for i, _ in res.ranking[: res.k]]
-    assert DEFAULT_K[method] == (3 if method in ("promp", "elmap") else 1)
+    assert REPRESENTATIONS[method].default_k == (3 if method in ("promp", "elmap") else 1)
 
 
 def test_k_limited_by_usable_candidates_and_explicit_k():
@@ -210,7 +210,7 @@ def test_lte_reuse_meets_any_end_points(y0, y1, x1):
         ({"ids": "abc"}, r"ids: expected a list of 3 ids, got str"),
         ({"rank": "random"},
          r"rank: expected one of \['shortlist', 'length', 'endpoints', 'deformation'\], got 'random'"),
-        ({"t": [0.0, 1.0]}, r"t: expected"),
+        ({"t": [0.0]}, r"t: expected at least 2 samples"),
     ],
 )
 def test_bad_arguments(kwargs, match):
@@ -233,14 +233,19 @@ def test_bad_inputs(primitives, constraints, match):
 
 
 def test_velocity_constraint_unsupported_by_elastic_map():
+    task = Constraints(goal=[1.0, 0.0], start_velocity=[0.0, 0.0])
     with pytest.raises(ValueError, match="ElasticMap does not support"):
-        reuse(arcs([0.1, 0.2]), Constraints(goal=[1.0, 0.0], start_velocity=[0.0, 0.0]), method="elmap")
+        ElasticMap().fit(arcs([0.1, 0.2])).reproduce(task)
+    # reuse reads ElasticMap.supports_start_velocity and follows it through the edited candidates
+    res = reuse(arcs([0.1, 0.2]), task, method="elmap")
+    assert "elmap: start velocity followed only through the adapted demonstration" in res.message
+    assert res.constraint_error < 1e-6
 
 
 def test_reuse_on_rail_pressing(data_dir):
+    from skillbank.core import resample
     from skillbank.io import load_rail
     from skillbank.metrics import frechet_distance
-    from skillbank.representations import resample
 
     demos = load_rail(data_dir / "rail", classes=["pressing"])[:12]
     held, library = demos[0], demos[1:]

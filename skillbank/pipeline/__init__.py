@@ -1,10 +1,13 @@
-"""The motion-primitive library: demonstrations, primitives, skills and labels in one SQLite file.
+"""The pipeline: demonstrations in, skills out, over a store.
+
+:class:`Library` runs add -> segment -> featurise -> assign or cluster ->
+label -> reuse, and keeps the results in a :class:`skillbank.store.Store`
+(by default one SQLite file).
 
 Examples
 --------
 >>> import numpy as np, os, tempfile
 >>> from skillbank import Demonstration
->>> from skillbank.library import Library
 >>> t = np.linspace(0.0, 1.0, 40)
 >>> lib = Library(os.path.join(tempfile.mkdtemp(), "skills.db"))
 >>> ids = lib.add_many([Demonstration.from_array(np.column_stack([t, a * t]), t) for a in (1, 2)],
@@ -14,9 +17,6 @@ Examples
 >>> lib.close()
 """
 
-from ._arrays import flat_features, from_npy, to_npy
-from ._library import Library
-from ._records import Primitive
-from ._schema import SCHEMA_VERSION
+from ._library import Library, carry_labels
 
-__all__ = ["Library", "Primitive", "SCHEMA_VERSION", "flat_features", "to_npy", "from_npy"]
+__all__ = ["Library", "carry_labels"]

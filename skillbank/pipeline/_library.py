@@ -1,20 +1,23 @@
-"""The motion-primitive library: one SQLite file in WAL mode."""
+"""The pipeline: add -> segment -> featurise -> assign or cluster -> reuse, over any store."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
+from sklearn.decomposition import PCA
+from tqdm import tqdm
 
-from .._demonstration import Demonstration
-from ._arrays import from_npy
-from ._clusters import assign_incremental, current_version, fit_version, load_version
-from ._records import Primitive, insert_demonstration, load_demonstrations, primitive_demo
-from ._schema import SCHEMA_VERSION, connect, database_errors, transaction
+from ..clustering import FEATURE_KINDS, ElasticClustering, nearest_centre, primitive_features
+from ..core import Demonstration, __version__
+from ..core._validation import check_positive
+from ..segmentation import MultimodalSegmenter
+from ..selection import SHORTLIST, reuse
+from ..store import SCHEMA_VERSION, Store, open_store
 
-__all__ = ["Library"]
+__all__ = ["Library", "carry_labels"]
 
 _ASSIGN = ("incremental", "none", "recluster")
+#: The paper's stretching constant for elastic clustering (RAIL experiment).
+DEFAULT_STRETCH = 1.2
 
 
 def _check_label(name, what="label"):
@@ -29,26 +32,65 @@ def _check_id(value, name):
     return int(value)
 
 
-class Library:
-    """A durable library of demonstrations, motion primitives, skills and labels.
-
-    Everything lives in one SQLite file opened in WAL mode: demonstrations
-    (source, time base and every stream, losslessly as ``.npy`` bytes),
-    primitives (segment bounds in their demonstration; their samples are the
-    demonstration's rows ``start:stop``), clustering versions (parameters,
-    centres, the featuriser's PCA arrays, every member's features), sparse
-    labels on clusters or primitives, and the segmentation parameters of each
-    demonstration. Each write is one transaction; concurrent writers queue on
-    SQLite's lock for up to ``timeout`` seconds.
+def carry_labels(old_members: dict, old_labels: dict, new_members: dict) -> dict:
+    """Labels for a new clustering: a new cluster takes the old label more than half of its members had.
 
     Parameters
     ----------
-    path : str or path-like
-        The library file; created when missing (with ``create=True``).
+    old_members, new_members : dict
+        ``{primitive id: cluster}`` of the previous and the new version.
+    old_labels : dict
+        ``{cluster: label}`` of the previous version.
+
+    Returns
+    -------
+    dict
+        ``{new cluster: label}``.
+
+    Examples
+    --------
+    >>> carry_labels({1: 0, 2: 0, 3: 1}, {0: "reach"}, {1: 5, 2: 5, 3: 5})
+    {5: 'reach'}
+    """
+    old_label = {pid: old_labels[c] for pid, c in old_members.items() if c in old_labels}
+    by_cluster: dict = {}
+    for pid, c in new_members.items():
+        by_cluster.setdefault(c, []).append(pid)
+    out = {}
+    for c in sorted(by_cluster):
+        members = by_cluster[c]
+        names = [old_label[pid] for pid in members if pid in old_label]
+        if not names:
+            continue
+        values, counts = np.unique(names, return_counts=True)
+        best = int(np.argmax(counts))
+        if counts[best] * 2 > len(members):
+            out[c] = str(values[best])
+    return out
+
+
+class Library:
+    """A skill library: the pipeline from demonstrations to reusable skills, over a store.
+
+    ``Library`` adds demonstrations (cut into primitives by
+    :class:`~skillbank.segmentation.MultimodalSegmenter`), clusters the
+    primitives into skills (:class:`~skillbank.clustering.ElasticClustering`
+    on :func:`~skillbank.clustering.primitive_features`), assigns new
+    primitives to the current skills, keeps sparse labels, and reuses a skill
+    for a new task (:func:`~skillbank.selection.reuse`). What it computes is
+    kept by a :class:`~skillbank.store.Store`: by default one SQLite file in
+    WAL mode (:class:`~skillbank.store.SQLiteStore`), each write one
+    transaction, concurrent writers queueing on its lock.
+
+    Parameters
+    ----------
+    location : str, path-like or Store
+        A library file (created when missing, with ``create=True``), a URL of
+        a registered backend (``sqlite:///lib.db``), or an open store.
     create : bool, default=True
-        False raises ValueError when the file does not exist.
+        False raises ValueError when the library does not exist.
     timeout : float, default=60.0
-        Seconds a writer waits for another writer before giving up.
+        Seconds a SQLite writer waits for another writer before giving up.
 
     Raises
     ------
@@ -70,16 +112,21 @@ class Library:
 
     schema_version = SCHEMA_VERSION
 
-    def __init__(self, path, *, create: bool = True, timeout: float = 60.0):
-        self.path = Path(path)
-        self._conn = connect(self.path, timeout=timeout, create=create)
+    def __init__(self, location, *, create: bool = True, timeout: float = 60.0):
+        if isinstance(location, Store):
+            self.store = location
+        else:
+            self.store = open_store(location, create=create, timeout=timeout)
+
+    @property
+    def path(self):
+        """The store's location (a path for SQLite)."""
+        return getattr(self.store, "path", self.store.location)
 
     # -- life cycle -------------------------------------------------------------------------------
     def close(self) -> None:
-        """Close the file (idempotent)."""
-        if self._conn is not None:
-            self._conn.close()
-            self._conn = None
+        """Close the store (idempotent)."""
+        self.store.close()
 
     def __enter__(self):
         return self
@@ -88,31 +135,38 @@ class Library:
         self.close()
 
     def __repr__(self) -> str:
-        return f"Library({str(self.path)!r})"
-
-    @property
-    def conn(self):
-        """The open SQLite connection."""
-        if self._conn is None:
-            raise ValueError(f"library {str(self.path)!r} is closed")
-        return self._conn
-
-    def _errors(self):
-        return database_errors(self.path)
+        return f"Library({self.store.location!r})"
 
     # -- adding -----------------------------------------------------------------------------------
-    def _bounds(self, demo, segment, segmentation):
+    @staticmethod
+    def _bounds(demo, segment, segmentation):
         if not segment:
             return [(0, demo.n_steps)], {"segment": False}
-        from .. import __version__
-        from ..segmentation import segment as run_segmentation
-
         params = dict(segmentation or {})
         streams = params.pop("streams", None)
-        result = run_segmentation(demo, streams, **params)
-        return result.bounds, {"segment": True, "method": "skillbank.segmentation.segment",
+        result = MultimodalSegmenter(**params).fit(demo, streams).result_
+        return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
                                "streams": streams, "requested": params, "resolved": result.params,
                                "mode": result.mode, "skillbank_version": __version__}
+
+    def _assignment(self, demo, bounds, cache: dict):
+        """The current version's clusters for the new primitives (None when they cannot join)."""
+        version = self.store.current_version()
+        if version is None:
+            return None
+        if cache.get("version") != version:
+            cache.clear()
+            cache.update(self.store.version(version))
+        p = cache["params"]
+        parts = [demo.slice(a, b) for a, b in bounds]
+        try:
+            F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
+        except ValueError:  # another number of dimensions, or too short: stays unclustered
+            return None
+        if F.shape[1] != cache["pca_mean"].shape[0]:
+            return None
+        X = (F - cache["pca_mean"]) @ cache["pca_components"].T
+        return {"version": version, "clusters": nearest_centre(X, cache["centers"]).tolist(), "features": X}
 
     def add(self, demo, *, segment: bool = True, segmentation=None, label=None, source=None,
             assign: str = "incremental") -> int:
@@ -157,8 +211,6 @@ class Library:
         >>> lib.add_many(demos, segment=False, progress=True)  # doctest: +SKIP
         [1, 2, 3]
         """
-        from tqdm import tqdm
-
         if assign not in _ASSIGN:
             raise ValueError(f"assign: expected one of {list(_ASSIGN)}, got {assign!r}")
         label = None if label is None else _check_label(label)
@@ -171,17 +223,13 @@ class Library:
                 raise ValueError(f"demos[{k}]: expected a Demonstration, got {type(demo).__name__}")
             if "position" not in demo.streams:
                 raise ValueError(f"demos[{k}]: expected a 'position' stream, got streams {demo.stream_names}")
-        ids = []
+        ids, cache = [], {}
         for demo in tqdm(demos, desc="adding", unit="demo", disable=not progress):
             bounds, provenance = self._bounds(demo, segment, segmentation)
             src = source if source is not None else demo.metadata.get("source")
-            with self._errors(), transaction(self.conn) as conn:
-                did, pids = insert_demonstration(conn, demo, bounds, source=None if src is None else str(src),
-                                                 label=label, provenance=provenance)
-                if assign == "incremental":
-                    parts = [primitive_demo(demo, p, did, a, b)
-                             for p, (a, b) in zip(pids, bounds, strict=True)]
-                    assign_incremental(conn, pids, parts)
+            members = self._assignment(demo, bounds, cache) if assign == "incremental" else None
+            did, _ = self.store.add_demonstration(demo, bounds, source=None if src is None else str(src),
+                                                  label=label, provenance=provenance, members=members)
             ids.append(did)
         if assign == "recluster" and ids:
             params = self.clustering_params() or {}
@@ -196,17 +244,14 @@ class Library:
         --------
         >>> lib.remove(3)  # doctest: +SKIP
         """
-        demo_id = _check_id(demo_id, "demo_id")
-        with self._errors(), transaction(self.conn) as conn:
-            if conn.execute("DELETE FROM demonstrations WHERE id = ?", (demo_id,)).rowcount == 0:
-                raise ValueError(f"demo_id: no demonstration with id {demo_id} in the library")
+        self.store.remove_demonstration(_check_id(demo_id, "demo_id"))
 
     # -- clustering and labels --------------------------------------------------------------------
     def cluster(self, *, stretch=None, features: str = "default", n_points: int = 16, n_components: int = 3,
                 random_state=0) -> int:
         """Cluster every primitive with elastic clustering; records and returns a new version.
 
-        Features: ``features`` (see :func:`~skillbank.library._arrays.flat_features`)
+        Features: ``features`` (see :func:`~skillbank.clustering.primitive_features`)
         of ``n_points`` samples, projected on ``n_components`` principal
         components; the PCA arrays are stored so that later primitives are
         featurised identically. Labels of the previous version carry over to
@@ -225,27 +270,42 @@ class Library:
         >>> lib.cluster(stretch=1.2)  # doctest: +SKIP
         1
         """
-        stretch = 1.2 if stretch is None else stretch
-        with self._errors(), transaction(self.conn) as conn:
-            prims = self._query(conn, load=True)
-            return fit_version(conn, [p.id for p in prims], [p.demo for p in prims], stretch=stretch,
-                               features=features, n_points=n_points, n_components=n_components,
-                               random_state=random_state)
+        stretch = DEFAULT_STRETCH if stretch is None else stretch
+        if features not in FEATURE_KINDS:
+            raise ValueError(f"features: expected one of {list(FEATURE_KINDS)}, got {features!r}")
+        n_points = check_positive(n_points, name="n_points", integer=True)
+        n_components = check_positive(n_components, name="n_components", integer=True)
+        if n_points < 2:
+            raise ValueError(f"n_points: expected an integer >= 2, got {n_points}")
+        old = self.store.current_version()
+        prims = self.store.primitives(load=True)
+        if len(prims) < 2:
+            raise ValueError(f"library: expected at least 2 primitives to cluster, got {len(prims)}")
+        F = primitive_features([p.demo for p in prims], kind=features, n_points=n_points)
+        pca = PCA(n_components=min(n_components, F.shape[0], F.shape[1]), random_state=random_state).fit(F)
+        X = (F - pca.mean_) @ pca.components_.T
+        model = ElasticClustering(stretch=stretch, random_state=random_state).fit(X)
+        params = {"stretch": float(stretch), "features": features, "n_points": int(n_points),
+                  "n_components": int(pca.components_.shape[0]), "random_state": random_state,
+                  "method": "ElasticClustering", "criterion": model.criterion,
+                  "min_separation": model.min_separation, "n_primitives": len(prims),
+                  "energy": float(model.energy_)}
+        new_members = {p.id: int(c) for p, c in zip(prims, model.labels_, strict=True)}
+        labels = {} if old is None else carry_labels(self.store.members(old), self.store.cluster_labels(old),
+                                                     new_members)
+        return self.store.add_version(
+            params=params, centers=model.cluster_centers_, pca_mean=pca.mean_,
+            pca_components=pca.components_, labels=labels,
+            members=[(p.id, int(c), x) for p, c, x in zip(prims, model.labels_, X, strict=True)])
 
     def clustering_params(self, version=None):
         """Parameters of a clustering version (default: the current one), or None before any."""
-        with self._errors():
-            version = current_version(self.conn) if version is None else version
-            return None if version is None else load_version(self.conn, version)["params"]
+        version = self.store.current_version() if version is None else version
+        return None if version is None else self.store.version(version)["params"]
 
     def versions(self) -> list:
         """Every clustering version: ``{"version", "created", "n_clusters", "params"}``, oldest first."""
-        from ._arrays import from_json
-
-        with self._errors():
-            rows = self.conn.execute("SELECT version, created, n_clusters, params FROM cluster_versions "
-                                     "ORDER BY version").fetchall()
-        return [{"version": v, "created": c, "n_clusters": n, "params": from_json(p)} for v, c, n, p in rows]
+        return self.store.versions()
 
     def label(self, name, *, cluster=None, primitive=None) -> None:
         """Label a cluster of the current version, or one primitive (``name=None`` removes it).
@@ -259,45 +319,9 @@ class Library:
         if (cluster is None) == (primitive is None):
             raise ValueError("label: give exactly one of cluster= or primitive=")
         name = None if name is None else _check_label(name, "name")
-        with self._errors(), transaction(self.conn) as conn:
-            if primitive is not None:
-                pid = _check_id(primitive, "primitive")
-                if conn.execute("UPDATE primitives SET label = ? WHERE id = ?", (name, pid)).rowcount == 0:
-                    raise ValueError(f"primitive: no primitive with id {pid} in the library")
-                return
-            k = _check_id(cluster, "cluster")
-            version = current_version(conn)
-            if version is None:
-                raise ValueError("cluster: the library has no clusters yet; run cluster() first")
-            n = conn.execute("SELECT n_clusters FROM cluster_versions WHERE version = ?",
-                             (version,)).fetchone()[0]
-            if not 0 <= k < n:
-                raise ValueError(f"cluster: expected a cluster id in 0..{n - 1} (version {version}), got {k}")
-            conn.execute("DELETE FROM cluster_labels WHERE version = ? AND cluster = ?", (version, k))
-            if name is not None:
-                conn.execute("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
-                             (version, k, name))
+        self.store.set_label(name, cluster=cluster, primitive=primitive)
 
     # -- queries ----------------------------------------------------------------------------------
-    def _query(self, conn, *, label=None, cluster=None, source=None, demonstration=None, load=True):
-        version = current_version(conn)
-        rows = conn.execute(
-            "SELECT p.id, p.demonstration_id, p.start, p.stop, m.cluster, COALESCE(p.label, l.label), "
-            "m.features FROM primitives p JOIN demonstrations d ON d.id = p.demonstration_id "
-            "LEFT JOIN cluster_members m ON m.primitive_id = p.id AND m.version = ? "
-            "LEFT JOIN cluster_labels l ON l.version = m.version AND l.cluster = m.cluster "
-            "WHERE (? IS NULL OR d.source = ?) AND (? IS NULL OR p.demonstration_id = ?) "
-            "AND (? IS NULL OR m.cluster = ?) AND (? IS NULL OR COALESCE(p.label, l.label) = ?) "
-            "ORDER BY p.id",
-            (-1 if version is None else version, source, source, demonstration, demonstration,
-             cluster, cluster, label, label)).fetchall()
-        parents = load_demonstrations(conn, {r[1] for r in rows}) if load and rows else {}
-        out = []
-        for pid, did, a, b, c, lab, feats in rows:
-            demo = primitive_demo(parents[did], pid, did, a, b) if load else None
-            out.append(Primitive(pid, did, a, b, c, lab, demo, None if feats is None else from_npy(feats)))
-        return out
-
     def primitives(self, *, label=None, cluster=None, source=None, demonstration=None, load=True) -> list:
         """Primitives matching every filter given, by id (``load=False`` skips their samples).
 
@@ -320,34 +344,21 @@ class Library:
         >>> [p.id for p in lib.primitives(label="press")]  # doctest: +SKIP
         [4, 9]
         """
-        cluster = None if cluster is None else _check_id(cluster, "cluster")
-        demonstration = None if demonstration is None else _check_id(demonstration, "demonstration")
-        with self._errors():
-            return self._query(self.conn, label=label, cluster=cluster, source=None if source is None
-                               else str(source), demonstration=demonstration, load=load)
+        return self.store.primitives(label=label, cluster=cluster, source=source, demonstration=demonstration,
+                                     load=load)
 
     def demonstration(self, demo_id) -> Demonstration:
         """The stored demonstration ``demo_id``, exactly as added."""
-        with self._errors():
-            did = _check_id(demo_id, "demo_id")
-            return load_demonstrations(self.conn, [did])[did]
+        did = _check_id(demo_id, "demo_id")
+        return self.store.demonstrations([did])[did]
 
     def demonstration_ids(self) -> list:
         """Ids of every stored demonstration, ascending."""
-        with self._errors():
-            return [r[0] for r in self.conn.execute("SELECT id FROM demonstrations ORDER BY id")]
+        return self.store.demonstration_ids()
 
     def provenance(self, demo_id) -> dict:
         """The segmentation parameters recorded when ``demo_id`` was added."""
-        from ._arrays import from_json
-
-        with self._errors():
-            row = self.conn.execute("SELECT p.params FROM demonstrations d LEFT JOIN provenance p "
-                                    "ON p.id = d.provenance_id WHERE d.id = ?",
-                                    (_check_id(demo_id, "demo_id"),)).fetchone()
-        if row is None:
-            raise ValueError(f"demo_id: no demonstration with id {demo_id} in the library")
-        return from_json(row[0]) or {}
+        return self.store.provenance(demo_id)
 
     def summary(self) -> dict:
         """The ``skillbank library list --json`` document.
@@ -359,29 +370,21 @@ class Library:
             "primitives": [{"id", "demonstration", "cluster", "label", "n_steps"}]}``;
             skills are the clusters of the current version.
         """
-        with self._errors():
-            conn = self.conn
-            n_demos = conn.execute("SELECT COUNT(*) FROM demonstrations").fetchone()[0]
-            version = current_version(conn)
-            skills = []
-            if version is not None:
-                n = conn.execute("SELECT n_clusters FROM cluster_versions WHERE version = ?",
-                                 (version,)).fetchone()[0]
-                counts = dict(conn.execute("SELECT cluster, COUNT(*) FROM cluster_members WHERE version = ? "
-                                           "GROUP BY cluster", (version,)).fetchall())
-                labels = dict(conn.execute("SELECT cluster, label FROM cluster_labels WHERE version = ?",
-                                           (version,)).fetchall())
-                skills = [{"cluster": k, "label": labels.get(k), "count": int(counts.get(k, 0))}
-                          for k in range(n)]
-            prims = self._query(conn, load=False)
-        return {"n_demonstrations": int(n_demos), "skills": skills,
+        version = self.store.current_version()
+        skills = []
+        if version is not None:
+            n = self.store.version(version)["n_clusters"]
+            counts = np.bincount(list(self.store.members(version).values()), minlength=n)
+            labels = self.store.cluster_labels(version)
+            skills = [{"cluster": k, "label": labels.get(k), "count": int(counts[k])} for k in range(n)]
+        prims = self.store.primitives(load=False)
+        return {"n_demonstrations": len(self.store.demonstration_ids()), "skills": skills,
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
                                 "label": p.label, "n_steps": p.n_steps} for p in prims]}
 
     def check(self) -> str:
-        """SQLite's ``PRAGMA integrity_check`` ("ok" for a sound file)."""
-        with self._errors():
-            return "; ".join(r[0] for r in self.conn.execute("PRAGMA integrity_check"))
+        """The store's integrity check ("ok" for a sound library)."""
+        return self.store.check()
 
     # -- reuse and transfer -----------------------------------------------------------------------
     def skill(self, skill) -> list:
@@ -400,7 +403,7 @@ class Library:
         return prims
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
-              shortlist: int = 3, random_state=None):
+              shortlist: int = SHORTLIST, random_state=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -419,20 +422,12 @@ class Library:
         >>> lib.reuse("press", Constraints(start=[0, 0, 0.2], goal=[0.3, 0.1, 0.0]))  # doctest: +SKIP
         """
         prims = self.skill(skill)  # a clear error for an empty skill before any fitting
-        from ..selection import reuse
-
         return reuse([p.demo for p in prims], constraints, method=method, k=k,
                      ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state)
 
     def export(self, folder):
-        """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.
-
-        See :func:`skillbank.library._transfer.export_library` for the layout.
-        """
-        from ._transfer import export_library
-
-        with self._errors():
-            return export_library(self.conn, folder)
+        """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path."""
+        return self.store.export(folder)
 
     def import_folder(self, folder) -> dict:
         """Add everything from a folder written by :meth:`export`, in one transaction.
@@ -440,7 +435,4 @@ class Library:
         Into an empty library the ids are kept; otherwise they are renumbered.
         Returns ``{"demonstrations": {old: new}, "primitives": {...}, "versions": {...}}``.
         """
-        from ._transfer import import_library
-
-        with self._errors():
-            return import_library(self.conn, folder)
+        return self.store.import_folder(folder)

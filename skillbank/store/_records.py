@@ -2,57 +2,13 @@
 
 from __future__ import annotations
 
-import os
-import time
-from dataclasses import dataclass, field
-from pathlib import Path
-
-import numpy as np
-
-from .._demonstration import Demonstration
+from ..core import Demonstration
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._schema import now
 
-__all__ = ["Primitive", "insert_demonstration", "load_demonstrations", "chunks", "test_pause"]
+__all__ = ["insert_demonstration", "load_demonstrations", "primitive_demo", "chunks"]
 
 _CHUNK = 500  # ids per IN (...) query, well under SQLite's variable limit
-PAUSE_ENV = "SKILLBANK_LIBRARY_TEST_PAUSE"
-MARKER_ENV = "SKILLBANK_LIBRARY_TEST_MARKER"
-
-
-@dataclass
-class Primitive:
-    """One stored motion primitive.
-
-    Attributes
-    ----------
-    id : int
-    demonstration_id : int
-    start, stop : int
-        Sample range ``start:stop`` in its demonstration (stop exclusive).
-    cluster : int or None
-        Cluster in the current clustering version (None: not clustered yet).
-    label : str or None
-        The primitive's own label, else its cluster's.
-    demo : Demonstration or None
-        The primitive's samples, every stream of its demonstration.
-    features : ndarray or None
-        Its features in the current clustering version.
-    """
-
-    id: int
-    demonstration_id: int
-    start: int
-    stop: int
-    cluster: int | None = None
-    label: str | None = None
-    demo: Demonstration | None = field(default=None, repr=False)
-    features: np.ndarray | None = field(default=None, repr=False)
-
-    @property
-    def n_steps(self) -> int:
-        """Number of samples."""
-        return int(self.stop - self.start)
 
 
 def chunks(ids):
@@ -65,22 +21,6 @@ def chunks(ids):
 def placeholders(n: int) -> str:
     """``?, ?, ...`` for ``n`` bound parameters."""
     return ", ".join("?" * n)
-
-
-def test_pause() -> None:
-    """Test hook: sleep inside the add transaction when ``SKILLBANK_LIBRARY_TEST_PAUSE`` is set.
-
-    Only the durability tests set it, to kill a process in the middle of an add:
-    ``SKILLBANK_LIBRARY_TEST_MARKER`` names a file written when the pause starts.
-    Unset (the normal case) it does nothing.
-    """
-    seconds = os.environ.get(PAUSE_ENV)
-    if not seconds:
-        return
-    marker = os.environ.get(MARKER_ENV)
-    if marker:
-        Path(marker).write_text("in transaction\n")
-    time.sleep(float(seconds))
 
 
 def insert_demonstration(conn, demo: Demonstration, bounds, *, source, label, provenance) -> tuple:
@@ -99,7 +39,6 @@ def insert_demonstration(conn, demo: Demonstration, bounds, *, source, label, pr
     conn.executemany(
         "INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
         [(demo_id, name, k, to_npy(arr)) for k, (name, arr) in enumerate(demo.streams.items())])
-    test_pause()
     prim_ids = []
     for a, b in bounds:
         cur = conn.execute("INSERT INTO primitives (demonstration_id, start, stop, label) "

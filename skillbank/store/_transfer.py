@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io import read_npz, write_npz
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._records import load_demonstrations
 from ._schema import SCHEMA_VERSION, now, transaction
@@ -31,8 +32,6 @@ def export_library(conn, folder) -> Path:
     pathlib.Path
         The manifest.
     """
-    from ..io import write_npz
-
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"folder: expected a folder, got the file {str(folder)!r}")
@@ -117,8 +116,6 @@ def import_library(conn, folder) -> dict:
     and the imported clustering versions are appended after the existing ones
     (the last imported version becomes current).
     """
-    from ..io import read_npz
-
     folder = Path(folder)
     manifest = _read_manifest(folder)
     demos = [(doc, read_npz(folder / doc["file"])) for doc in manifest.get("demonstrations", [])]

@@ -1,0 +1,36 @@
+"""``skillbank demo``: the main job on embedded data."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub):
+    """Register ``demo`` on argparse subparsers ``sub``."""
+    p = sub.add_parser("demo", help="run the main job on embedded data (LASA) and write figures")
+    p.add_argument("--out", type=Path, default=Path("demo_output"), help="folder for figures and summary")
+    p.add_argument("--data", type=Path, default=None,
+                   help="shared data folder: use RAIL and the three-button demo instead of LASA")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    """Run the main job; returns the exit status."""
+    from ..experiments import run_library_demo  # the whole stack, imported when the job runs
+
+    summary = run_library_demo(args.out, data=args.data)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for r in summary["reuse"]:
+            outcome = r["error"] if "error" in r else (
+                f"used {r['used']}, constraint error {r['constraint_error']:.2g}, collision {r['collision']}")
+            print(f"reuse {r['skill']} ({r['method']}): {outcome}")
+        print(f"figures and summary written to {summary['out']}")
+        print(f"open {summary['summary']}")
+    return 0

@@ -1,0 +1,27 @@
+"""The core layer: the data model, input validation, task constraints and geometry.
+
+Everything else in skillbank builds on these: :class:`Demonstration` (a time
+base plus named streams), :class:`Constraints` (start, goal, via-points,
+boundary velocities, obstacles), the :class:`Obstacle` shapes and their one
+collision test, and the geometry of sampled paths (the one resampler and the
+path Laplacian). Nothing here imports another skillbank package.
+
+Examples
+--------
+>>> import numpy as np
+>>> from skillbank.core import Constraints, Demonstration, Sphere
+>>> demo = Demonstration(np.linspace(0, 1, 3), {"position": [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]]})
+>>> Constraints(obstacles=[Sphere([0.5, 0.0], 0.1)]).collides(demo["position"])
+True
+"""
+
+from ._constraints import Constraints, ViaPoint
+from ._demonstration import Demonstration
+from ._obstacles import OBSTACLES, Box, Obstacle, Sphere, parse_obstacle
+from ._paths import laplacian_matrix, neighbour_weights, resample, resample_many
+from ._version import __version__
+
+__all__ = [
+    "Demonstration", "Constraints", "ViaPoint", "Obstacle", "Sphere", "Box", "OBSTACLES", "parse_obstacle",
+    "resample", "resample_many", "laplacian_matrix", "neighbour_weights", "__version__",
+]
