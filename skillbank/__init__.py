@@ -16,6 +16,8 @@ Examples
 200
 """
 
+import importlib
+
 from .core import Box, Constraints, Demonstration, Obstacle, Sphere, ViaPoint, __version__
 
 __all__ = ["Demonstration", "Constraints", "ViaPoint", "Obstacle", "Sphere", "Box", "Library", "__version__"]
@@ -26,7 +28,5 @@ _LAZY = {"Library": "skillbank.pipeline"}
 def __getattr__(name):
     # The pipeline pulls in scikit-learn and scipy; import it when it is first asked for.
     if name in _LAZY:
-        import importlib
-
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'skillbank' has no attribute {name!r}")

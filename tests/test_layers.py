@@ -11,12 +11,14 @@ dependencies, and each carries a comment saying so.
 from __future__ import annotations
 
 import ast
+import re
 import shutil
 from pathlib import Path
 
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "skillbank"
+DOC = PACKAGE.parent / "docs" / "architecture.md"
 
 #: Lowest first. Sub-packages on one line form one layer and may not import each other.
 LAYERS = (
@@ -146,3 +148,11 @@ def test_a_planted_backward_import_is_caught(tmp_path, module, planted, expected
         fh.write(planted)
     found = violations(copy)
     assert len(found) >= 1 and any(expected in line for line in found), found
+
+
+def test_the_documented_layers_are_the_tested_ones():
+    rows = re.findall(r"^\| (\d+) \| `(\w+)` \|", DOC.read_text(), flags=re.M)
+    documented: dict[int, list[str]] = {}
+    for k, name in rows:
+        documented.setdefault(int(k), []).append(name)
+    assert [tuple(documented[k]) for k in sorted(documented)] == [tuple(layer) for layer in LAYERS]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
+
 __all__ = ["add_parser", "run"]
 
 
@@ -50,8 +52,6 @@ def _indices(text) -> list[int] | None:
 def run(args) -> int:
     """Cluster ``args.input``; returns the exit status."""
     # Imported here so that 'skillbank --help' and the other commands start without scikit-learn.
-    import numpy as np
-
     from ..clustering import ElasticClustering, trajectory_features
     from ..io import load_folder, read_feature_matrix
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..core import Demonstration
 from ._options import add_constraint_options, constraints_from_args
 
 __all__ = ["add_parser", "run"]
@@ -42,7 +43,6 @@ def run(args) -> int:
     """Edit ``args.input`` under the constraints given on the command line; returns the exit status."""
     # Imported here, not at the top, so that 'skillbank --help' and the other commands start
     # without scikit-learn and scipy.
-    from ..core import Demonstration
     from ..io import load_positions, write_csv, write_npz
     from ..metrics import comparison_metrics
     from ..representations import fit_reproduce, representation

@@ -31,7 +31,7 @@ _EXTENSIONS = {
 
 
 def _hdf5_kind(path) -> str:
-    import h5py
+    import h5py  # slow to import; only when an HDF5 file is read
 
     with reading(path, "corrupt HDF5 file"), h5py.File(path, "r") as h5:
         groups = sorted(k for k in h5.keys() if isinstance(h5[k], h5py.Group))

@@ -85,7 +85,7 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None):
     >>> read_handwriting_h5("seed/r_shape.h5", group="unsmoothed", index=2).n_steps  # doctest: +SKIP
     237
     """
-    import h5py
+    import h5py  # slow to import; only when an HDF5 file is read
 
     p = as_file(path)
     expect_magic(p, HDF5_MAGIC, "HDF5 content")

@@ -54,7 +54,7 @@ def read_rail_file(path) -> list[Demonstration]:
     >>> demos[0].metadata["label"], demos[0]["position"].shape  # doctest: +SKIP
     ('reaching', (1000, 3))
     """
-    from scipy.io import loadmat, whosmat
+    from scipy.io import loadmat, whosmat  # scipy is slow to import; only for .mat files
 
     p = as_file(path)
     expect_magic(p, MAT5_MAGIC, "a MATLAB 5.0 file")

@@ -85,7 +85,7 @@ def read_robot_h5(path) -> Demonstration:
     >>> demo["joints"].shape  # doctest: +SKIP
     (4099, 6)
     """
-    import h5py
+    import h5py  # slow to import; only when an HDF5 file is read
 
     p = as_file(path)
     expect_magic(p, HDF5_MAGIC, "HDF5 content")

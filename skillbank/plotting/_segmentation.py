@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..segmentation._result import SegmentationResult
+from ..segmentation import SegmentationResult
 
 __all__ = [
     "plot_jerk_profile",

@@ -55,36 +55,137 @@ def test_four_processes_add_fifty_demonstrations_each(tmp_path):
                        for p in prims)
 
 
-def _slow_add(path, marker):
-    # The documented test hook: sleep inside the add transaction, after the demonstration
-    # and its streams are written and before its primitives are.
-    os.environ["SKILLBANK_LIBRARY_TEST_PAUSE"] = "60"
-    os.environ["SKILLBANK_LIBRARY_TEST_MARKER"] = str(marker)
+# Big enough that much of an add is spent inside SQLite's write transaction: its 2.9 MB of samples
+# exceed the default 2 MB page cache, so SQLite spills pages to the WAL before writing the commit
+# frame, and a reader of the WAL file can see the transaction in flight.
+_N_STREAMS, _N_STEPS = 3, 20_000
+
+
+def _demo(trial: int, seq: int, writer: str = "child", n_steps: int = _N_STEPS) -> Demonstration:
+    # Reproducible from its metadata alone, so the parent can regenerate what a child wrote.
+    rng = np.random.default_rng([trial, seq, writer == "parent"])
+    t = np.arange(n_steps) * 0.01
+    streams = {name: rng.standard_normal((n_steps, 6)) for name in ("position", "velocity", "force")}
+    return Demonstration(t, streams, {"trial": trial, "seq": seq, "writer": writer})
+
+
+def _add_forever(path, trial):
+    # Runs until SIGKILLed; the time limit only stops an orphan if the parent test died.
+    deadline = time.monotonic() + 60
     with Library(path) as lib:
-        lib.add(_small_demo(9, 9), segment=False, source="killed")
+        seq = 0
+        while time.monotonic() < deadline:
+            lib.add(_demo(trial, seq), segment=False, source=f"trial{trial}")
+            seq += 1
+
+
+def _wal_frames(wal) -> tuple:
+    """``(frames, uncommitted)`` in the current generation of a SQLite WAL file.
+
+    Frames belong to it while their salts match the header's (older generations beyond carry other
+    salts); ``uncommitted`` are those after its last commit frame (the one with a non-zero database
+    size): pages of a write transaction that has not committed. Format: sqlite.org/fileformat.html.
+    """
+    try:
+        data = wal.read_bytes()
+    except FileNotFoundError:
+        return 0, 0
+    page_size = int.from_bytes(data[8:12], "big") if len(data) >= 32 else 0
+    if page_size < 512 or page_size & (page_size - 1):
+        return 0, 0
+    salts, size = data[16:24], 24 + page_size
+    frames = uncommitted = 0
+    for offset in range(32, len(data) - size + 1, size):  # whole frames only
+        if data[offset + 8:offset + 16] != salts:
+            break
+        frames += 1
+        uncommitted = 0 if int.from_bytes(data[offset + 4:offset + 8], "big") else uncommitted + 1
+    return frames, uncommitted
+
+
+def _wait_for(condition, timeout: float) -> bool:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.001)
+    return True
+
+
+def _row_counts(lib) -> dict:
+    return {table: lib.store.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0]  # noqa: S608
+            for table in ("demonstrations", "streams", "primitives", "provenance")}
+
+
+def _whole_demonstrations(lib) -> dict:
+    """Check that every stored demonstration is whole and as written; returns each trial's child seqs."""
+    assert lib.check() == "ok"
+    ids = lib.demonstration_ids()
+    seqs = {}
+    for did in ids:
+        demo = lib.demonstration(did)
+        meta = demo.metadata
+        expected = _demo(meta["trial"], meta["seq"], meta["writer"], demo.n_steps)
+        assert demo.stream_names == expected.stream_names, (did, demo.stream_names)
+        assert np.array_equal(demo.t, expected.t), did
+        assert all(np.array_equal(demo[name], expected[name]) for name in expected.stream_names), did
+        [prim] = lib.primitives(demonstration=did, load=False)  # segment=False: the whole demonstration
+        assert (prim.start, prim.stop) == (0, demo.n_steps), did
+        assert lib.provenance(did) == {"segment": False}, did
+        if meta["writer"] == "child":
+            seqs.setdefault(meta["trial"], []).append(meta["seq"])
+    n = len(ids)
+    assert _row_counts(lib) == {"demonstrations": n, "streams": _N_STREAMS * n, "primitives": n,
+                                "provenance": n}
+    # Each child committed a prefix of its sequence, in order; the add it was killed in left nothing.
+    for trial, s in seqs.items():
+        assert s == list(range(len(s))), (trial, s)
+    return {trial: len(s) for trial, s in seqs.items()}
 
 
 def test_process_killed_in_the_middle_of_an_add(tmp_path):
-    path, marker = tmp_path / "kill.db", tmp_path / "in_transaction"
-    with Library(path) as lib:
-        lib.add(_small_demo(0, 0), segment=False, source="before")
-    proc = _CTX.Process(target=_slow_add, args=(path, marker))
-    proc.start()
-    deadline = time.monotonic() + 60
-    while not marker.exists() and time.monotonic() < deadline and proc.is_alive():
-        time.sleep(0.02)
-    assert marker.exists(), "the child never reached the pause inside the transaction"
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.join(10)
-    assert proc.exitcode == -signal.SIGKILL
-    with Library(path) as lib:
-        assert lib.check() == "ok"
-        assert lib.demonstration_ids() == [1]
-        for table in ("demonstrations", "streams", "primitives", "provenance"):
-            assert lib.store.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0] == 1, table  # noqa: S608
-        did = lib.add(_small_demo(9, 9), segment=False, source="killed")
-        [prim] = lib.primitives(source="killed")
-        assert prim.demonstration_id == did and prim.n_steps == 20
+    """Children adding large demonstrations in a loop, SIGKILLed at seeded random moments.
+
+    Every kill comes after its child has started writing, at a random delay; every other kill then
+    also waits until the WAL shows a write transaction in flight (pages after the last commit), so
+    that some kills surely land inside one. The rest fall wherever the delay ends: inside an add,
+    between two, or in the checkpoint after a commit. After every kill the library must hold only
+    whole demonstrations, in consistent tables, and take a new one.
+    """
+    path = tmp_path / "kill.db"
+    wal = path.with_name(path.name + "-wal")
+    Library(path).close()
+    rng = np.random.default_rng(7)
+    n_trials, committed, in_flight = 10, {}, []
+    for trial in range(n_trials):
+        # Closing the last connection checkpoints and deletes the WAL, so whatever the WAL holds at
+        # the kill was written by this child alone.
+        assert not wal.exists()
+        proc = _CTX.Process(target=_add_forever, args=(path, trial))
+        proc.start()
+        try:
+            assert _wait_for(lambda: _wal_frames(wal)[0] > 0, 30), "the child never started writing"
+            time.sleep(rng.uniform(0.0, 0.2))
+            if trial % 2:
+                assert _wait_for(lambda: _wal_frames(wal)[1] > 0, 10), "no transaction seen in flight"
+        finally:
+            os.kill(proc.pid, signal.SIGKILL)
+            proc.join(10)
+        assert proc.exitcode == -signal.SIGKILL  # it was still in its loop of adds
+        in_flight.append(_wal_frames(wal)[1])  # before opening: recovery ignores these pages
+        with Library(path) as lib:
+            seen = _whole_demonstrations(lib)
+            committed[trial] = seen.pop(trial, 0)
+            assert seen == {k: n for k, n in committed.items() if n and k != trial}  # earlier ones kept
+            before = _row_counts(lib)
+            did = lib.add(_demo(trial, 0, "parent", n_steps=200), segment=False, source="parent")
+            assert _row_counts(lib) == {table: n + (_N_STREAMS if table == "streams" else 1)
+                                        for table, n in before.items()}
+            assert np.array_equal(lib.demonstration(did)["force"], _demo(trial, 0, "parent", 200)["force"])
+    # The kills came while the children were adding: demonstrations kept arriving between kills,
+    # and some kills left pages of an uncommitted transaction in the WAL, which recovery discarded.
+    assert sum(committed.values()) > 0 and sum(n > 0 for n in committed.values()) >= 3, committed
+    assert sum(n > 0 for n in in_flight) >= 1, in_flight
 
 
 def _one_line_error(path, match):
@@ -190,7 +291,8 @@ def test_migrates_a_version_1_library(tmp_path):
         prims = lib.primitives()
         assert [(p.id, p.cluster, p.label) for p in prims] == [(1, 0, "head"), (2, 1, "tail")]
         assert np.array_equal(prims[1].demo["position"], Y[12:])
-        assigned = lib.store.conn.execute("SELECT assigned FROM cluster_members ORDER BY primitive_id").fetchall()
+        assigned = lib.store.conn.execute(
+            "SELECT assigned FROM cluster_members ORDER BY primitive_id").fetchall()
         assert assigned == [("fit",), ("fit",)]
         # The migrated library takes new demonstrations, assigned with the old version's featuriser:
         # resampled to 2 points, x of the start (about 5) minus 0.5 -> nearest centre +1 -> cluster 1.
