@@ -24,11 +24,12 @@ import math
 
 import numpy as np
 
-from skillbank.segmentation import detect_changepoints, gate_changepoints, to_samples
+from skillbank.segmentation import detect_changepoints, gate_changepoints
+from skillbank.segmentation._segmenter import to_samples
 
 __all__ = ["loop_segment", "loop_gradient", "loop_jerk_profile", "LoopResult"]
 
-# same constants as skillbank.segmentation._profile / _segmenter
+# same values as skillbank.segmentation._profile.FLAT_SCALE and TYPICAL_FRACTION
 _FLAT = 1e-12
 _TYPICAL_FRACTION = 0.05  # relative scale: speed + 0.05 * (95th percentile of speed)
 

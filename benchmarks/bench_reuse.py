@@ -50,9 +50,9 @@ from pathlib import Path
 import numpy as np
 
 from skillbank import Constraints
+from skillbank.core import resample
 from skillbank.io import load_rail
 from skillbank.metrics import dtw_distance, frechet_distance
-from skillbank.core import resample
 from skillbank.representations import DMP
 from skillbank.selection import METHODS, RANKINGS, reproduce_selection, select_candidates
 

@@ -27,10 +27,9 @@ from matplotlib.figure import Figure
 
 import skillbank.io as sio
 from skillbank.core import Constraints
-from skillbank.representations import LaplacianEditor
 from skillbank.metrics import angular_similarity, curvature_deviation, frechet_distance
 from skillbank.plotting._editing import draw_edit
-from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP
+from skillbank.representations import DMP, ElasticMap, JerkAccuracy, LaplacianEditor, ProMP
 
 SHAPES = ("GShape", "CShape", "JShape", "Sshape", "WShape", "Zshape")
 # name -> (estimator factory, fitted on all 7 demos, takes a via-point). Two departures from the

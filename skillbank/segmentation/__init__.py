@@ -1,20 +1,19 @@
-"""Probabilistic multimodal segmentation of demonstrations into motion primitives."""
+"""Probabilistic multimodal segmentation of demonstrations into motion primitives.
 
-from ._changepoints import detect_changepoints, refine_to_jerk_centre
-from ._gate import gate_changepoints, smoothed_speed
-from ._keypoints import (
-    changepoint_probability,
-    combine_probabilities,
-    keypoints_deterministic,
-    keypoints_sampling,
-)
-from ._profile import jerk, jerk_profile, normalize_profile, speed_norm, windowed_mean
+:class:`MultimodalSegmenter` (or :func:`segment`) cuts a demonstration; it
+returns a :class:`SegmentationResult` with a :class:`StreamSegmentation` per
+stream. :func:`jerk`, :func:`jerk_profile`, :func:`detect_changepoints` and
+:func:`gate_changepoints` are the per-stream steps, for studying one stream.
+The other helpers live in the private modules and may change without notice.
+"""
+
+from ._changepoints import detect_changepoints
+from ._gate import gate_changepoints
+from ._profile import jerk, jerk_profile
 from ._result import SegmentationResult, StreamSegmentation
-from ._segmenter import MultimodalSegmenter, segment, to_samples
+from ._segmenter import MultimodalSegmenter, segment
 
 __all__ = [
-    "MultimodalSegmenter", "SegmentationResult", "StreamSegmentation", "segment", "jerk", "jerk_profile",
-    "windowed_mean", "normalize_profile", "detect_changepoints", "changepoint_probability",
-    "combine_probabilities", "keypoints_deterministic", "keypoints_sampling", "to_samples",
-    "refine_to_jerk_centre", "gate_changepoints", "smoothed_speed", "speed_norm",
+    "MultimodalSegmenter", "segment", "SegmentationResult", "StreamSegmentation",
+    "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
 ]

@@ -7,6 +7,11 @@ from scipy.signal import find_peaks, peak_widths
 
 __all__ = ["detect_changepoints", "suppress_close", "refine_to_jerk_centre"]
 
+#: A changepoint is where its event's profile rises through this fraction of
+#: the event's prominence: the half-height crossing marks where the transition
+#: begins, and unlike the foot of the rise it does not wander with small noise.
+ONSET_HEIGHT = 0.5
+
 
 def suppress_close(positions, scores, *, min_size: int, n_steps: int) -> np.ndarray:
     """Keep the strongest positions that leave segments of at least ``min_size``.
@@ -115,7 +120,7 @@ def detect_changepoints(profile, *, threshold: float, min_size: int, grace: int,
         return np.array([], dtype=int), np.array([], dtype=float)
     prom = props["prominences"]
     left = peak_widths(
-        padded, peaks, rel_height=0.5,
+        padded, peaks, rel_height=ONSET_HEIGHT,
         prominence_data=(prom, props["left_bases"], props["right_bases"]),
     )[2]
     peaks = peaks - 1

@@ -5,30 +5,51 @@ from __future__ import annotations
 import numpy as np
 
 from ._changepoints import suppress_close
-from ._profile import speed_norm, windowed_mean
+from ._profile import TYPICAL_PERCENTILE, speed_norm, windowed_mean
 
-__all__ = ["gate_changepoints", "smoothed_speed"]
+__all__ = ["gate_changepoints"]
+
+#: The speed is smoothed by boxes of half-width ``window // SMOOTH_DIVISOR``.
+#: Their two passes span about half a window: enough to even out sample-level
+#: noise in the speed, and narrower than the jerk window, so they cannot merge
+#: two valleys that the jerk profile tells apart.
+SMOOTH_DIVISOR = 8
+
+#: Two passes of a centred box make a triangle, which is symmetric: a
+#: symmetric valley keeps its minimum exactly where it was. Each pass can shift
+#: an asymmetric minimum by up to its half-width, so the raw minimum is looked
+#: for within ``SMOOTH_PASSES`` half-widths of the smoothed one.
+SMOOTH_PASSES = 2
+
+#: A stream is at rest where its smoothed speed is below this fraction of its
+#: typical speed (the ``TYPICAL_PERCENTILE`` of the smoothed speed): a stop
+#: that deep is a stop whatever the speeds either side.
+AT_REST_FRACTION = 0.05
+
+#: The slow stretch around a stop is where the speed stays within this
+#: fraction of the way from the valley's lowest speed up to the slower side's
+#: peak: so close to the minimum that the speed there has no one slowest sample.
+SLOW_FRACTION = 0.1
+
+#: A rest of at least this fraction of a minimum segment is a real rest (the
+#: robot waits, a gripper holds), where a pen turning at a corner stops for a
+#: few samples only.
+MIN_REST = 0.5
 
 
-def smoothed_speed(t, Y, *, width: int) -> np.ndarray:
-    """Speed of ``Y`` smoothed by a symmetric triangular window.
-
-    Two passes of an odd-width centred box make a triangle, so a symmetric
-    valley keeps its minimum exactly where it was.
+def _smooth(v: np.ndarray, half_width: int) -> np.ndarray:
+    """``v`` smoothed by ``SMOOTH_PASSES`` centred boxes of ``2 * half_width + 1`` samples.
 
     Examples
     --------
-    >>> t = np.arange(7.0)
-    >>> Y = np.array([0.0, 1.0, 2.0, 3.0, 2.0, 1.0, 0.0])[:, None]
-    >>> int(np.argmin(smoothed_speed(t, Y, width=3)[1:-1])) + 1
+    >>> v = np.array([3.0, 2.0, 1.0, 0.0, 1.0, 2.0, 3.0])
+    >>> int(np.argmin(_smooth(v, 1)))  # a symmetric valley stays put
     3
     """
-    return _triangle(speed_norm(t, Y), width)
-
-
-def _triangle(v: np.ndarray, width: int) -> np.ndarray:
-    odd = 2 * (max(1, int(width)) // 2) + 1
-    return windowed_mean(windowed_mean(v, odd), odd) if odd > 1 else v
+    width = 2 * half_width + 1
+    for _ in range(SMOOTH_PASSES):
+        v = windowed_mean(v, width)
+    return v
 
 
 def _turn_degrees(Y: np.ndarray, c: int, h: int) -> float:
@@ -72,19 +93,19 @@ def _stop_position(v, v_raw, span: tuple, c: int, *, low: float, side: float, at
     """
     lo, hi = span
     rest = _nearest_run(v[lo:hi + 1] <= at_rest, c - lo)
-    if rest is not None and rest[1] - rest[0] + 1 >= min_size / 2:
+    if rest is not None and rest[1] - rest[0] + 1 >= MIN_REST * min_size:
         return c
-    a, b = _nearest_run(v[lo:hi + 1] <= low + 0.1 * (side - low), c - lo)
+    a, b = _nearest_run(v[lo:hi + 1] <= low + SLOW_FRACTION * (side - low), c - lo)
     if b - a + 1 >= min_size:
         return c
     pos = lo + a + _argmin_near(v[lo + a:lo + b + 1], c - lo - a)
-    # two box passes of half-width s can shift an asymmetric minimum by up to 2s
-    a, b = max(pos - 2 * s, 0), min(pos + 2 * s, v_raw.shape[0] - 1)
+    # each box pass of half-width s can shift an asymmetric minimum by up to s
+    a, b = max(pos - SMOOTH_PASSES * s, 0), min(pos + SMOOTH_PASSES * s, v_raw.shape[0] - 1)
     return a + _argmin_near(v_raw[a:b + 1], pos - a)
 
 
 def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: int, grace: int,
-                      stop_ratio: float, min_turn: float, speed=None):
+                      stop_ratio: float, min_turn: float):
     """Keep the changepoints where the motion stops or turns, and pin stops to the stop.
 
     A jerk event marks a primitive boundary when the motion either comes
@@ -120,8 +141,6 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
         Largest speed at the boundary, as a fraction of the slower side's peak.
     min_turn : float
         Smallest change of direction, in degrees, that makes a boundary.
-    speed : ndarray of shape (n_steps,), optional
-        :func:`speed_norm` of ``Y`` if already computed.
 
     Returns
     -------
@@ -137,16 +156,28 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
     >>> cps.tolist()  # 100 is the reversal; 150 is mid-way back, so it goes
     [100]
     """
+    Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
+    return _gate_changepoints(changepoints, strength, Y, speed_norm(t, Y), window=window,
+                              min_size=min_size, grace=grace, stop_ratio=stop_ratio, min_turn=min_turn)
+
+
+def _gate_changepoints(changepoints, strength, Y, speed, *, window: int, min_size: int, grace: int,
+                       stop_ratio: float, min_turn: float):
+    """:func:`gate_changepoints` given ``Y`` as (n_steps, n_dims) and its :func:`speed_norm`.
+
+    The segmenter computes the speed once per stream, for the relative jerk
+    scale and for this gate.
+    """
     cps = np.asarray(changepoints, dtype=int)
     strength = np.asarray(strength, dtype=float)
     if cps.size == 0:
         return cps, strength
-    Y = np.asarray(Y, dtype=float).reshape(len(t), -1)
+    v_raw = np.asarray(speed, dtype=float)
+    Y = np.asarray(Y, dtype=float).reshape(v_raw.shape[0], -1)
     n = Y.shape[0]
-    v_raw = speed_norm(t, Y) if speed is None else np.asarray(speed, dtype=float)
-    s = max(1, window // 8)
-    v = _triangle(v_raw, 2 * s + 1)
-    at_rest = 0.05 * float(np.percentile(v, 95.0))
+    s = max(1, window // SMOOTH_DIVISOR)
+    v = _smooth(v_raw, s)
+    at_rest = AT_REST_FRACTION * float(np.percentile(v, TYPICAL_PERCENTILE))
     keep = np.ones(cps.size, dtype=bool)
     while True:
         idx = np.flatnonzero(keep)
@@ -170,6 +201,7 @@ def gate_changepoints(changepoints, strength, t, Y, *, window: int, min_size: in
                 # still slowing down at the edge: the stop belongs to a neighbour or an end
                 ratio[k] = np.inf
             else:
+                # side >= low > at_rest >= 0 here; the guard is for subnormal speeds only
                 ratio[k] = low / max(side, 1e-300)
             if ratio[k] <= stop_ratio:
                 moved[k] = _stop_position(v, v_raw, (bounds[k], bounds[k + 2]), int(ck), low=low,

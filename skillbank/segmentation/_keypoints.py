@@ -11,6 +11,11 @@ __all__ = [
     "changepoint_probability", "combine_probabilities", "keypoints_deterministic", "keypoints_sampling",
 ]
 
+#: A mode counts when its support is within this of ``min_support``: the
+#: support is a sum of logarithms, and a mode where exactly ``min_support``
+#: streams agree can come out a round-off below it.
+SUPPORT_TOLERANCE = 1e-9
+
 
 def changepoint_probability(changepoints, n_steps: int, sigma: float, *, floor: float = 0.05):
     """One stream's keypoint curve: a unit Gaussian at each changepoint over a floor.
@@ -77,7 +82,9 @@ def keypoints_deterministic(support, *, min_support: float, min_size: int):
     [40]
     """
     support = np.asarray(support, dtype=float)
-    peaks, props = find_peaks(np.concatenate(([-np.inf], support, [-np.inf])), height=min_support - 1e-9)
+    # -inf at both ends lets a mode at the first or last sample count
+    padded = np.concatenate(([-np.inf], support, [-np.inf]))
+    peaks, props = find_peaks(padded, height=min_support - SUPPORT_TOLERANCE)
     peaks = peaks - 1
     return suppress_close(peaks, props["peak_heights"], min_size=min_size, n_steps=support.shape[0])
 

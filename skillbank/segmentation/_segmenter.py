@@ -6,24 +6,69 @@ import re
 from collections.abc import Mapping
 
 import numpy as np
+from sklearn.base import BaseEstimator
 
 from ..core import Demonstration
 from ..core._validation import check_fraction, check_positive
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
-from ._gate import gate_changepoints
+from ._gate import _gate_changepoints
 from ._keypoints import (
     changepoint_probability,
     combine_probabilities,
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import jerk, jerk_profile, speed_norm
+from ._profile import _jerk_profile, jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
 
 _STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize", "stop_ratio", "min_turn")
 _SECONDS = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*s\s*$")
+
+#: ``window="auto"`` is this fraction of the demonstration's length. With
+#: ``min_size`` two windows, a demonstration then holds at most 12 segments,
+#: and each of a handful of primitives spans several windows.
+AUTO_WINDOW_FRACTION = 0.04
+
+#: ... and at least this many samples: wider than the jerk of a single kink
+#: (five samples, from three centred differences), so that the window of a
+#: short demonstration still averages the noise around an event, not only the event.
+MIN_AUTO_WINDOW = 8
+
+#: ``min_size="auto"`` is this many windows: the windowed mean smears each jerk
+#: event over one window, so two events less than two windows apart leave
+#: hardly a valley between them to tell them apart.
+MIN_SIZE_WINDOWS = 2
+
+#: The third derivative needs at least four samples (:func:`jerk` refuses fewer).
+MIN_SAMPLES = 4
+
+#: A stream needs room for this many minimum segments, i.e. for one cut.
+MIN_SEGMENTS = 2
+
+#: The jerk's centre of mass is taken within ``window // REFINE_DIVISOR`` of a
+#: changepoint: wide enough to hold the event that the profile placed a sample
+#: or two off, and narrow next to the default ``min_size`` (two windows)
+#: between changepoints, so a neighbour's jerk stays out.
+REFINE_DIVISOR = 4
+
+#: ... and at least this many samples, a kink's jerk either side of it.
+MIN_REFINE_HALF_WIDTH = 2
+
+#: Each changepoint's Gaussian has sigma = this fraction of the window: the
+#: window smears an event over itself, so a changepoint is placed to within
+#: about half a window, and two streams that saw the same event still agree.
+SIGMA_PER_WINDOW = 0.5
+
+#: By default, a deterministic keypoint needs this fraction of the streams
+#: (and at least one) to agree: with two streams either may place a keypoint
+#: the other has no event at, with four two must agree.
+DEFAULT_SUPPORT_FRACTION = 0.5
+
+#: A keypoint at a single stream's Gaussian peak scores 1 on the support
+#: scale; allow for the small loss where two streams' peaks are a little apart.
+SUPPORT_SLACK = 0.25
 
 
 def to_samples(value, t: np.ndarray, *, name: str) -> int:
@@ -49,7 +94,7 @@ def to_samples(value, t: np.ndarray, *, name: str) -> int:
     return check_positive(value, name=name, integer=True)
 
 
-class MultimodalSegmenter:
+class MultimodalSegmenter(BaseEstimator):
     """Probabilistic multimodal segmentation of a demonstration into primitives.
 
     Each stream is segmented on its own: jerk (third time derivative) → norm
@@ -59,6 +104,10 @@ class MultimodalSegmenter:
     turns (``stop_ratio``, ``min_turn``).
     Each changepoint becomes a Gaussian with σ = window / 2; the per-stream
     curves are multiplied; keypoints are taken from the product.
+
+    A scikit-learn estimator: the hyperparameters are stored unchanged and
+    checked by :meth:`fit`, so that ``get_params``, ``set_params`` and
+    :func:`sklearn.base.clone` work.
 
     Parameters
     ----------
@@ -116,6 +165,8 @@ class MultimodalSegmenter:
     >>> seg = MultimodalSegmenter(window=16).fit(Demonstration.from_array(Y, t))
     >>> seg.result_.n_segments
     2
+    >>> seg.get_params()["window"]
+    16
     """
 
     def __init__(
@@ -148,9 +199,9 @@ class MultimodalSegmenter:
                              f"got {sorted(unknown)}")
         raw.update(overrides)
         n = t.shape[0]
-        window = max(8, int(round(0.04 * n))) if raw["window"] == "auto" else to_samples(
-            raw["window"], t, name="window")
-        min_size = 2 * window if raw["min_size"] == "auto" else to_samples(
+        window = max(MIN_AUTO_WINDOW, int(round(AUTO_WINDOW_FRACTION * n))) if raw["window"] == "auto" \
+            else to_samples(raw["window"], t, name="window")
+        min_size = MIN_SIZE_WINDOWS * window if raw["min_size"] == "auto" else to_samples(
             raw["min_size"], t, name="min_size")
         grace = window if raw["grace"] == "auto" else (
             0 if raw["grace"] == 0 else to_samples(raw["grace"], t, name="grace"))
@@ -167,9 +218,16 @@ class MultimodalSegmenter:
     def fit(self, demo: Demonstration, streams=None) -> MultimodalSegmenter:
         """Segment ``demo`` using ``streams`` (default: all of its streams).
 
+        Parameters
+        ----------
+        demo : Demonstration
+        streams : str or list of str, optional
+            Names of the streams to segment on; default all of ``demo``'s.
+
         Returns
         -------
         self
+            With :attr:`result_` set.
         """
         if not isinstance(demo, Demonstration):
             raise ValueError(f"demo: expected a skillbank.Demonstration, got {type(demo).__name__}")
@@ -191,36 +249,38 @@ class MultimodalSegmenter:
         per_stream = {}
         for name in names:
             p = self._stream_settings(name, t)
-            if n < max(4, 2 * p["min_size"]):
+            needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
+            if n < needed:
                 raise ValueError(
-                    f"demo: expected at least {max(4, 2 * p['min_size'])} samples to segment stream "
+                    f"demo: expected at least {needed} samples to segment stream "
                     f"{name!r} with min_size={p['min_size']}, got {n}")
-            absj = np.linalg.norm(jerk(t, demo[name]), axis=1)
-            # one speed serves both the relative scale and the gate
+            Y = demo[name]
+            # the jerk norm serves the profile and the refinement, the speed
+            # the relative scale and the gate: each is computed once
+            absj = np.linalg.norm(jerk(t, Y), axis=1)
             needs_speed = p["scale"] == "relative" or p["stop_ratio"] is not None
-            speed = speed_norm(t, demo[name]) if needs_speed else None
-            j, prof = jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
-                                   normalize=p["normalize"], grace=p["grace"], jerk_norm=absj, speed=speed)
+            speed = speed_norm(t, Y) if needs_speed else None
+            j, prof = _jerk_profile(t, Y, absj, speed, window=p["window"], scale=p["scale"],
+                                    normalize=p["normalize"], grace=p["grace"])
             cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
                                                 grace=p["grace"], window=p["window"])
             # the profile places an event to a sample or two; the raw jerk's centre pins it
-            cps = refine_to_jerk_centre(cps, absj, half_width=max(2, p["window"] // 4))
+            cps = refine_to_jerk_centre(
+                cps, absj, half_width=max(MIN_REFINE_HALF_WIDTH, p["window"] // REFINE_DIVISOR))
             if p["stop_ratio"] is not None:
-                cps, strength = gate_changepoints(
-                    cps, strength, t, demo[name], window=p["window"], min_size=p["min_size"],
-                    grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"], speed=speed)
-            curve = changepoint_probability(cps, n, sigma=p["window"] / 2.0, floor=floor)
+                cps, strength = _gate_changepoints(
+                    cps, strength, Y, speed, window=p["window"], min_size=p["min_size"], grace=p["grace"],
+                    stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+            curve = changepoint_probability(cps, n, sigma=SIGMA_PER_WINDOW * p["window"], floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
                                               floor=floor)
         min_size = min(s.params["min_size"] for s in per_stream.values())
         window = min(s.params["window"] for s in per_stream.values())
         if self.mode == "deterministic":
-            need = max(1.0, len(names) / 2.0) if self.min_support is None else check_positive(
-                self.min_support, name="min_support")
-            # a keypoint at a single stream's Gaussian peak scores 1; allow for the
-            # small loss where two streams' peaks are a little apart
-            keypoints = keypoints_deterministic(support, min_support=need - 0.25, min_size=min_size)
+            need = max(1.0, DEFAULT_SUPPORT_FRACTION * len(names)) if self.min_support is None else \
+                check_positive(self.min_support, name="min_support")
+            keypoints = keypoints_deterministic(support, min_support=need - SUPPORT_SLACK, min_size=min_size)
         else:
             n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
             min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
@@ -230,10 +290,6 @@ class MultimodalSegmenter:
         self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
                                           {k: v.params for k, v in per_stream.items()})
         return self
-
-    def fit_segments(self, demo: Demonstration, streams=None) -> list[Demonstration]:
-        """Segment ``demo`` and return the segments."""
-        return self.fit(demo, streams).result_.segments
 
 
 def segment(demo: Demonstration, streams=None, **params) -> SegmentationResult:

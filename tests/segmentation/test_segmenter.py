@@ -4,19 +4,23 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from sklearn.base import clone
 
 import skillbank.io as sio
-from skillbank import Demonstration
+from skillbank import Demonstration, segmentation
 from skillbank.experiments import synthetic_multistream
 from skillbank.segmentation import (
     MultimodalSegmenter,
-    changepoint_probability,
-    combine_probabilities,
+    detect_changepoints,
+    gate_changepoints,
     jerk,
+    jerk_profile,
     segment,
-    to_samples,
-    windowed_mean,
 )
+from skillbank.segmentation._changepoints import refine_to_jerk_centre
+from skillbank.segmentation._keypoints import changepoint_probability, combine_probabilities
+from skillbank.segmentation._profile import windowed_mean
+from skillbank.segmentation._segmenter import to_samples
 
 # corners of the five R demos (normalized group): the deepest interior speed
 # minima, where the pen turns round at the top of the stem and where the bowl
@@ -179,6 +183,85 @@ def test_estimator_contract():
     assert seg.result_.n_segments == 3
     with pytest.raises(TypeError):
         MultimodalSegmenter(16)
+
+
+def test_hyperparameters_are_stored_unchanged_and_checked_by_fit():
+    # scikit-learn's contract: __init__ stores, fit validates
+    seg = MultimodalSegmenter(stream_params={"position": {"windw": 3}})
+    assert seg.stream_params == {"position": {"windw": 3}}
+    with pytest.raises(ValueError, match=r"stream_params\['position'\]: expected keys"):
+        seg.fit(Demonstration.from_array(_polyline([150]), np.linspace(0, 1, 600)))
+
+
+def test_get_params_round_trip():
+    params = {"window": "0.1s", "threshold": 0.3, "stop_ratio": None,
+              "stream_params": {"force": {"window": 30}}, "mode": "sampling", "random_state": 7}
+    seg = MultimodalSegmenter(**params)
+    got = seg.get_params()
+    assert {k: got[k] for k in params} == params
+    assert got["min_turn"] == 45.0 and got["floor"] == 0.05  # the defaults
+    assert MultimodalSegmenter(**got).get_params() == got
+
+
+def test_set_params_changes_the_result():
+    demo = Demonstration.from_array(_polyline([150, 320, 450]), np.linspace(0.0, 6.0, 600))
+    seg = MultimodalSegmenter(window=16, min_size=50)
+    assert seg.fit(demo).result_.keypoints.tolist() == [150, 320, 450]
+    assert seg.set_params(min_size=200) is seg and seg.min_size == 200
+    # 150 and 450 are closer than 200 samples to 320 (the strongest turn) and are dropped
+    assert seg.fit(demo).result_.keypoints.tolist() == [320]
+    with pytest.raises(ValueError, match="Invalid parameter"):
+        seg.set_params(windw=3)
+
+
+def test_clone_is_an_unfitted_copy_with_equal_params():
+    demo = synthetic_multistream()
+    seg = MultimodalSegmenter(window=16, stream_params={"force": {"threshold": 0.3}}).fit(demo)
+    copy = clone(seg)
+    assert copy is not seg and not hasattr(copy, "result_")
+    assert copy.get_params() == seg.get_params()
+    assert copy.stream_params is not seg.stream_params  # deep-copied, not shared
+    np.testing.assert_array_equal(copy.fit(demo).result_.keypoints, seg.result_.keypoints)
+
+
+def test_repr_shows_the_changed_params():
+    assert repr(MultimodalSegmenter()) == "MultimodalSegmenter()"
+    assert repr(MultimodalSegmenter(window=16, stop_ratio=None)) == \
+        "MultimodalSegmenter(stop_ratio=None, window=16)"
+
+
+def test_public_api():
+    assert sorted(segmentation.__all__) == sorted([
+        "MultimodalSegmenter", "segment", "SegmentationResult", "StreamSegmentation",
+        "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
+    ])
+    assert all(hasattr(segmentation, name) for name in segmentation.__all__)
+    for name in ("to_samples", "windowed_mean", "speed_norm", "smoothed_speed", "refine_to_jerk_centre"):
+        assert not hasattr(segmentation, name)
+    assert not hasattr(MultimodalSegmenter, "fit_segments")
+
+
+@pytest.mark.parametrize("params", [{}, {"scale": "absolute", "normalize": "max", "window": 12}])
+def test_public_building_blocks_match_the_segmenter(params):
+    # the segmenter computes each stream's jerk and speed once; the public
+    # functions recompute them from t and Y and must give the same numbers
+    demo = synthetic_multistream()
+    result = segment(demo, **params)
+    for name, stream in result.streams.items():
+        p = stream.params
+        raw, profile = jerk_profile(demo.t, demo[name], window=p["window"], scale=p["scale"],
+                                    normalize=p["normalize"], grace=p["grace"])
+        np.testing.assert_array_equal(raw, stream.jerk)
+        np.testing.assert_array_equal(profile, stream.profile)
+        cps, strength = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
+                                            grace=p["grace"], window=p["window"])
+        cps = refine_to_jerk_centre(cps, np.linalg.norm(jerk(demo.t, demo[name]), axis=1),
+                                    half_width=max(2, p["window"] // 4))
+        cps, strength = gate_changepoints(cps, strength, demo.t, demo[name], window=p["window"],
+                                          min_size=p["min_size"], grace=p["grace"],
+                                          stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+        np.testing.assert_array_equal(cps, stream.changepoints)
+        np.testing.assert_array_equal(strength, stream.strength)
 
 
 @settings(max_examples=25, deadline=None)
