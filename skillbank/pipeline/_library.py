@@ -149,8 +149,8 @@ class Library:
                                "streams": streams, "requested": params, "resolved": result.params,
                                "mode": result.mode, "skillbank_version": __version__}
 
-    def _assignment(self, demo, bounds, cache: dict):
-        """The current version's clusters for the new primitives (None when they cannot join)."""
+    def _assign(self, parts, cache: dict):
+        """Clusters of the current version for primitive samples ``parts`` (None when they cannot join)."""
         version = self.store.current_version()
         if version is None:
             return None
@@ -158,7 +158,6 @@ class Library:
             cache.clear()
             cache.update(self.store.version(version))
         p = cache["params"]
-        parts = [demo.slice(a, b) for a, b in bounds]
         try:
             F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
         except ValueError:  # another number of dimensions, or too short: stays unclustered
@@ -227,7 +226,8 @@ class Library:
         for demo in tqdm(demos, desc="adding", unit="demo", disable=not progress):
             bounds, provenance = self._bounds(demo, segment, segmentation)
             src = source if source is not None else demo.metadata.get("source")
-            members = self._assignment(demo, bounds, cache) if assign == "incremental" else None
+            parts = [demo.slice(a, b) for a, b in bounds]
+            members = self._assign(parts, cache) if assign == "incremental" else None
             did, _ = self.store.add_demonstration(demo, bounds, source=None if src is None else str(src),
                                                   label=label, provenance=provenance, members=members)
             ids.append(did)
@@ -255,7 +255,11 @@ class Library:
         of ``n_points`` samples, projected on ``n_components`` principal
         components; the PCA arrays are stored so that later primitives are
         featurised identically. Labels of the previous version carry over to
-        a new cluster when more than half of its members had that label.
+        a new cluster when more than half of its members had that label
+        (:func:`carry_labels`). The version is written in one transaction;
+        the fit itself runs outside it, so other processes keep adding
+        meanwhile; primitives added while the fit ran are then assigned to the
+        new version's nearest clusters, as later adds are.
 
         Parameters
         ----------
@@ -293,10 +297,17 @@ class Library:
         new_members = {p.id: int(c) for p, c in zip(prims, model.labels_, strict=True)}
         labels = {} if old is None else carry_labels(self.store.members(old), self.store.cluster_labels(old),
                                                      new_members)
-        return self.store.add_version(
+        version = self.store.add_version(
             params=params, centers=model.cluster_centers_, pca_mean=pca.mean_,
             pca_components=pca.components_, labels=labels,
             members=[(p.id, int(c), x) for p, c, x in zip(prims, model.labels_, X, strict=True)])
+        # Primitives other processes added while the fit ran join the new version as adds would.
+        late = [q for q in self.store.primitives(load=True) if q.id not in new_members]
+        found = self._assign([q.demo for q in late], {}) if late else None
+        if found is not None and found["version"] == version:
+            self.store.add_members(version, [(q.id, c, x) for q, c, x in
+                                             zip(late, found["clusters"], found["features"], strict=True)])
+        return version
 
     def clustering_params(self, version=None):
         """Parameters of a clustering version (default: the current one), or None before any."""

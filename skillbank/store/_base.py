@@ -183,6 +183,13 @@ class Store(ABC):
         """
 
     @abstractmethod
+    def add_members(self, version: int, members) -> None:
+        """Add ``(primitive id, cluster, features)`` to a version incrementally, in one transaction.
+
+        A primitive already a member of that version is left as it is.
+        """
+
+    @abstractmethod
     def set_label(self, name, *, cluster=None, primitive=None) -> None:
         """Label a cluster of the current version or one primitive; ``name=None`` removes the label."""
 

@@ -194,6 +194,14 @@ class SQLiteStore(Store):
                              [(version, int(k), str(v)) for k, v in (labels or {}).items()])
         return version
 
+    def add_members(self, version, members) -> None:
+        with self._errors(), transaction(self.conn) as conn:
+            # a primitive removed meanwhile by another process is skipped, not an error
+            conn.executemany(
+                "INSERT OR IGNORE INTO cluster_members (version, primitive_id, cluster, features, assigned) "
+                "SELECT ?, id, ?, ?, 'incremental' FROM primitives WHERE id = ?",
+                [(int(version), int(c), to_npy(x), int(p)) for p, c, x in members])
+
     def set_label(self, name, *, cluster=None, primitive=None) -> None:
         if (cluster is None) == (primitive is None):
             raise ValueError("label: give exactly one of cluster= or primitive=")

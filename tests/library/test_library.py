@@ -204,3 +204,31 @@ def test_reuse_is_selection_on_the_skill_primitives(lib, two_skills):
     assert mine.used == direct.used and mine.ranking == direct.ranking
     np.testing.assert_array_equal(mine.trajectory["position"], direct.trajectory["position"])
     assert lib.reuse(cluster, task, method="ja").used == mine.used  # by cluster id too
+
+
+def test_primitives_added_while_clustering_join_the_new_version(tmp_path, two_skills):
+    """Another process adds a demonstration between the fit and the write of a clustering version."""
+    from skillbank.store import SQLiteStore
+
+    path = tmp_path / "race.db"
+
+    class Racing(SQLiteStore):
+        def add_version(self, **kwargs):
+            with Library(path) as other:  # a second writer, as another process would be
+                other.add(late, segment=False, assign="none")
+            return super().add_version(**kwargs)
+
+    demos = two_skills()
+    late = demos.pop()
+    with Library(Racing(path)) as lib:
+        lib.add_many(demos, segment=False)
+        version = lib.cluster()
+        prims = lib.primitives()
+        assert len(prims) == len(demos) + 1 and all(p.cluster is not None for p in prims)
+        members = lib.store.members(version)
+        assert set(members) == {p.id for p in prims}
+        assigned = dict(lib.store.conn.execute(
+            "SELECT primitive_id, assigned FROM cluster_members WHERE version = ?", (version,)).fetchall())
+        assert assigned[prims[-1].id] == "incremental" and list(assigned.values()).count("fit") == len(demos)
+        # the late one, a bowed reach, joins the bowed reaches' cluster, not the straight ones'
+        assert prims[-1].cluster == prims[-2].cluster != prims[0].cluster
