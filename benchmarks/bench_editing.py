@@ -3,6 +3,7 @@
 Run from the repository root::
 
     .venv/bin/python benchmarks/bench_editing.py [--dense-sizes 1000 2000 4000] [--json PATH]
+        [--cli-sizes 1000 10000 100000] [--cli-metrics-sizes 1000 10000] [--cli-repeats 3] [--no-cli]
 
 Case: a smooth 3-D path of N samples (N = 10^3, 10^4, 10^5), edited to a
 moved start and goal and two moved via-points (phases 0.3 and 0.7). skillbank
@@ -19,7 +20,13 @@ cuts the Laplacian's small singular values and the baseline misses it).
 
 ``bench_ja(sizes)`` times the jerk-accuracy representation
 (``skillbank.representations.JerkAccuracy``) at 10^3 and 10^4 samples when
-it is available, and says it is skipped otherwise. No timing is asserted.
+it is available, and says it is skipped otherwise.
+
+Then the command line beside the library (``benchmarks/bench_cli.py``, also runnable alone):
+``skillbank edit FILE.csv --goal ... --obstacle sphere:... --json`` as a subprocess at the
+``--cli-sizes`` against ``lte`` in this process, ``skillbank --help`` start-up, which heavy
+packages each command imports, and ``--metrics`` time and peak memory at the
+``--cli-metrics-sizes``. No timing is asserted.
 """
 
 from __future__ import annotations
@@ -115,6 +122,12 @@ def main(argv=None):
     parser.add_argument("--sizes", type=int, nargs="+", default=list(LTE_SIZES))
     parser.add_argument("--dense-sizes", type=int, nargs="*", default=[1000, 2000])
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--cli-sizes", type=int, nargs="*", default=list(LTE_SIZES),
+                        help="sizes of the command-line run (bench_cli.py)")
+    parser.add_argument("--cli-metrics-sizes", type=int, nargs="*", default=[1000, 10000],
+                        help="sizes of the command-line run with --metrics (quadratic time)")
+    parser.add_argument("--cli-repeats", type=int, default=3, help="subprocess repeats (best of)")
+    parser.add_argument("--no-cli", action="store_true", help="skip the command-line part")
     args = parser.parse_args(argv)
     print(f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
           f"{platform.machine()}")
@@ -128,8 +141,13 @@ def main(argv=None):
                 else "n/a | n/a | n/a")
         print(f"| {r['n']:,} | {r['skillbank_s']:.4f} | {dense}{r['skillbank_error']:.1e} | {tail} |")
     ja = bench_ja()
+    cli = None
+    if not args.no_cli:
+        import bench_cli  # beside this file; sys.path is set above
+
+        cli = bench_cli.run(args.cli_sizes, args.cli_metrics_sizes, args.cli_repeats)
     if args.json:
-        args.json.write_text(json.dumps({"lte": rows, "ja": ja}, indent=2, default=float))
+        args.json.write_text(json.dumps({"lte": rows, "ja": ja, "cli": cli}, indent=2, default=float))
 
 
 if __name__ == "__main__":

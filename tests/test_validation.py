@@ -105,3 +105,38 @@ def test_property_time_is_accepted_iff_strictly_increasing(t):
     else:
         with pytest.raises(ValueError, match=r"t: expected strictly increasing time"):
             check_time(t)
+
+
+def test_params_protocol_matches_scikit_learn():
+    """core._params.Params gives what sklearn.base.BaseEstimator gives, so sklearn's tools work."""
+    from sklearn.base import BaseEstimator, clone
+
+    from skillbank.core._params import Params
+    from skillbank.representations import ProMP
+
+    class Inner(Params):
+        def __init__(self, *, gamma=1.0):
+            self.gamma = gamma
+
+    class Mine(Params):
+        def __init__(self, *, alpha=1.0, inner=None, label="x"):
+            self.alpha, self.inner, self.label = alpha, inner, label
+
+    class Theirs(BaseEstimator):
+        def __init__(self, *, alpha=1.0, inner=None, label="x"):
+            self.alpha, self.inner, self.label = alpha, inner, label
+
+    for kwargs in ({}, {"alpha": 2.0}, {"inner": Inner(gamma=3.0), "label": "y"}):
+        mine, theirs = Mine(**kwargs), Theirs(**kwargs)
+        assert mine.get_params(deep=True).keys() == theirs.get_params(deep=True).keys()
+        assert mine.get_params(deep=False) == theirs.get_params(deep=False)
+        assert repr(mine).replace("Mine", "Theirs") == repr(theirs)
+        copy = clone(mine)
+        assert type(copy) is Mine and copy is not mine
+        assert repr(copy) == repr(mine)
+    nested = Mine(inner=Inner()).set_params(inner__gamma=5.0, alpha=0.5)
+    assert nested.inner.gamma == 5.0 and nested.alpha == 0.5
+    with pytest.raises(ValueError, match=r"set_params: Mine has no parameter 'beta'"):
+        Mine().set_params(beta=1)
+    model = clone(ProMP(n_basis=7, random_state=3))
+    assert model.get_params() == ProMP(n_basis=7, random_state=3).get_params()

@@ -267,7 +267,8 @@ class Box(Obstacle):
 
     def _segment_hits(self, A, B) -> np.ndarray:
         V = B - A
-        with np.errstate(divide="ignore", invalid="ignore"):
+        # a tiny step overflows to +-inf, the right limit of the slab parameter
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             t1, t2 = (self.lower - A) / V, (self.upper - A) / V
         still = V == 0
         inside_slab = (A > self.lower) & (A < self.upper)

@@ -23,10 +23,9 @@ import warnings
 from typing import ClassVar
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.exceptions import NotFittedError
 
 from ..core import Constraints, Demonstration, resample
+from ..core._params import NotFittedError, Params
 from ..core._validation import check_array, check_positive
 from ..editing import lte
 
@@ -50,7 +49,7 @@ def as_constraints(constraints) -> Constraints:
     return constraints
 
 
-class Representation(BaseEstimator):
+class Representation(Params):
     """Base class: demonstration handling, time base, constraints and output.
 
     Subclasses implement ``_fit(Ys)`` on a list of arrays resampled to a

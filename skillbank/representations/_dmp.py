@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.signal import lfilter, lfiltic
 
 from ..core._validation import check_positive
 from ._base import Representation
@@ -144,6 +143,8 @@ class DMP(Representation):
 
     def _integrate(self, x0, g, xd0, n_steps):
         """Exact discretisation for piecewise-linear input, run with lfilter."""
+        from scipy.signal import lfilter, lfiltic  # 0.4 s to import (scipy.stats); only when a DMP runs
+
         K, D, a_s = self._gains()
         tau = self.tau_
         dt = tau / (n_steps - 1)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
-from sklearn.utils import check_random_state
 
 from ..core._validation import check_positive
 from ._base import Representation, as_constraints
@@ -262,6 +261,8 @@ class ProMP(Representation):
         """
         n = check_positive(n, name="n", integer=True)
         mean, cov, Phi = self._posterior(constraints, n_steps)
+        from sklearn.utils import check_random_state  # slow to import; only when sampling
+
         rng = check_random_state(self.random_state)
         vals, vecs = np.linalg.eigh(cov)
         root = vecs * np.sqrt(np.maximum(vals, 0.0))

@@ -6,9 +6,9 @@ import re
 from collections.abc import Mapping
 
 import numpy as np
-from sklearn.base import BaseEstimator
 
 from ..core import Demonstration
+from ..core._params import Params
 from ..core._validation import check_fraction, check_positive
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._gate import _gate_changepoints
@@ -94,7 +94,7 @@ def to_samples(value, t: np.ndarray, *, name: str) -> int:
     return check_positive(value, name=name, integer=True)
 
 
-class MultimodalSegmenter(BaseEstimator):
+class MultimodalSegmenter(Params):
     """Probabilistic multimodal segmentation of a demonstration into primitives.
 
     Each stream is segmented on its own: jerk (third time derivative) → norm
@@ -105,9 +105,10 @@ class MultimodalSegmenter(BaseEstimator):
     Each changepoint becomes a Gaussian with σ = window / 2; the per-stream
     curves are multiplied; keypoints are taken from the product.
 
-    A scikit-learn estimator: the hyperparameters are stored unchanged and
-    checked by :meth:`fit`, so that ``get_params``, ``set_params`` and
-    :func:`sklearn.base.clone` work.
+    It follows scikit-learn's estimator contract: the hyperparameters are
+    stored unchanged and checked by :meth:`fit`, so that ``get_params``,
+    ``set_params`` and :func:`sklearn.base.clone` work (through
+    :class:`skillbank.core._params.Params`, without importing scikit-learn).
 
     Parameters
     ----------

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-from sklearn.exceptions import NotFittedError
 
 from skillbank import Demonstration
 from skillbank.core import Box, Constraints, Sphere
+from skillbank.core._params import NotFittedError
 from skillbank.editing import lte
 from skillbank.metrics import constraint_report, frechet_distance
 from skillbank.representations import LaplacianEditor

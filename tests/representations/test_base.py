@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sklearn.exceptions import NotFittedError
 
 from skillbank import Demonstration
 from skillbank.core import Constraints, Sphere, resample
+from skillbank.core._params import NotFittedError
 from skillbank.editing import lte
 from skillbank.representations import DMP, ElasticMap, JerkAccuracy, ProMP
 from skillbank.representations._base import as_constraints, edit_summary

@@ -210,7 +210,7 @@ def test_set_params_changes_the_result():
     assert seg.set_params(min_size=200) is seg and seg.min_size == 200
     # 150 and 450 are closer than 200 samples to 320 (the strongest turn) and are dropped
     assert seg.fit(demo).result_.keypoints.tolist() == [320]
-    with pytest.raises(ValueError, match="Invalid parameter"):
+    with pytest.raises(ValueError, match=r"set_params: MultimodalSegmenter has no parameter 'windw'"):
         seg.set_params(windw=3)
 
 
