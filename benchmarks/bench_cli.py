@@ -112,7 +112,7 @@ def bench_startup(repeats: int) -> list[dict]:
         ("skillbank library --help", sb + ["library", "--help"]),
         ("import skillbank.editing (the library call)", py + ["-c", "import skillbank.editing"]),
         ("import what edit imports", py + ["-c", f"import {EDIT_IMPORTS}"]),
-        ("import sklearn.base (via skillbank.representations)", py + ["-c", "import sklearn.base"]),
+        ("import sklearn.base (for reference; edit does not import it)", py + ["-c", "import sklearn.base"]),
     ]
     rows = []
     for name, cmd in cases:
