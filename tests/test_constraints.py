@@ -204,3 +204,12 @@ def test_repr_roundtrip_information():
     c = Constraints(start=[0, 0], via=[(0.5, [1, 1])], obstacles=[Sphere([0, 1], 0.5), Box([0, 0], [1, 1])])
     text = repr(c)
     assert "start=[0.0, 0.0]" in text and "ViaPoint([1.0, 1.0], phase=0.5)" in text and "Box(" in text
+
+
+def test_dimension_mismatch_among_many_via_points_is_summarised():
+    """Issue 12, item 6: the message lists the first few constraints that differ, then a count."""
+    via = [(k / 1000, [0.0, 0.0, 0.0]) for k in range(1000)]
+    with pytest.raises(ValueError) as info:
+        Constraints(goal=[1.0, 0.0], via=via)
+    assert str(info.value) == ("constraints: expected the same number of dimensions everywhere, got goal has "
+                               "2, via[0] has 3, via[1] has 3, via[2] has 3 and 997 more")

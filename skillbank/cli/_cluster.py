@@ -35,7 +35,8 @@ def add_parser(sub):
                         "--features angular")
     p.add_argument("--seed", type=int, default=None, help="random seed")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--plot", type=Path, default=None, help="write a figure of the clusters here")
+    p.add_argument("--plot", type=Path, default=None,
+                   help="write a figure of the clusters to this file (.png, .pdf, .svg; no extension: .png)")
     p.set_defaults(func=run)
     return p
 
@@ -58,6 +59,10 @@ def run(args) -> int:
     path = Path(args.input)
     if not path.exists():
         raise ValueError(f"input: no such file or folder: {str(path)!r}")
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     names, demos = None, None
     if path.is_dir():
         names, demos = load_folder(path)
@@ -76,10 +81,11 @@ def run(args) -> int:
         X = read_feature_matrix(path)
     model = ElasticClustering(stretch=args.stretch, random_state=args.seed).fit(X)
     labels = model.labels_.tolist()
+    plot = None
     if args.plot is not None:
-        from ..plotting import plot_cluster_comparison  # matplotlib only when a figure is asked for
+        from ..plotting import plot_cluster_comparison  # matplotlib, as above
 
-        plot_cluster_comparison(
+        plot = plot_cluster_comparison(
             X, {"elastic": model.labels_}, args.plot,
             trajectories=None if demos is None else [d["position"] for d in demos],
             title=f"{path.name}: {model.n_clusters_} cluster(s)",
@@ -88,6 +94,8 @@ def run(args) -> int:
         doc = {"labels": labels, "n_clusters": int(model.n_clusters_), "energy": float(model.energy_)}
         if names is not None:
             doc = {"files": names, **doc}
+        if plot is not None:
+            doc["plot"] = str(plot)
         print(json.dumps(doc))
         return 0
     print(f"{path}: {X.shape[0]} sample(s), {X.shape[1]} feature(s) -> {model.n_clusters_} cluster(s), "
@@ -96,7 +104,8 @@ def run(args) -> int:
         members = np.flatnonzero(model.labels_ == k)
         shown = [names[i] for i in members[:8]] if names is not None else members[:12].tolist()
         more = " ..." if members.size > len(shown) else ""
-        print(f"  cluster {k + 1}: {members.size} member(s): {', '.join(map(str, shown))}{more}")
-    if args.plot is not None:
-        print(f"  wrote {args.plot}")
+        # ids as in --json, the figure and 'skillbank library': 0..k-1
+        print(f"  cluster {k}: {members.size} member(s): {', '.join(map(str, shown))}{more}")
+    if plot is not None:
+        print(f"  wrote {plot}")
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 __all__ = ["add_parser", "run"]
@@ -14,7 +15,7 @@ def add_parser(sub):
     p.add_argument("--out", type=Path, default=Path("demo_output"), help="folder for figures and summary")
     p.add_argument("--data", type=Path, default=None,
                    help="shared data folder: use RAIL and the three-button demo instead of LASA")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
     p.set_defaults(func=run)
     return p
 
@@ -23,7 +24,9 @@ def run(args) -> int:
     """Run the main job; returns the exit status."""
     from ..experiments import run_library_demo  # the whole stack, imported when the job runs
 
-    summary = run_library_demo(args.out, data=args.data)
+    # A progress bar for a person watching, not for a program reading the JSON or a log file.
+    progress = not args.json and sys.stderr.isatty()
+    summary = run_library_demo(args.out, data=args.data, progress=progress)
     if args.json:
         print(json.dumps(summary))
     else:

@@ -34,7 +34,8 @@ def add_parser(sub):
                         "Fréchet and DTW take time proportional to the product of the lengths")
     p.add_argument("--out", type=Path, default=None, help="write the result here (.csv or .npz)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--plot", type=Path, default=None, help="write a figure of the edit here")
+    p.add_argument("--plot", type=Path, default=None,
+                   help="write a figure of the edit to this file (.png, .pdf, .svg; no extension: .png)")
     p.set_defaults(func=run)
     return p
 
@@ -52,6 +53,10 @@ def run(args) -> int:
     out_suffix = None if args.out is None else args.out.suffix.lower()
     if out_suffix not in (None, ".csv", ".npz"):
         raise ValueError(f"out: expected a .csv or .npz file name, got {str(args.out)!r}")
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     demos = load_positions(args.input)
     constraints.check_dims(demos[0]["position"].shape[1])
     out, collision, notes = fit_reproduce(args.method, demos, constraints)
@@ -62,15 +67,18 @@ def run(args) -> int:
         meta = {"method": args.method, "inputs": [str(p) for p in args.input],
                 "constraint_error": error, "collision": collision}
         (write_csv if out_suffix == ".csv" else write_npz)(Demonstration(t, {"position": Y}, meta), args.out)
+    plot = None
     if args.plot is not None:
-        from ..plotting import plot_edit  # matplotlib only when a figure is asked for
+        from ..plotting import plot_edit  # matplotlib, as above
 
-        plot_edit(Y, args.plot, demo=demos[0], demos=demos[1:], constraints=constraints,
-                  title=f"{args.method}: {Path(args.input[0]).name}")
+        plot = plot_edit(Y, args.plot, demo=demos[0], demos=demos[1:], constraints=constraints,
+                         title=f"{args.method}: {Path(args.input[0]).name}")
     if args.json:
         doc = {"trajectory": Y.tolist(), "constraint_error": float(error), "collision": bool(collision)}
         if metrics is not None:
             doc["metrics"] = metrics
+        if plot is not None:
+            doc["plot"] = str(plot)
         print(json.dumps(doc, allow_nan=False))
         return 0
     print(f"{args.method}: {len(demos)} demonstration(s) -> {Y.shape[0]} samples, {Y.shape[1]} dimensions")
@@ -79,7 +87,7 @@ def run(args) -> int:
         print("  " + ", ".join(f"{k} {v:.4g}" for k, v in metrics.items()))
     for note in notes:
         print(f"  warning: {' '.join(note.split())}")
-    for path in (args.out, args.plot):
+    for path in (args.out, plot):
         if path is not None:
             print(f"  wrote {path}")
     return 0

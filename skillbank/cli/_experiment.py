@@ -30,7 +30,9 @@ def add_parser(sub):
                       help="comma-separated classes among reaching, pushing, pressing, writing")
     rail.add_argument("--seed", type=int, default=0, help="random seed (first elastic node, PCA)")
     rail.add_argument("--json", action="store_true", help="print the result as JSON")
-    rail.add_argument("--plot", type=Path, default=None, help="write the cluster comparison figure here")
+    rail.add_argument("--plot", type=Path, default=None,
+                      help="write the cluster comparison figure to this file (.png, .pdf, .svg; no "
+                           "extension: .png)")
     rail.set_defaults(func=run)
     return p
 
@@ -53,7 +55,7 @@ def _table(summary: dict) -> list[str]:
         lines += ["", f"{method}: {summary[method]['method']}",
                   "  cluster " + "".join(f"{c:>{width}}" for c in classes)]
         for i, row in enumerate(summary[method]["composition"]):
-            lines.append(f"  {i + 1:>7} " + "".join(f"{n:>{width}}" for n in row))
+            lines.append(f"  {i:>7} " + "".join(f"{n:>{width}}" for n in row))  # ids 0..k-1, as in JSON
     timing = summary["timing"]
     lines += ["", f"time: {timing['total_s']:.3f} s (loading {timing['load_s']:.3f} s)"]
     return lines
@@ -63,14 +65,17 @@ def run(args) -> int:
     """Run the experiment named by ``args.experiment``; returns the exit status."""
     from ..experiments import plot_rail_experiment, rail_experiment  # the whole stack, when it runs
 
+    if args.plot is not None:
+        from ..plotting import figure_path  # the stack is imported when the job runs, as above
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     result = rail_experiment(args.data, mode=args.mode, classes=args.classes, random_state=args.seed)
     summary = result.summary()
-    if args.plot is not None:
-        plot_rail_experiment(result, args.plot)
+    plot = None if args.plot is None else plot_rail_experiment(result, args.plot)
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(summary if plot is None else {**summary, "plot": str(plot)}))
     else:
         print("\n".join(_table(summary)))
-        if args.plot is not None:
-            print(f"wrote {args.plot}")
+        if plot is not None:
+            print(f"wrote {plot}")
     return 0

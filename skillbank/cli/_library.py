@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
+
+import numpy as np
 
 from ._options import (
     add_constraint_options,
@@ -14,6 +17,9 @@ from ._options import (
 )
 
 __all__ = ["add_parser"]
+
+_DB = "the library file (see 'library init')"
+_DB_READ = "the library file; opened read-only, so a library in a folder you cannot write works"
 
 
 def add_parser(sub):
@@ -30,11 +36,14 @@ def add_parser(sub):
     cmds = p.add_subparsers(dest="library_command", required=True)
 
     c = cmds.add_parser("init", help="create an empty library file")
-    c.add_argument("db", type=Path)
+    c.add_argument("db", type=Path, help="the library file to create (an existing library is left as it is)")
+    c.add_argument("--json", action="store_true", help="print the library, whether it was created, and its "
+                                                       "schema version as JSON")
     c.set_defaults(func=_init)
 
-    c = cmds.add_parser("add", help="segment demonstrations and store their primitives")
-    c.add_argument("db", type=Path)
+    c = cmds.add_parser("add", help="segment demonstrations and store their primitives (all files or none, "
+                                    "unless --keep-going)")
+    c.add_argument("db", type=Path, help=_DB)
     c.add_argument("files", nargs="+", type=Path, help="demonstration files (.h5, .mat, .csv, .npz)")
     add_segmentation_options(c)
     c.add_argument("--whole", action="store_true", help="store each demonstration as one primitive")
@@ -42,33 +51,41 @@ def add_parser(sub):
     c.add_argument("--assign", choices=["incremental", "none", "recluster"], default="incremental",
                    help="put new primitives in the nearest existing cluster (default), leave them "
                         "unclustered, or recluster everything afterwards")
-    c.add_argument("--json", action="store_true", help="print the new ids as JSON")
+    c.add_argument("--keep-going", action="store_true",
+                   help="add every file that reads and segments, list each bad one with its reason, and "
+                        "exit with status 2 if any failed (default: a bad file adds nothing)")
+    c.add_argument("--json", action="store_true",
+                   help="print the new ids, the failed files and the unclustered demonstrations as JSON")
     c.set_defaults(func=_add)
 
     c = cmds.add_parser("cluster", help="(re)cluster every primitive; records a new version")
-    c.add_argument("db", type=Path)
+    c.add_argument("db", type=Path, help=_DB)
     c.add_argument("--stretch", type=float, default=None, help="stretching constant (default 1.2)")
     c.add_argument("--features", choices=["default", "position"], default="default",
                    help="direction over time in the heading frame (default) or resampled positions")
     c.add_argument("--seed", type=int, default=0, help="random seed")
+    c.add_argument("--plot", type=Path, default=None,
+                   help="write a figure of the clusters (features and each cluster's primitives) to this "
+                        "file (.png, .pdf, .svg; no extension: .png)")
     c.add_argument("--json", action="store_true", help="print the new version as JSON")
     c.set_defaults(func=_cluster)
 
     c = cmds.add_parser("label", help="label a cluster (current version) or a primitive")
-    c.add_argument("db", type=Path)
+    c.add_argument("db", type=Path, help=_DB)
     which = c.add_mutually_exclusive_group(required=True)
     which.add_argument("--cluster", type=int, default=None, help="cluster id (see 'library list')")
     which.add_argument("--primitive", type=int, default=None, help="primitive id")
-    c.add_argument("name", help="the label")
+    c.add_argument("name", help="the label, e.g. 'press' (then 'library reuse --skill press')")
+    c.add_argument("--json", action="store_true", help="print what was labelled as JSON")
     c.set_defaults(func=_label)
 
-    c = cmds.add_parser("list", help="skills with counts and labels, then primitives")
-    c.add_argument("db", type=Path)
+    c = cmds.add_parser("list", help="skills with counts and labels, unassigned primitives, then primitives")
+    c.add_argument("db", type=Path, help=_DB_READ)
     c.add_argument("--json", action="store_true", help="print the library summary as JSON")
     c.set_defaults(func=_list)
 
     c = cmds.add_parser("reuse", help="reproduce a skill under new constraints")
-    c.add_argument("db", type=Path)
+    c.add_argument("db", type=Path, help=_DB_READ)
     c.add_argument("--skill", required=True, help="a label, or a cluster id")
     add_constraint_options(c)
     c.add_argument("--method", default="promp",
@@ -86,19 +103,24 @@ def add_parser(sub):
     c.set_defaults(func=_reuse)
 
     c = cmds.add_parser("export", help="write the library to a folder of NPZ files and a manifest")
-    c.add_argument("db", type=Path)
-    c.add_argument("folder", type=Path)
+    c.add_argument("db", type=Path, help=_DB_READ)
+    c.add_argument("folder", type=Path, help="a new or empty folder to write to")
+    c.add_argument("--json", action="store_true", help="print the folder, the manifest and the number of "
+                                                       "demonstrations as JSON")
     c.set_defaults(func=_export)
 
-    c = cmds.add_parser("import", help="add the contents of an exported folder")
-    c.add_argument("db", type=Path)
-    c.add_argument("folder", type=Path)
-    c.add_argument("--json", action="store_true", help="print the id maps as JSON")
+    c = cmds.add_parser("import", help="copy an exported folder into an empty library, or merge it into "
+                                       "a non-empty one (skipping demonstrations already there)")
+    c.add_argument("db", type=Path, help="the library (created when missing)")
+    c.add_argument("folder", type=Path, help="a folder written by 'library export'")
+    c.add_argument("--json", action="store_true", help="print the counts and id maps as JSON")
     c.set_defaults(func=_import)
 
     c = cmds.add_parser("remove", help="delete a demonstration with its primitives")
-    c.add_argument("db", type=Path)
-    c.add_argument("demonstration", type=int)
+    c.add_argument("db", type=Path, help=_DB)
+    c.add_argument("demonstration", type=int, help="id of the demonstration (see 'library list')")
+    c.add_argument("--json", action="store_true",
+                   help="print the removed demonstration and its primitives as JSON")
     c.set_defaults(func=_remove)
     return p
 
@@ -110,66 +132,103 @@ def _library(location, **kwargs):
     return Library(location, **kwargs)
 
 
-def _open(args, *, create=False):
+def _open(args, *, create=False, readonly=False):
+    if readonly:
+        return _library(args.db, readonly=True)
     return _library(args.db, create=create)
 
 
+def _progress(args) -> bool:
+    """Progress bars for a person watching: on a terminal, and not under --json."""
+    return not getattr(args, "json", False) and sys.stderr.isatty()
+
+
 def _init(args) -> int:
-    if args.db.exists():
-        _library(args.db, create=False).close()  # validates; an existing library is left as it is
+    created = not args.db.exists()
+    # an existing library is validated (and migrated) and otherwise left as it is
+    with _library(args.db, create=created) as lib:
+        schema = lib.schema_version
+    if args.json:
+        print(json.dumps({"library": str(args.db), "created": created, "schema_version": schema}))
+    elif created:
+        print(f"created library {args.db}")
+    else:
         print(f"{args.db}: library already exists")
-        return 0
-    _library(args.db).close()
-    print(f"created library {args.db}")
     return 0
 
 
 def _add(args) -> int:
-    from .. import io  # h5py and scipy.io readers, only when files are read
-
-    demos = []
-    for path in args.files:
-        loaded = [io.load(path, index=args.demo, group=args.group)] if args.demo is not None else \
-            io.load_all(path, group=args.group)
-        for demo in loaded:
-            demo.metadata.setdefault("source", str(path))
-        demos.extend(loaded)
     segmentation = {"streams": args.stream, **segmentation_params(args)}
     with _open(args) as lib:
-        ids = lib.add_many(demos, segment=not args.whole, segmentation=segmentation, label=args.label,
-                           assign=args.assign, progress=True)
-        prims = [lib.primitives(demonstration=i, load=False) for i in ids]
+        report = lib.add_files(args.files, index=args.demo, group=args.group, segment=not args.whole,
+                               segmentation=segmentation, label=args.label, assign=args.assign,
+                               keep_going=args.keep_going, progress=_progress(args))
+    command = getattr(args, "command_name", "skillbank library add")
+    for path, reason in report["failed"].items():
+        print(f"{command}: skipped {path}: {reason}", file=sys.stderr)
     if args.json:
-        print(json.dumps({"demonstrations": ids, "primitives": [[p.id for p in ps] for ps in prims]}))
-        return 0
-    n = sum(len(ps) for ps in prims)
-    print(f"{args.db}: added {len(ids)} demonstration(s) with {n} primitive(s)")
+        print(json.dumps(report))
+    else:
+        n = sum(len(p) for p in report["primitives"])
+        print(f"{args.db}: added {len(report['demonstrations'])} demonstration(s) with {n} primitive(s)")
+        n_prims = dict(zip(report["demonstrations"], map(len, report["primitives"]), strict=True))
+        for did, why in report["unclustered"].items():
+            print(f"  demonstration {did}: {n_prims[did]} primitive(s) left unclustered: {why}")
+        if report["version"] is not None:
+            print(f"  reclustered: clustering version {report['version']}")
+    if report["failed"]:
+        n, bad = len(args.files), len(report["failed"])
+        print(f"{command}: error: {bad} of {n} file(s) failed and were skipped; the other {n - bad} were "
+              "added", file=sys.stderr)
+        return 2
     return 0
 
 
 def _cluster(args) -> int:
+    plot = None
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     with _open(args) as lib:
-        version = lib.cluster(stretch=args.stretch, features=args.features, random_state=args.seed)
+        version = lib.cluster(stretch=args.stretch, features=args.features, random_state=args.seed,
+                              progress=_progress(args))
         skills = lib.summary()["skills"]
+        if args.plot is not None:
+            from ..plotting import plot_cluster_comparison  # matplotlib, as above
+
+            prims = [p for p in lib.primitives(load=True) if p.cluster is not None]
+            plot = plot_cluster_comparison(
+                np.array([p.features for p in prims]), {f"version {version}": [p.cluster for p in prims]},
+                args.plot, trajectories=[p.demo["position"] for p in prims],
+                title=f"{args.db.name}: clustering version {version}, {len(skills)} skill(s)")
     if args.json:
-        print(json.dumps({"version": version, "skills": skills}))
+        doc = {"version": version, "skills": skills}
+        print(json.dumps(doc if plot is None else {**doc, "plot": str(plot)}))
         return 0
     print(f"{args.db}: clustering version {version}: {len(skills)} skill(s)")
     for s in skills:
         print(f"  cluster {s['cluster']}: {s['count']} primitive(s), label {s['label'] or '-'}")
+    if plot is not None:
+        print(f"  wrote {plot}")
     return 0
 
 
 def _label(args) -> int:
     with _open(args) as lib:
         lib.label(args.name, cluster=args.cluster, primitive=args.primitive)
+        version = lib.store.current_version()
+    if args.json:
+        print(json.dumps({"label": args.name.strip(), "cluster": args.cluster, "primitive": args.primitive,
+                          "version": version}))
+        return 0
     what = f"cluster {args.cluster}" if args.cluster is not None else f"primitive {args.primitive}"
     print(f"{args.db}: labelled {what} {args.name!r}")
     return 0
 
 
 def _list(args) -> int:
-    with _open(args) as lib:
+    with _open(args, readonly=True) as lib:
         doc = lib.summary()
     if args.json:
         print(json.dumps(doc))
@@ -178,6 +237,11 @@ def _list(args) -> int:
     print("skills:" if doc["skills"] else "skills: none (run 'skillbank library cluster')")
     for s in doc["skills"]:
         print(f"  cluster {s['cluster']}: {s['count']} primitive(s), label {s['label'] or '-'}")
+    unassigned = doc["unassigned"]
+    if doc["version"] is not None and unassigned["count"]:
+        shown = ", ".join(map(str, unassigned["ids"][:20])) + (", ..." if unassigned["count"] > 20 else "")
+        print(f"unassigned: {unassigned['count']} primitive(s) in no cluster of version {doc['version']}: "
+              f"{shown} (run 'skillbank library cluster')")
     print("primitives:")
     for p in doc["primitives"]:
         cluster = "-" if p["cluster"] is None else p["cluster"]
@@ -201,10 +265,10 @@ def _reuse(args) -> int:
 
     constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle)
     options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
-    with _open(args) as lib:
+    with _open(args, readonly=True) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           random_state=args.seed, **options)
+                           random_state=args.seed, progress=_progress(args), **options)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz
@@ -229,26 +293,44 @@ def _reuse(args) -> int:
 
 
 def _export(args) -> int:
-    with _open(args) as lib:
-        manifest = lib.export(args.folder)
-    print(f"{args.db}: exported to {args.folder} ({manifest.name})")
+    with _open(args, readonly=True) as lib:
+        manifest = lib.export(args.folder, progress=_progress(args))
+        n = len(lib.demonstration_ids())
+    if args.json:
+        print(json.dumps({"folder": str(args.folder), "manifest": str(manifest), "demonstrations": n}))
+        return 0
+    print(f"{args.db}: exported {n} demonstration(s) to {args.folder} ({manifest.name})")
     return 0
 
 
 def _import(args) -> int:
     with _open(args, create=True) as lib:
-        maps = lib.import_folder(args.folder)
+        res = lib.import_folder(args.folder)
+    kinds = ("demonstrations", "primitives", "versions")
+    added = {k: len(res[k]) for k in kinds}
     if args.json:
-        print(json.dumps({k: {str(a): b for a, b in v.items()} for k, v in maps.items()}))
+        ids = {k: {str(a): b for a, b in res[k].items()} for k in kinds}
+        print(json.dumps({"mode": res["mode"], "added": added, "skipped": len(res["skipped"]),
+                          "assigned": len(res["assigned"]), **ids,
+                          "duplicates": {str(a): b for a, b in res["skipped"].items()}}))
         return 0
-    print(f"{args.db}: imported {len(maps['demonstrations'])} demonstration(s), "
-          f"{len(maps['primitives'])} primitive(s), {len(maps['versions'])} clustering version(s)")
+    line = (f"{args.db}: imported {added['demonstrations']} demonstration(s), {added['primitives']} "
+            f"primitive(s), {added['versions']} clustering version(s)")
+    if res["mode"] == "copy":
+        print(f"{line} (an exact copy)")
+        return 0
+    print(f"{line} (merged); skipped {len(res['skipped'])} demonstration(s) already in the library; "
+          f"assigned {len(res['assigned'])} primitive(s) to the current clusters")
     return 0
 
 
 def _remove(args) -> int:
     with _open(args) as lib:
+        prims = [p.id for p in lib.primitives(demonstration=args.demonstration, load=False)]
         lib.remove(args.demonstration)
-    print(f"{args.db}: removed demonstration {args.demonstration}")
+    if args.json:
+        print(json.dumps({"removed": args.demonstration, "primitives": prims}))
+        return 0
+    print(f"{args.db}: removed demonstration {args.demonstration} with {len(prims)} primitive(s)")
     return 0
 

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
+from ..core import __version__
 from . import _cluster, _demo, _edit, _experiment, _library, _segment
 from ._options import join_negative_values
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "leaf_parsers"]
 
 _COMMANDS = (_segment, _demo, _cluster, _experiment, _library, _edit)
 
@@ -20,22 +22,68 @@ class _OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
+def leaf_parsers(parser) -> dict:
+    """Every command that runs something, by its full name (``"skillbank library add"``).
+
+    Examples
+    --------
+    >>> sorted(leaf_parsers(build_parser()))[:2]
+    ['skillbank cluster', 'skillbank demo']
+    """
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return {parser.prog: parser}
+    return {name: leaf for sub in subs for child in dict.fromkeys(sub.choices.values())
+            for name, leaf in leaf_parsers(child).items()}
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser for ``skillbank``."""
     parser = _OneLineParser(prog="skillbank", description="A library of motion primitives.")
+    parser.add_argument("--version", action="version", version=f"skillbank {__version__}",
+                        help="print 'skillbank <version>' and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     for command in _COMMANDS:
         command.add_parser(sub)
+    # Errors name the command that ran, sub-command included ("skillbank library add: error: ...").
+    for name, leaf in leaf_parsers(parser).items():
+        leaf.set_defaults(command_name=name)
     return parser
 
 
-def main(argv=None) -> int:
-    """Entry point; returns the exit status (2 on bad input)."""
-    parser = build_parser()
-    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
+def _quiet_stdout() -> None:
+    """Point stdout at the null device once its reader has gone (``skillbank ... | head``).
+
+    Python flushes stdout again at exit, which would raise a second BrokenPipeError
+    there; this is the recipe of the Python documentation (``signal``, "Note on SIGPIPE").
+    """
     try:
-        return int(args.func(args) or 0)
-    except (ValueError, ImportError, OSError) as exc:
-        message = " ".join(str(exc).split())
-        print(f"skillbank {args.command}: error: {message}", file=sys.stderr)
-        return 2
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout without a file descriptor: nothing left to flush
+        pass
+
+
+def main(argv=None) -> int:
+    """Entry point; returns the exit status (2 on bad input, 0 when the reader closes the pipe)."""
+    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
+        except SystemExit:
+            sys.stdout.flush()  # --help and --version: a closed pipe is handled below, not at exit
+            raise
+        try:
+            status = int(args.func(args) or 0)
+        except (ValueError, ImportError, OSError) as exc:
+            if isinstance(exc, BrokenPipeError):
+                raise
+            message = " ".join(str(exc).split())
+            print(f"{args.command_name}: error: {message}", file=sys.stderr)
+            return 2
+        sys.stdout.flush()  # here, where a closed pipe can still be handled, not at exit
+        return status
+    except BrokenPipeError:
+        # The reader wanted no more output (``| head``): not an error.
+        _quiet_stdout()
+        return 0

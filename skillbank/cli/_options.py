@@ -15,8 +15,8 @@ import re
 from ..core import Constraints, ViaPoint, parse_obstacle
 
 __all__ = [
-    "size", "ratio_or_none", "add_segmentation_options", "segmentation_params", "add_constraint_options",
-    "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
+    "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
+    "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
 ]
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
@@ -25,16 +25,55 @@ _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
 _SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "mode")
 
 
-def size(value: str):
-    """Samples (``64``) or seconds (``0.1s``), checked later against the data."""
+def _size(value: str, *, zero: bool):
     value = value.strip()
-    if value == "auto" or value.endswith("s"):
+    if value == "auto":
         return value
+    bound = ">= 0" if zero else "> 0"
     try:
-        return int(value)
+        if value.endswith("s"):
+            seconds = float(value[:-1])
+            if not (seconds >= 0 if zero else seconds > 0) or seconds == float("inf"):
+                raise ValueError
+            # Zero seconds is zero samples at any rate; other values are written the way the
+            # segmenter reads them ("1.s" -> "1.0s"), and turned into samples against the data.
+            return 0 if seconds == 0 else f"{seconds!r}s"
+        samples = int(value)
+        if not (samples >= 0 if zero else samples > 0):
+            raise ValueError
+        return samples
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"expected an integer number of samples or seconds like '0.1s', got {value!r}") from None
+            f"expected an integer number of samples {bound} or seconds {bound} like '0.1s', got {value!r}"
+        ) from None
+
+
+def size(value: str):
+    """Samples (``64``) or seconds (``0.1s``), both > 0, or ``auto``.
+
+    Seconds become samples later, against the data's sample period.
+
+    Examples
+    --------
+    >>> size("64"), size("0.1s"), size("auto")
+    (64, '0.1s', 'auto')
+    >>> size("0s")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected an integer number of samples > 0 or seconds > 0 like '0.1s', got '0s'
+    """
+    return _size(value, zero=False)
+
+
+def margin(value: str):
+    """Like :func:`size` but zero is allowed: ``0`` and ``0s`` are both 0 samples.
+
+    Examples
+    --------
+    >>> margin("0s"), margin("0"), margin("0.25s")
+    (0, 0, '0.25s')
+    """
+    return _size(value, zero=True)
 
 
 def ratio_or_none(value: str):
@@ -74,19 +113,27 @@ def join_negative_values(argv, options=CONSTRAINT_OPTIONS) -> list:
 def add_segmentation_options(p) -> None:
     """Input selection and :class:`~skillbank.segmentation.MultimodalSegmenter` parameters."""
     keep = argparse.SUPPRESS  # an option not given is not passed: the segmenter's default applies
-    p.add_argument("--demo", type=int, default=None, help="demonstration index inside multi-demo files")
+    p.add_argument("--demo", type=int, default=None,
+                   help="which demonstration of a multi-demonstration file (RAIL .mat, handwriting .h5), "
+                        "from 0; negative counts from the end")
     p.add_argument("--group", default="normalized", help="group inside handwriting HDF5 files")
     p.add_argument("--stream", action="append", default=None, help="stream to use (repeatable; default all)")
-    p.add_argument("--window", type=size, default=keep, help="window in samples or seconds (0.1s)")
-    p.add_argument("--min-size", type=size, default=keep, help="minimum segment size, samples or seconds")
+    p.add_argument("--window", type=size, default=keep,
+                   help="sliding-window width, samples or seconds like '0.1s' (default auto: 4 %% of the "
+                        "length, at least 8 samples)")
+    p.add_argument("--min-size", type=size, default=keep,
+                   help="minimum segment length, samples or seconds like '0.5s' (default two windows)")
     p.add_argument("--threshold", type=float, default=keep, help="minimum jerk-event prominence in (0, 1]")
-    p.add_argument("--grace", type=size, default=keep, help="samples ignored at each end")
+    p.add_argument("--grace", type=margin, default=keep,
+                   help="samples or seconds like '0.1s' ignored at each end of a stream (default one window)")
     p.add_argument("--stop-ratio", type=ratio_or_none, default=keep,
                    help="keep a changepoint where the speed drops below this fraction of the movements' "
                         "peak speed ('none': keep every jerk event, as in the paper)")
     p.add_argument("--min-turn", type=float, default=keep,
                    help="or where the direction turns by at least this many degrees")
-    p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep)
+    p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep,
+                   help="deterministic (default): keypoints where the streams agree; sampling: the paper's "
+                        "random draws, reproducible with --seed")
     p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
 
 

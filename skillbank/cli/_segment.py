@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import re
+import sys
 from pathlib import Path
 
 from ._options import add_segmentation_options, segmentation_params
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "segment_file_names"]
 
 
 def add_parser(sub):
@@ -17,10 +19,74 @@ def add_parser(sub):
     add_segmentation_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None, help="write a summary figure to this file")
-    p.add_argument("--out", type=Path, default=None, help="write each segment to this folder")
+    p.add_argument("--out", type=Path, default=None,
+                   help="write the segments to this folder: <input>_segmentNN.npz with every stream, or "
+                        "with --format csv one <input>_segmentNN_<stream>.csv per stream; files of that "
+                        "format left there by an earlier run on the same input are removed")
     p.add_argument("--format", choices=["npz", "csv"], default="npz", help="segment file format for --out")
     p.set_defaults(func=run)
     return p
+
+
+def segment_file_names(stem: str, n_segments: int, streams, fmt: str) -> list[str]:
+    """The files ``--out`` writes for ``n_segments`` segments of a demonstration with ``streams``.
+
+    NPZ keeps every stream in one file per segment; a CSV file holds one stream
+    (:func:`skillbank.io.write_csv`), so there is one per stream and segment.
+
+    Examples
+    --------
+    >>> segment_file_names("demo", 2, ["position", "force"], "csv")[:3]
+    ['demo_segment00_position.csv', 'demo_segment00_force.csv', 'demo_segment01_position.csv']
+    >>> segment_file_names("demo", 2, ["position", "force"], "npz")
+    ['demo_segment00.npz', 'demo_segment01.npz']
+    """
+    if fmt == "npz":
+        return [f"{stem}_segment{i:02d}.npz" for i in range(n_segments)]
+    return [f"{stem}_segment{i:02d}_{name}.csv" for i in range(n_segments) for name in streams]
+
+
+def _earlier_files(folder: Path, stem: str, fmt: str) -> list[Path]:
+    """Files of ``fmt`` that a run on an input named ``stem`` wrote to ``folder``."""
+    # Not "<stem>_segment00_segment00.npz": the segments of a segment file, another input's.
+    stream = r"_(?!segment\d)\w+" if fmt == "csv" else ""
+    pattern = re.compile(rf"{re.escape(stem)}_segment\d+{stream}\.{fmt}")
+    return sorted(p for p in folder.iterdir() if p.is_file() and pattern.fullmatch(p.name))
+
+
+def _write_segments(io, result, folder: Path, stem: str, fmt: str) -> tuple[list[str], list[str]]:
+    """Write every segment with every stream; remove what an earlier run left. Returns (written, removed)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    earlier = _earlier_files(folder, stem, fmt)
+    segments = result.segments
+    streams = segments[0].stream_names
+    names = iter(segment_file_names(stem, len(segments), streams, fmt))
+    written = []
+    for seg in segments:
+        if fmt == "npz":
+            written.append(io.write_npz(seg, folder / next(names)))
+        else:
+            written += [io.write_csv(seg, folder / next(names), stream=name) for name in streams]
+    # Removed after writing: a run that fails half-way leaves the earlier files, not none.
+    kept = set(written)
+    removed = [p for p in earlier if p not in kept]
+    for p in removed:
+        p.unlink()
+    return [str(p) for p in written], [str(p) for p in removed]
+
+
+def _pick(demos: list, index, path: str) -> int:
+    """The index of the demonstration to segment, counted from 0."""
+    n = len(demos)
+    if index is None:
+        if n > 1:
+            print(f"skillbank segment: {path} holds {n} demonstrations; segmenting demonstration 0 "
+                  f"(--demo 0..{n - 1} picks another)", file=sys.stderr)
+        return 0
+    if not -n <= index < n:
+        raise ValueError(f"demo: expected an index in 0..{n - 1} ({path} holds {n} demonstration"
+                         f"{'s' if n != 1 else ''}), got {index}")
+    return index % n
 
 
 def run(args) -> int:
@@ -29,30 +95,40 @@ def run(args) -> int:
     from .. import io
     from ..segmentation import MultimodalSegmenter
 
-    demo = io.load(args.input, index=args.demo, group=args.group)
-    result = MultimodalSegmenter(**segmentation_params(args)).fit(demo, args.stream).result_
-    written = []
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        stem = Path(args.input).stem
-        for i, seg in enumerate(result.segments):
-            path = args.out / f"{stem}_segment{i:02d}.{args.format}"
-            (io.write_npz if args.format == "npz" else io.write_csv)(seg, path)
-            written.append(str(path))
     if args.plot is not None:
-        from ..plotting import plot_segmentation_summary  # matplotlib only when a figure is asked for
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
-        plot_segmentation_summary(result, args.plot)
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
+    demos = io.load_all(args.input, group=args.group)
+    index = _pick(demos, args.demo, args.input)
+    demo = demos[index]
+    result = MultimodalSegmenter(**segmentation_params(args)).fit(demo, args.stream).result_
+    written, removed = [], []
+    if args.out is not None:
+        written, removed = _write_segments(io, result, args.out, Path(args.input).stem, args.format)
+    plot = None
+    if args.plot is not None:
+        from ..plotting import plot_segmentation_summary  # matplotlib, as above
+
+        plot = plot_segmentation_summary(result, args.plot)
     if args.json:
-        print(json.dumps(result.to_dict()))
-    else:
-        print(f"{args.input}: {result.n_segments} segment(s) from streams {list(result.streams)}")
-        for name, cps in result.changepoints.items():
-            print(f"  changepoints[{name}]: {[int(c) for c in cps]}")
-        for i, (a, b) in enumerate(result.bounds):
-            print(f"  segment {i}: samples {a}-{b - 1}, t = {demo.t[a]:.3f}-{demo.t[b - 1]:.3f} s")
-        for path in written:
-            print(f"  wrote {path}")
-        if args.plot is not None:
-            print(f"  wrote {args.plot}")
+        doc = {**result.to_dict(), "demo": index, "n_demos": len(demos)}
+        if args.out is not None:
+            doc.update(files=written, removed=removed)
+        if plot is not None:
+            doc["plot"] = str(plot)
+        print(json.dumps(doc))
+        return 0
+    which = f" (demonstration {index} of {len(demos)})" if len(demos) > 1 else ""
+    print(f"{args.input}{which}: {result.n_segments} segment(s) from streams {list(result.streams)}")
+    for name, cps in result.changepoints.items():
+        print(f"  changepoints[{name}]: {[int(c) for c in cps]}")
+    for i, (a, b) in enumerate(result.bounds):
+        print(f"  segment {i}: samples {a}-{b - 1}, t = {demo.t[a]:.3f}-{demo.t[b - 1]:.3f} s")
+    for path in written:
+        print(f"  wrote {path}")
+    for path in removed:
+        print(f"  removed {path} (from an earlier run)")
+    if plot is not None:
+        print(f"  wrote {plot}")
     return 0

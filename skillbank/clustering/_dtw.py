@@ -6,7 +6,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from ..core._validation import check_fraction, check_positive
+from ..core._validation import check_finite_result, check_fraction, check_positive, numerical_errors
 from ..metrics import dtw_many
 from ._features import resampled_input
 
@@ -67,6 +67,10 @@ class DTWFeatures(TransformerMixin, BaseEstimator):
         """Choose the landmarks among the training trajectories."""
         k = check_positive(self.n_landmarks, name="n_landmarks", integer=True)
         window = self._window()
+        with numerical_errors("DTWFeatures.fit"):
+            return self._fit(X, k, window)
+
+    def _fit(self, X, k, window):
         R = self._prepare(X, reset=True)
         flat = R.reshape(R.shape[0], -1)
         first = int(np.argmin(np.sum((flat - flat.mean(axis=0)) ** 2, axis=1)))
@@ -91,5 +95,7 @@ class DTWFeatures(TransformerMixin, BaseEstimator):
         R = self._prepare(X, reset=False)
         if R.shape[1] != self.landmarks_.shape[1]:
             raise ValueError(f"n_points: changed from {self.landmarks_.shape[1]} at fit to {R.shape[1]}")
-        cols = [dtw_many(R, landmark, window) for landmark in self.landmarks_]
-        return np.column_stack(cols) / R.shape[1]
+        with numerical_errors("DTWFeatures.transform"):
+            cols = [dtw_many(R, landmark, window) for landmark in self.landmarks_]
+            F = np.column_stack(cols) / R.shape[1]
+        return check_finite_result(F, name="DTWFeatures.transform")

@@ -8,7 +8,7 @@ from sklearn.base import BaseEstimator, ClusterMixin
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
-from ..core._validation import check_array, check_positive
+from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors
 from ._em import (
     assign,
     cluster_sums,
@@ -166,7 +166,7 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         if scipy.sparse.issparse(X):
             raise TypeError("X: sparse input is not supported by ElasticClustering; pass a dense array")
         if np.iscomplexobj(X):
-            raise ValueError("X: Complex data not supported; expected real numbers")
+            raise ValueError("X: expected real numbers, got complex values (Complex data not supported)")
         shape = np.shape(X)
         if len(shape) == 1:
             raise ValueError(f"X: expected a 2-D array (n_samples, n_features), got 1-D with shape {shape}; "
@@ -279,6 +279,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         return float(np.min(delta[~np.eye(n, dtype=bool)]))
 
     def _store(self, X, nodes, labels, energy, n_iter, path):
+        check_finite_result(nodes, name="ElasticClustering (cluster centres)")
+        check_finite_result(energy, name="ElasticClustering (energy)")
         # Nodes without points (only in paper mode) carry no cluster; drop them and relabel.
         used = np.unique(labels)
         remap = np.full(nodes.shape[0], -1)
@@ -316,7 +318,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         X = self._check_X(X, reset=True)
         rng = check_random_state(self.random_state)
         start = X[rng.randint(X.shape[0])][None, :]
-        return self._store(X.copy(), *self._grow(X, start, p))
+        with numerical_errors("ElasticClustering.fit"):
+            return self._store(X.copy(), *self._grow(X, start, p))
 
     def partial_fit(self, X, y=None):
         """Add points to a fitted model, as a growing library receives new primitives.
@@ -345,7 +348,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             return self.fit(X)
         p = self._params()
         X = np.vstack([self._X, self._check_X(X, reset=False)])
-        return self._store(X, *self._grow(X, self.cluster_centers_.copy(), p))
+        with numerical_errors("ElasticClustering.partial_fit"):
+            return self._store(X, *self._grow(X, self.cluster_centers_.copy(), p))
 
     def predict(self, X):
         """Index of the nearest node of each point.
@@ -358,7 +362,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         """
         check_is_fitted(self, "cluster_centers_")
         X = self._check_X(X, reset=False)
-        return nearest_centre(X, self.cluster_centers_)
+        with numerical_errors("ElasticClustering.predict"):
+            return nearest_centre(X, self.cluster_centers_)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

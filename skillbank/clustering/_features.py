@@ -8,10 +8,12 @@ from sklearn.decomposition import PCA
 from sklearn.utils.validation import check_is_fitted
 
 from ..core import Demonstration, resample_many
-from ..core._validation import check_array, check_positive
+from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors, summarise
 from ..metrics import angular_similarity_matrix
 
-__all__ = ["AngularSimilarityFeatures", "TrajectoryFeatures", "as_trajectories", "resampled_input"]
+__all__ = [
+    "AngularSimilarityFeatures", "TrajectoryFeatures", "as_trajectories", "resampled_input", "pca_components",
+]
 
 
 def as_trajectories(X, *, name: str = "X", with_time: bool = False):
@@ -51,8 +53,10 @@ def as_trajectories(X, *, name: str = "X", with_time: bool = False):
             times.append(np.arange(arr.shape[0], dtype=float))
     dims = {a.shape[1] for a in trajs}
     if len(dims) > 1:
+        first = trajs[0].shape[1]
+        other = [f"{name}[{k}] has {a.shape[1]}" for k, a in enumerate(trajs) if a.shape[1] != first]
         raise ValueError(f"{name}: expected every trajectory to have the same number of dimensions, "
-                         f"got {sorted(dims)}")
+                         f"got {name}[0] has {first}, {summarise(other)}")
     return (trajs, times) if with_time else trajs
 
 
@@ -62,7 +66,7 @@ def _stack_equal(trajs, *, name: str, n_steps: int | None = None) -> np.ndarray:
         lengths.add(n_steps)
     if len(lengths) > 1:
         raise ValueError(f"{name}: angular similarity needs trajectories of equal length, got lengths "
-                         f"{sorted(lengths)}; resample them first")
+                         f"{summarise(sorted(lengths))}; resample them first")
     return np.stack(trajs)
 
 
@@ -112,7 +116,10 @@ class AngularSimilarityFeatures(TransformerMixin, BaseEstimator):
     def transform(self, X):
         """Features of shape ``(n_trajectories, n_representatives)``."""
         check_is_fitted(self, "representatives_")
-        return angular_similarity_matrix(self._check(X), self.representatives_)
+        R = self._check(X)
+        with numerical_errors("AngularSimilarityFeatures.transform"):
+            F = angular_similarity_matrix(R, self.representatives_)
+        return check_finite_result(F, name="AngularSimilarityFeatures.transform")
 
     def get_feature_names_out(self, input_features=None):
         check_is_fitted(self, "representatives_")
@@ -139,6 +146,9 @@ class FlatPCAMixin:
     """``fit`` and ``transform`` for featurisers that flatten (``_flat``) then
     optionally project with a PCA fitted in ``fit_transform``."""
 
+    #: Cut a count of components larger than the data allows (else it is an error).
+    _clip_components = False
+
     def fit(self, X, y=None):
         """Fit the PCA on the training trajectories."""
         self.fit_transform(X)
@@ -147,8 +157,54 @@ class FlatPCAMixin:
     def transform(self, X):
         """Features of shape ``(n_trajectories, n_components)``."""
         check_is_fitted(self, "n_features_in_")
-        F = self._flat(X, reset=False)
-        return F if self.pca_ is None else self.pca_.transform(F)
+        step = f"{type(self).__name__}.transform"
+        with numerical_errors(step):
+            F = self._flat(X, reset=False)
+            F = F if self.pca_ is None else self.pca_.transform(F)
+        return check_finite_result(F, name=step)
+
+    def fit_transform(self, X, y=None):
+        """Fit and return the features of ``X``, shape ``(n_trajectories, n_components)``."""
+        step = f"{type(self).__name__}.fit_transform"
+        with numerical_errors(step):
+            F = self._flat(X, reset=True)
+            if self.n_components is None:
+                self.pca_ = None
+                return check_finite_result(F, name=step)
+            if F.shape[0] < 2:
+                raise ValueError(f"X: expected at least 2 trajectories to fit the PCA, got {F.shape[0]}; "
+                                 "pass n_components=None to skip it")
+            n_comp = pca_components(self.n_components, F.shape, clip=self._clip_components)
+            self._check_variance(F)
+            self.pca_ = PCA(n_components=n_comp, random_state=self.random_state)
+            F = self.pca_.fit_transform(F)
+        return check_finite_result(F, name=step)
+
+    def _check_variance(self, F):
+        """Raise a ValueError when the flattened features leave PCA no variance to keep."""
+        if not np.any(F != F[0]) or not F.var(axis=0).sum() > 0.0:  # differences too small to square
+            raise ValueError("X: every trajectory has the same features (to float64 precision), so PCA has "
+                             "no variance to keep; pass n_components=None")
+
+
+def pca_components(value, shape, *, clip: bool):
+    """Check ``n_components`` of the PCA step against the feature matrix ``shape``.
+
+    A count (int >= 1; with ``clip`` cut to what the data allows, else at most
+    ``min(n_samples, n_features)``) or a fraction of variance in (0, 1).
+    """
+    limit = min(shape)
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        if value < 1:
+            raise ValueError(f"n_components: expected a count >= 1, a fraction in (0, 1) or None, "
+                             f"got {value!r}")
+        if value > limit and not clip:
+            raise ValueError(f"n_components: expected at most min(n_trajectories, n_features) = {limit} "
+                             f"components, got {value}")
+        return min(int(value), limit)
+    if isinstance(value, (float, np.floating)) and 0.0 < value < 1.0:
+        return float(value)
+    raise ValueError(f"n_components: expected a count >= 1, a fraction in (0, 1) or None, got {value!r}")
 
 
 class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
@@ -208,18 +264,8 @@ class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
             R /= np.where(length > 0, length, 1.0)[:, None, None]
         return R.reshape(R.shape[0], -1)
 
-    def fit_transform(self, X, y=None):
-        """Fit and return the features of ``X``."""
-        F = self._flat(X, reset=True)
-        if self.n_components is None:
-            self.pca_ = None
-            return F
-        if F.shape[0] < 2:
-            raise ValueError(f"X: expected at least 2 trajectories to fit the PCA, got {F.shape[0]}; "
-                             "pass n_components=None to skip it")
-        if not np.any(F != F[0]):
+    def _check_variance(self, F):
+        if not np.any(F != F[0]) or not F.var(axis=0).sum() > 0.0:  # differences too small to square
             raise ValueError("X: every trajectory has the same shape once resampled and moved to a common "
                              "start, so PCA has no variance to keep; pass n_components=None")
-        self.pca_ = PCA(n_components=self.n_components, random_state=self.random_state)
-        return self.pca_.fit_transform(F)
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
-from sklearn.decomposition import PCA
 
 from ._features import FlatPCAMixin, resampled_input
 
@@ -103,17 +102,5 @@ class HeadingFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
         U = heading_directions(R, mirror=bool(self.mirror))
         return U.reshape(U.shape[0], -1)
 
-    def fit_transform(self, X, y=None):
-        """Fit and return the features of ``X``, shape ``(n_trajectories, n_components)``."""
-        F = self._flat(X, reset=True)
-        if self.n_components is None:
-            self.pca_ = None
-            return F
-        if F.shape[0] < 2:
-            raise ValueError(f"X: expected at least 2 trajectories to fit the PCA, got {F.shape[0]}; "
-                             "pass n_components=None to skip it")
-        n_comp = self.n_components
-        if isinstance(n_comp, (int, np.integer)) and not isinstance(n_comp, bool):
-            n_comp = min(int(n_comp), F.shape[0], F.shape[1])
-        self.pca_ = PCA(n_components=n_comp, random_state=self.random_state)
-        return self.pca_.fit_transform(F)
+    # A count larger than the data allows is cut to it (min(n_trajectories, n_features)).
+    _clip_components = True

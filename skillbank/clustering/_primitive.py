@@ -6,6 +6,7 @@ import numpy as np
 from sklearn.preprocessing import minmax_scale
 
 from ..core import resample_many
+from ..core._validation import check_array, numerical_errors, summarise
 from ._dtw import DTWFeatures
 from ._em import assign
 from ._features import AngularSimilarityFeatures
@@ -51,7 +52,8 @@ def primitive_features(demos, *, kind: str = "default", n_points: int = 16) -> n
                          f"got {len(short)} shorter one(s)")
     dims = sorted({d["position"].shape[1] for d in demos})
     if len(dims) > 1:
-        raise ValueError(f"primitives: expected positions with one number of dimensions, got {dims}")
+        raise ValueError(f"primitives: expected positions with one number of dimensions, got "
+                         f"{summarise(dims)}")
     if kind == "default":
         return HeadingFeatures(n_points=n_points, n_components=None).fit_transform(demos)
     R = resample_many([d["position"] for d in demos], [d.t for d in demos], n_points, "time")
@@ -71,10 +73,13 @@ def nearest_centre(X, centers) -> np.ndarray:
     >>> nearest_centre(np.array([[0.9], [5.2]]), np.array([[0.0], [5.0]])).tolist()
     [0, 1]
     """
-    X = np.asarray(X, dtype=float)
-    centers = np.asarray(centers, dtype=float)
-    shift = centers.mean(axis=0)
-    return assign(X - shift, centers - shift)[0].astype(np.intp)
+    X = check_array(X, name="X", ndim=2, min_samples=0)
+    centers = check_array(centers, name="centers", ndim=2)
+    if X.shape[1] != centers.shape[1]:
+        raise ValueError(f"X: expected {centers.shape[1]} features like the centres, got {X.shape[1]}")
+    with numerical_errors("nearest_centre"):
+        shift = centers.mean(axis=0)
+        return assign(X - shift, centers - shift)[0].astype(np.intp)
 
 
 #: Featurisers of a folder of trajectories, by name (``skillbank cluster --features``).
@@ -118,11 +123,12 @@ def trajectory_features(demos, kind: str = "default", *, representatives=None, r
                              "e.g. [0, 5, 9]")
         bad = [i for i in representatives if not 0 <= i < len(demos)]
         if bad:
-            raise ValueError(f"representatives: expected indices in 0..{len(demos) - 1}, got {bad}")
+            raise ValueError(f"representatives: expected indices in 0..{len(demos) - 1}, got "
+                             f"{summarise(bad)}")
         reps = [demos[i] for i in representatives]
         return minmax_scale(AngularSimilarityFeatures(representatives=reps).fit_transform(demos))
     lengths = sorted({d.n_steps for d in demos})
     if len(lengths) > 1:
         raise ValueError(f"features: 'none' flattens the positions and needs trajectories of equal length, "
-                         f"got lengths {lengths}; use --features default or dtw")
+                         f"got lengths {summarise(lengths)}; use --features default or dtw")
     return np.stack([d["position"].ravel() for d in demos])

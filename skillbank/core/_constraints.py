@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._obstacles import Obstacle
-from ._validation import check_array, check_fraction, check_positive, check_time
+from ._validation import check_array, check_fraction, check_positive, check_time, summarise
 
 __all__ = ["Constraints", "ViaPoint"]
 
@@ -120,8 +120,11 @@ class Constraints:
         self.obstacles = tuple(obstacles)
         dims = self._dims()
         if len(set(dims.values())) > 1:
-            listing = ", ".join(f"{name} has {n}" for name, n in dims.items())
-            raise ValueError(f"constraints: expected the same number of dimensions everywhere, got {listing}")
+            # The first item sets the expectation; list the first few that differ from it.
+            (first, n0), = list(dims.items())[:1]
+            others = [f"{name} has {n}" for name, n in dims.items() if n != n0]
+            raise ValueError(f"constraints: expected the same number of dimensions everywhere, got "
+                             f"{first} has {n0}, {summarise(others)}")
         self.n_dims = next(iter(dims.values())) if dims else None
 
     @staticmethod

@@ -19,7 +19,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ._validation import check_array, check_positive
+from ._validation import MAX_MAGNITUDE, check_array, check_positive
 
 __all__ = ["Obstacle", "Sphere", "Box", "OBSTACLES", "parse_obstacle"]
 
@@ -330,6 +330,9 @@ def _number(text: str, whole: str) -> float:
         raise ValueError(f"obstacle: expected a number, got {text.strip()!r} in {whole!r}") from None
     if not np.isfinite(value):
         raise ValueError(f"obstacle: expected a finite number, got {text.strip()!r} in {whole!r}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise ValueError(f"obstacle: expected numbers of magnitude at most {MAX_MAGNITUDE:g} (larger ones "
+                         f"overflow the solvers), got {text.strip()!r} in {whole!r}")
     return value
 
 

@@ -3,13 +3,43 @@
 Every check raises :class:`ValueError` naming the argument, what was expected
 and what was received, so that users never see a traceback from deep inside
 numpy or scipy.
+
+Numbers at the edges
+--------------------
+Every array, time stamp, obstacle size and scalar hyperparameter is bounded
+by :data:`MAX_MAGNITUDE` (``|x| <= 1e100``) and must be real (complex input is
+rejected by name, never silently cast). Inside that bound the solvers can
+square and multiply coordinates; what can still overflow (a huge path on a
+tiny time step, say) is caught where it happens: the public entry points run
+their numerics under :func:`numerical_errors`, which turns floating-point
+trouble and the warnings of numpy and scipy into one :class:`ValueError`
+naming the step, and :func:`check_finite_result` checks what they return.
+Long lists in messages are cut by :func:`summarise`.
 """
 
 from __future__ import annotations
 
+import warnings
+from contextlib import contextmanager
+
 import numpy as np
 
-__all__ = ["check_array", "check_time", "check_positive", "check_fraction"]
+__all__ = [
+    "MAX_MAGNITUDE", "check_array", "check_time", "check_positive", "check_fraction",
+    "check_finite_result", "numerical_errors", "summarise",
+]
+
+#: Largest magnitude accepted for a coordinate, a time stamp, an obstacle's size or a scalar
+#: hyperparameter. Squares of such numbers (distances, variances, dot products) stay below 1e200,
+#: which leaves a factor of 1e108 of float64's range (1.8e308) for what the solvers multiply them
+#: by: sums over millions of samples, powers of the number of samples (the elastic map's bending
+#: weight grows as (N - 1)^3, a jerk as 1 / dt^3), hyperparameters. The square root of the range,
+#: 1e154, would leave no room at all. Real data (metres, millimetres, pixels, epoch seconds ~1.7e9
+#: or even epoch nanoseconds ~1.7e18) is far inside.
+MAX_MAGNITUDE = 1e100
+
+#: Most items a message lists before it says how many more there are.
+_LISTED = 3
 
 
 def _describe(value) -> str:
@@ -20,6 +50,58 @@ def _describe(value) -> str:
     if len(text) > 60:
         text = text[:57] + "..."
     return f"{type(value).__name__} {text}"
+
+
+def summarise(items, *, limit: int = _LISTED, sep: str = ", ") -> str:
+    """The first ``limit`` items joined by ``sep``, then how many more: messages stay one short line.
+
+    Examples
+    --------
+    >>> summarise([1, 2])
+    '1, 2'
+    >>> summarise(range(10))
+    '0, 1, 2 and 7 more'
+    """
+    items = [str(i) for i in items]
+    if len(items) <= limit:
+        return sep.join(items)
+    return f"{sep.join(items[:limit])} and {len(items) - limit} more"
+
+
+def _is_complex(raw: np.ndarray) -> bool:
+    if raw.dtype.kind == "c":
+        return True
+    if raw.dtype == object:
+        return any(isinstance(v, (complex, np.complexfloating)) for v in raw.flat)
+    return False
+
+
+def _index(bad: np.ndarray):
+    first = tuple(int(i) for i in bad[0])
+    return first if len(first) != 1 else first[0]
+
+
+def _check_range(arr: np.ndarray, name: str) -> None:
+    """NaN, inf and magnitudes above MAX_MAGNITUDE, each reported with its first index and count."""
+    if arr.size == 0:
+        return
+    lo, hi = arr.min(), arr.max()  # two reductions; NaN propagates and fails the test below
+    if -MAX_MAGNITUDE <= lo and hi <= MAX_MAGNITUDE:
+        return
+    finite = np.isfinite(arr)
+    if not finite.all():
+        bad = np.argwhere(~finite)
+        kind = "NaN" if np.isnan(arr[tuple(bad[0])]) else "inf"
+        raise ValueError(
+            f"{name}: expected finite values, got {len(bad)} non-finite value(s) "
+            f"({kind} first at index {_index(bad)})"
+        )
+    bad = np.argwhere(np.abs(arr) > MAX_MAGNITUDE)
+    value = float(arr[tuple(bad[0])])
+    raise ValueError(
+        f"{name}: expected values of magnitude at most {MAX_MAGNITUDE:g} (larger ones overflow the "
+        f"solvers; rescale the data), got {value!r} at index {_index(bad)} ({len(bad)} such value(s))"
+    )
 
 
 def check_array(
@@ -55,8 +137,9 @@ def check_array(
     Raises
     ------
     ValueError
-        If the input cannot be converted, has the wrong ndim, holds NaN or
-        inf, or is too short.
+        If the input is complex or cannot be converted, has the wrong ndim,
+        holds NaN or inf or a magnitude above :data:`MAX_MAGNITUDE`, or is too
+        short.
 
     Examples
     --------
@@ -64,11 +147,17 @@ def check_array(
     (2, 2)
     """
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        raw = np.asarray(value)
+        if _is_complex(raw):
+            # Casting would drop the imaginary part with only a ComplexWarning.
+            raise ValueError(f"{name}: expected real numbers, got complex values ({_describe(raw)})")
+        arr = raw.astype(np.float64, copy=False)
     except (TypeError, ValueError) as exc:
+        if str(exc).startswith(f"{name}: "):
+            raise
         raise ValueError(
             f"{name}: expected an array of real numbers, got {_describe(value)} "
-            f"which cannot be converted to float ({exc})"
+            f"which cannot be converted to float ({' '.join(str(exc).split())[:200]})"
         ) from None
     allowed = (ndim,) if isinstance(ndim, int) else tuple(ndim)
     if arr.ndim not in allowed:
@@ -84,20 +173,16 @@ def check_array(
         raise ValueError(f"{name}: expected {n_dims} columns, got {arr.shape[1]}")
     if arr.ndim == 2 and arr.shape[1] == 0:
         raise ValueError(f"{name}: expected at least one column, got shape {arr.shape}")
-    finite = np.isfinite(arr)
-    if not finite.all():
-        bad = np.argwhere(~finite)
-        first = tuple(int(i) for i in bad[0])
-        kind = "NaN" if np.isnan(arr[first]) else "inf"
-        raise ValueError(
-            f"{name}: expected finite values, got {len(bad)} non-finite value(s) "
-            f"({kind} first at index {first if len(first) > 1 else first[0]})"
-        )
+    _check_range(arr, name)
     return arr
 
 
 def check_time(t, *, name: str = "t", min_samples: int = 1, n_steps: int | None = None):
-    """Check a time vector: 1-D, finite, strictly increasing.
+    """Check a time vector: 1-D, finite, within :data:`MAX_MAGNITUDE`, strictly increasing.
+
+    Strictly increasing is checked on the differences as computed
+    (``np.diff``), so stamps too close for float64 at their magnitude
+    (``1e20`` and ``1e20 + 1``) count as repeated.
 
     Parameters
     ----------
@@ -134,8 +219,21 @@ def check_time(t, *, name: str = "t", min_samples: int = 1, n_steps: int | None 
     return arr
 
 
+def _real_scalar(value, name: str, expected: str) -> float:
+    """``value`` as a float, or ValueError: not a real number, or beyond float64."""
+    if isinstance(value, (complex, np.complexfloating)):
+        raise ValueError(f"{name}: expected a real number, got complex {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name}: expected {expected}, got {_describe(value)}")
+    try:
+        return float(value)
+    except OverflowError:  # a Python int beyond float64
+        raise ValueError(f"{name}: expected {expected}, got an integer of {len(str(abs(value)))} digits") \
+            from None
+
+
 def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool = False):
-    """Check a scalar hyperparameter is a positive (optionally integer) number.
+    """Check a scalar hyperparameter is a positive (optionally integer) number, at most MAX_MAGNITUDE.
 
     Examples
     --------
@@ -144,13 +242,15 @@ def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool 
     """
     kind = "an integer" if integer else "a number"
     bound = ">= 0" if allow_zero else "> 0"
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name}: expected {kind} {bound}, got {_describe(value)}")
-    if integer and float(value) != int(value):
-        raise ValueError(f"{name}: expected an integer {bound}, got {value!r}")
-    if not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
+    number = _real_scalar(value, name, f"{kind} {bound}")
+    if not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero):
         raise ValueError(f"{name}: expected {kind} {bound}, got {value!r}")
-    return int(value) if integer else float(value)
+    if integer and number != int(number):
+        raise ValueError(f"{name}: expected an integer {bound}, got {value!r}")
+    if number > MAX_MAGNITUDE:
+        raise ValueError(f"{name}: expected {kind} {bound} and at most {MAX_MAGNITUDE:g} (larger ones "
+                         f"overflow the solvers), got {number!r}")
+    return int(value) if integer else number
 
 
 def check_fraction(value, *, name: str, low: float = 0.0, high: float = 1.0):
@@ -161,8 +261,71 @@ def check_fraction(value, *, name: str, low: float = 0.0, high: float = 1.0):
     >>> check_fraction(0.2, name="threshold")
     0.2
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name}: expected a number in [{low}, {high}], got {_describe(value)}")
-    if not np.isfinite(value) or not (low <= value <= high):
+    number = _real_scalar(value, name, f"a number in [{low}, {high}]")
+    if not np.isfinite(number) or not (low <= number <= high):
         raise ValueError(f"{name}: expected a number in [{low}, {high}], got {value!r}")
-    return float(value)
+    return number
+
+
+def check_finite_result(value, *, name: str):
+    """Return ``value`` (an array or a number) if it is finite; else ValueError naming what produced it.
+
+    Used on what a solver returns or stores, so a result that overflowed is
+    never handed on or written.
+
+    Examples
+    --------
+    >>> check_finite_result([1.0, 2.0], name="lte")
+    [1.0, 2.0]
+    >>> try:
+    ...     check_finite_result([1.0, float("inf")], name="lte")
+    ... except ValueError as exc:
+    ...     print(str(exc)[:49])
+    lte: produced 1 non-finite value(s) (inf first at
+    """
+    arr = np.asarray(value, dtype=float)
+    finite = np.isfinite(arr)
+    if finite.all():
+        return value
+    bad = np.argwhere(~finite)
+    where = f" first at index {_index(bad)}" if arr.ndim else ""
+    kind = "NaN" if np.isnan(arr[tuple(bad[0])]) else "inf"
+    raise ValueError(f"{name}: produced {len(bad)} non-finite value(s) ({kind}{where}): the input's "
+                     "magnitudes or time steps are beyond what it handles")
+
+
+#: What numpy, scipy and Python raise on numerical trouble once warnings are errors.
+_NUMERICAL = (FloatingPointError, ArithmeticError, RuntimeWarning, np.linalg.LinAlgError)
+
+
+@contextmanager
+def numerical_errors(step: str):
+    """Run a solver with floating-point trouble turned into one ValueError naming ``step``.
+
+    Inside, numpy raises on overflow, division by zero and invalid
+    operations (``np.errstate``), and every ``RuntimeWarning`` (numpy's,
+    ``ComplexWarning``, scipy's ``LinAlgWarning``) is an error; any of these,
+    a Python ``OverflowError`` or a ``LinAlgError`` leaves as ``ValueError``
+    with a one-line message. Other ``ValueError``s (the input checks) pass
+    unchanged. Used at the public entry points, also as a decorator; code
+    that expects infinities inside sets its own ``np.errstate``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> try:
+    ...     with numerical_errors("scale"):
+    ...         np.float64(1e300) * 1e300
+    ... except ValueError as exc:
+    ...     print(str(exc).split(";")[0])
+    scale: the computation overflowed or became undefined (overflow encountered in scalar multiply)
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            with np.errstate(over="raise", divide="raise", invalid="raise"):
+                yield
+        except _NUMERICAL as exc:
+            detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+            raise ValueError(f"{step}: the computation overflowed or became undefined ({detail}); the "
+                             "input's magnitudes or time steps are beyond what it handles") from None

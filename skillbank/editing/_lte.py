@@ -7,7 +7,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core import Constraints, Demonstration
-from ..core._validation import check_array, check_positive, check_time
+from ..core._validation import (
+    MAX_MAGNITUDE,
+    check_array,
+    check_finite_result,
+    check_positive,
+    check_time,
+    numerical_errors,
+)
 from ._laplacian import LaplacianSystem
 
 __all__ = ["EditResult", "lte"]
@@ -105,7 +112,8 @@ def _pushes(P, sd, fixed, obstacles, margins):
             continue
         edges = np.diff(np.concatenate([[0], inside.view(np.int8), [0]]))
         starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-        depth = np.where(fixed, np.inf, sd[j])
+        # Outside samples count as inf too: reduceat runs from one start to the next, past the run's end.
+        depth = np.where(fixed | ~inside, np.inf, sd[j])
         best = np.minimum.reduceat(depth, starts)
         pinned = ~np.isfinite(best)
         if pinned.any():
@@ -117,6 +125,7 @@ def _pushes(P, sd, fixed, obstacles, margins):
     return sorted(pushes.items()), None
 
 
+@numerical_errors("lte")
 def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True, avoid_obstacles=True,
         margin=None, max_iter=50, tol=1e-9) -> EditResult:
     """Laplacian trajectory editing: move a path to meet constraints, keeping its shape.
@@ -156,6 +165,13 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
     -------
     EditResult
 
+    Raises
+    ------
+    ValueError
+        On invalid input (naming the argument), and, naming ``lte``, when the
+        solve overflows or its result is not finite (magnitudes near
+        :data:`~skillbank.core._validation.MAX_MAGNITUDE` on tiny time steps).
+
     Examples
     --------
     >>> import numpy as np
@@ -176,6 +192,9 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
         raise ValueError(f"constraints: expected a skillbank Constraints, got {type(c).__name__}")
     c.check_dims(d)
     weight = check_positive(weight, name="weight")
+    if weight < 1.0 / MAX_MAGNITUDE:  # the soft rows need 1 / weight^2
+        raise ValueError(f"weight: expected a number in [{1.0 / MAX_MAGNITUDE:g}, {MAX_MAGNITUDE:g}], "
+                         f"got {weight!r}")
     max_iter = check_positive(max_iter, name="max_iter", integer=True, allow_zero=True)
     if margin is not None:
         margin = check_positive(margin, name="margin", allow_zero=True)
@@ -197,6 +216,7 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
         P = Y + system.solve(all_idx, all_pts - Y[all_idx], hard=hard, weight=weight)
         if hard and len(all_idx):
             P[all_idx] = all_pts
+        check_finite_result(P, name="lte")
         if not obstacles:
             break
         sd = np.stack([ob.signed_distance(P) for ob in obstacles])
@@ -207,8 +227,8 @@ def lte(Y, constraints=None, *, hard=True, weight=1e6, t=None, anchor_ends=True,
             break
         n_iter += 1
         added.update(pushes)
-    error = c.position_error(P)
-    vel_error = c.velocity_error(P, t)
+    error = check_finite_result(c.position_error(P), name="lte (constraint error)")
+    vel_error = check_finite_result(c.velocity_error(P, t), name="lte (velocity error)")
     collision = c.collides(P) if c.obstacles else False
     crossing = None
     if collision and not c.collision_mask(P).any():  # no sample inside: a segment crosses

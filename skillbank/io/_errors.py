@@ -18,7 +18,8 @@ import numpy as np
 
 __all__ = [
     "FormatError", "HDF5_MAGIC", "MAT5_MAGIC", "ZIP_MAGICS",
-    "as_file", "describe_content", "drop_repeated_times", "expect_magic", "reading", "read_head",
+    "TIME_REPAIRS", "as_file", "check_clock", "check_repair_time", "describe_content", "expect_magic",
+    "reading", "read_head", "real_array",
 ]
 
 # What the file libraries raise on bad content. FormatError is a ValueError,
@@ -105,26 +106,87 @@ def as_file(path) -> Path:
     return p
 
 
-def drop_repeated_times(t, *arrays):
-    """Drop samples whose time stamp repeats the previous one.
+#: The repairs a reader may apply to a clock that does not increase (its ``repair_time`` option).
+TIME_REPAIRS = (None, "drop")
 
-    Recorders sometimes log two samples with the same stamp; keeping the first
-    is the least surprising fix and leaves a strictly increasing clock.
-    Decreasing time is left alone so that validation still reports it.
 
-    Returns
-    -------
-    t, arrays..., n_dropped
+def check_repair_time(repair_time):
+    """Validate a reader's ``repair_time`` option.
+
+    Examples
+    --------
+    >>> check_repair_time("drop")
+    'drop'
     """
+    if repair_time not in TIME_REPAIRS:
+        raise ValueError(f"repair_time: expected None (time stamps that do not increase are an error) or "
+                         f"'drop' (drop samples that repeat the previous stamp), got {repair_time!r}")
+    return repair_time
+
+
+def check_clock(path, t, *arrays, where: str, repair_time=None):
+    """Check that a stream's time stamps increase strictly: ``(t, arrays..., n_dropped)``.
+
+    A recorder that repeats a stamp, a clock that runs backwards or one that
+    never advances (all stamps equal) would otherwise lose samples silently or
+    fail deep inside; each is a :class:`FormatError` naming the stream and
+    its clock (``where``, e.g. ``"stream 'joints' (clock 'joint_state_info/joint_time')"``),
+    the first offending sample (its index in the file) and how many steps do
+    not increase. With ``repair_time="drop"`` (the documented repair) samples
+    whose stamp repeats the previous one are dropped, keeping the first, and
+    counted in ``n_dropped``; a clock that runs backwards, or that leaves
+    fewer than 2 samples of several, is still an error.
+
+    Examples
+    --------
+    >>> check_clock("a.csv", [0.0, 1.0, 1.0, 2.0], [[0], [1], [2], [3]], where="stream 'position'",
+    ...             repair_time="drop")[2]
+    1
+    """
+    check_repair_time(repair_time)
     t = np.asarray(t, dtype=float).ravel()
-    if t.shape[0] < 2:
+    n = t.shape[0]
+    if n < 2 or not np.isfinite(t).all():  # NaN and inf are the validator's to name
         return (t, *arrays, 0)
-    keep = np.ones(t.shape[0], dtype=bool)
-    keep[1:] = np.diff(t) != 0
-    n_dropped = int(t.shape[0] - keep.sum())
-    if n_dropped == 0:
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size == 0:
         return (t, *arrays, 0)
-    return (t[keep], *(np.asarray(a)[keep] for a in arrays), n_dropped)
+    backwards = np.flatnonzero(steps < 0)
+    if repair_time == "drop" and backwards.size == 0 and np.any(steps > 0):
+        keep = np.ones(n, dtype=bool)
+        keep[1:] = steps > 0
+        return (t[keep], *(np.asarray(a)[keep] for a in arrays), int(n - keep.sum()))
+    i = int((backwards if backwards.size else bad)[0]) + 1
+    what = "runs back from" if t[i] < t[i - 1] else "repeats"
+    reason = (f"{where}: expected strictly increasing time stamps, but sample {i} "
+              f"({float(t[i])!r} s) {what} sample {i - 1} ({float(t[i - 1])!r} s); {bad.size} of {n - 1} "
+              "steps do not increase")
+    if not np.any(steps > 0):
+        reason += " (the clock never advances, so no repair applies)"
+    elif backwards.size == 0:
+        reason += "; read with repair_time='drop' to drop the repeated stamps (keeping the first)"
+    raise FormatError(path, reason)
+
+
+def real_array(path, value, what: str) -> np.ndarray:
+    """``value`` (a dataset's content) as float64; complex or non-numeric content is a FormatError.
+
+    Casting complex data to float would drop the imaginary part with only a
+    ``ComplexWarning``.
+
+    Examples
+    --------
+    >>> real_array("a.h5", [1, 2], "'t'").tolist()
+    [1.0, 2.0]
+    """
+    raw = np.asarray(value)
+    if raw.dtype.kind == "c":
+        raise FormatError(path, f"expected real numbers in {what}, found complex values ({raw.dtype})")
+    try:
+        return raw.astype(float)
+    except (TypeError, ValueError):
+        raise FormatError(path, f"expected numbers in {what}, found {raw.dtype} values") from None
 
 
 HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"

@@ -5,7 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import Demonstration
-from ._errors import HDF5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
+from ..core._validation import summarise
+from ._errors import (
+    HDF5_MAGIC,
+    FormatError,
+    as_file,
+    check_clock,
+    check_repair_time,
+    expect_magic,
+    reading,
+    real_array,
+)
 
 __all__ = ["read_handwriting_h5", "HANDWRITING_GROUPS"]
 
@@ -20,25 +30,28 @@ def _sort_key(name: str):
 def _demo_names(path, h5, group: str) -> list[str]:
     groups = sorted(k for k in h5.keys() if hasattr(h5[k], "keys"))
     if group not in groups:
-        raise FormatError(path, f"expected a group {group!r}, found groups {groups}")
+        found = summarise(map(repr, groups))
+        raise FormatError(path, f"expected a group {group!r}, found groups [{found}]")
     return sorted((k for k in h5[group].keys() if hasattr(h5[group][k], "keys")), key=_sort_key)
 
 
-def _read_one(path, node, group: str, name: str) -> Demonstration:
+def _read_one(path, node, group: str, name: str, repair_time) -> Demonstration:
     missing = [k for k in ("t", "x", "y") if k not in node]
     if missing:
         raise FormatError(
             path, f"expected datasets t, x, y in '{group}/{name}', missing {missing}, "
-            f"found {sorted(node.keys())}"
+            f"found [{summarise(map(repr, sorted(node.keys())))}]"
         )
-    t_ms, x, y = (np.asarray(node[k][()], dtype=float).ravel() for k in ("t", "x", "y"))
+    t_ms, x, y = (real_array(path, node[k][()], f"'{group}/{name}/{k}'").ravel() for k in ("t", "x", "y"))
     if not (t_ms.shape == x.shape == y.shape) or t_ms.size == 0:
         raise FormatError(
             path, f"expected non-empty t, x, y of equal length in '{group}/{name}', "
             f"found lengths {t_ms.size}, {x.size}, {y.size}"
         )
     t0 = float(t_ms[0]) / 1000.0
-    t, xy, dropped = drop_repeated_times((t_ms - t_ms[0]) / 1000.0, np.column_stack([x, y]))
+    t, xy, dropped = check_clock(path, (t_ms - t_ms[0]) / 1000.0, np.column_stack([x, y]),
+                                 repair_time=repair_time, where=f"demonstration '{group}/{name}' (clock "
+                                 f"'{group}/{name}/t')")
     index = int(name) if name.isdigit() else name
     metadata = {
         "source": str(path), "format": "handwriting-h5", "group": group, "index": index, "t0": t0,
@@ -49,7 +62,7 @@ def _read_one(path, node, group: str, name: str) -> Demonstration:
         return Demonstration(t, {"position": xy}, metadata)
 
 
-def read_handwriting_h5(path, *, group: str = "normalized", index=None):
+def read_handwriting_h5(path, *, group: str = "normalized", index=None, repair_time=None):
     """Read handwriting demonstrations: groups ``<group>/<i>`` with datasets ``t``, ``x``, ``y``.
 
     Parameters
@@ -61,6 +74,11 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None):
         ``"unsmoothed"`` (any group present in the file is accepted).
     index : int, optional
         Read only demonstration ``<group>/<index>``.
+    repair_time : {None, "drop"}, default=None
+        Time stamps that repeat, run backwards or never advance are an error
+        naming the demonstration and the sample. ``"drop"`` drops samples that
+        repeat the previous stamp (keeping the first), counted in
+        ``metadata["dropped_samples"]``.
 
     Returns
     -------
@@ -75,7 +93,7 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None):
     ------
     FormatError
         If the file is not HDF5, or the group or index does not exist (the
-        message lists what does).
+        message lists what does), or time stamps do not increase.
 
     Examples
     --------
@@ -87,6 +105,7 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None):
     """
     import h5py  # slow to import; only when an HDF5 file is read
 
+    check_repair_time(repair_time)
     p = as_file(path)
     expect_magic(p, HDF5_MAGIC, "HDF5 content")
     with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
@@ -94,10 +113,9 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None):
         if index is None:
             if not names:
                 raise FormatError(p, f"expected demonstrations in group {group!r}, found none")
-            return [_read_one(p, h5[group][n], group, n) for n in names]
+            return [_read_one(p, h5[group][n], group, n, repair_time) for n in names]
         key = str(index)
         if isinstance(index, bool) or key not in names:
-            raise FormatError(
-                p, f"expected an index in group {group!r} among [{', '.join(names)}], got {index!r}"
-            )
-        return _read_one(p, h5[group][key], group, key)
+            among = summarise(names, limit=10)
+            raise FormatError(p, f"expected an index in group {group!r} among [{among}], got {index!r}")
+        return _read_one(p, h5[group][key], group, key, repair_time)

@@ -11,7 +11,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..core import Demonstration
-from ._errors import drop_repeated_times
+from ._errors import check_clock, check_repair_time
 
 __all__ = ["lasa_shapes", "load_lasa"]
 
@@ -76,7 +76,7 @@ def _resolve(shape) -> str:
     raise ValueError(f"shape: expected one of {list(names)}, got {shape!r}{hint}")
 
 
-def load_lasa(shape: str, *, index=None):
+def load_lasa(shape: str, *, index=None, repair_time=None):
     """Load the demonstrations of one LASA handwriting shape.
 
     Parameters
@@ -85,13 +85,17 @@ def load_lasa(shape: str, *, index=None):
         A name from :func:`lasa_shapes`, e.g. ``"Angle"`` (case-insensitive).
     index : int, optional
         Return only this demonstration (0 to 6).
+    repair_time : {None, "drop"}, default=None
+        Time stamps that repeat or run backwards are an error naming the
+        demonstration and the sample; ``"drop"`` drops samples that repeat the
+        previous stamp (keeping the first), counted in
+        ``metadata["dropped_samples"]``. The published shapes need neither.
 
     Returns
     -------
     list of Demonstration, or Demonstration when ``index`` is given
         Stream ``position`` of shape (1000, 2), in millimetres; ``t`` as
-        stored, in seconds (samples repeating the previous time stamp are
-        dropped so that it increases strictly). Metadata holds ``label`` (the
+        stored, in seconds. Metadata holds ``label`` (the
         shape name), ``index``, ``source`` (``"lasa"``) and ``format``
         (``"lasa"``).
 
@@ -109,6 +113,7 @@ def load_lasa(shape: str, *, index=None):
     >>> len(demos), demos[0]["position"].shape
     (7, (1000, 2))
     """
+    check_repair_time(repair_time)
     name = _resolve(shape)
     lasa, _ = _import_lasa()
     with contextlib.redirect_stdout(io.StringIO()):
@@ -117,14 +122,15 @@ def load_lasa(shape: str, *, index=None):
         n = len(raw)
         if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
             raise ValueError(f"index: expected an integer in [0, {n}) for shape {name!r}, got {index!r}")
-        return _to_demo(raw[int(index)], name, int(index))
-    return [_to_demo(d, name, i) for i, d in enumerate(raw)]
+        return _to_demo(raw[int(index)], name, int(index), repair_time)
+    return [_to_demo(d, name, i, repair_time) for i, d in enumerate(raw)]
 
 
-def _to_demo(raw, name: str, index: int) -> Demonstration:
+def _to_demo(raw, name: str, index: int, repair_time) -> Demonstration:
     t = np.asarray(raw.t, dtype=float).ravel()
     position = np.asarray(raw.pos, dtype=float).T  # stored (2, n)
-    t, position, dropped = drop_repeated_times(t, position)
+    t, position, dropped = check_clock(f"LASA {name} demonstration {index}", t, position,
+                                       repair_time=repair_time, where="stream 'position' (clock 't')")
     metadata = {"label": name, "index": index, "source": "lasa", "format": "lasa"}
     if dropped:
         metadata["dropped_samples"] = dropped

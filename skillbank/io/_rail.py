@@ -7,7 +7,17 @@ from pathlib import Path
 import numpy as np
 
 from ..core import Demonstration
-from ._errors import MAT5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
+from ..core._validation import summarise
+from ._errors import (
+    MAT5_MAGIC,
+    FormatError,
+    as_file,
+    check_clock,
+    check_repair_time,
+    expect_magic,
+    reading,
+    real_array,
+)
 
 __all__ = ["read_rail_file", "load_rail", "RAIL_CLASSES"]
 
@@ -17,13 +27,13 @@ _FIELDS = {"time": None, "pos": "position", "vel": "velocity", "acc": "accelerat
 
 def _field(path, record, field: str, i: int) -> np.ndarray:
     if not hasattr(record, field):
-        found = list(getattr(record, "_fieldnames", []))
-        raise FormatError(path, f"expected a field '{field}' in dataset[{i}], found fields {found}")
+        found = summarise(map(repr, getattr(record, "_fieldnames", [])))
+        raise FormatError(path, f"expected a field '{field}' in dataset[{i}], found fields [{found}]")
     with reading(path, f"invalid field dataset[{i}].{field}"):
-        return np.asarray(getattr(record, field), dtype=float)
+        return real_array(path, getattr(record, field), f"dataset[{i}].{field}")
 
 
-def read_rail_file(path) -> list[Demonstration]:
+def read_rail_file(path, *, repair_time=None) -> list[Demonstration]:
     """Read every demonstration of one RAIL user file.
 
     Parameters
@@ -32,6 +42,11 @@ def read_rail_file(path) -> list[Demonstration]:
         A MATLAB v5 file ``<SKILL>/<user>.mat`` holding an ``(n_demos, 1)``
         struct array ``dataset`` with fields ``time``, ``pos``, ``vel`` and
         ``acc``.
+    repair_time : {None, "drop"}, default=None
+        Time stamps that repeat, run backwards or never advance are an error
+        naming the demonstration and the sample. ``"drop"`` drops samples
+        that repeat the previous stamp (keeping the first), counted in
+        ``metadata["dropped_samples"]``; the published files need no repair.
 
     Returns
     -------
@@ -39,14 +54,13 @@ def read_rail_file(path) -> list[Demonstration]:
         Streams ``position``, ``velocity`` and ``acceleration``; metadata
         ``label`` (the parent folder lower-cased, e.g. ``"reaching"``),
         ``user`` (the file stem), ``index`` (position in the file), ``source``
-        and ``format`` (``"rail-mat"``). Samples that repeat the previous time
-        stamp are dropped (keeping the first) and counted in
-        ``metadata["dropped_samples"]``; the published files have none.
+        and ``format`` (``"rail-mat"``).
 
     Raises
     ------
     FormatError
-        If the file is not MATLAB v5 or lacks ``dataset`` or its fields.
+        If the file is not MATLAB v5 or lacks ``dataset`` or its fields, or a
+        demonstration's time stamps do not increase (see ``repair_time``).
 
     Examples
     --------
@@ -56,6 +70,7 @@ def read_rail_file(path) -> list[Demonstration]:
     """
     from scipy.io import loadmat, whosmat  # scipy is slow to import; only for .mat files
 
+    check_repair_time(repair_time)
     p = as_file(path)
     expect_magic(p, MAT5_MAGIC, "a MATLAB 5.0 file")
     with reading(p, "invalid MATLAB file"):
@@ -63,8 +78,8 @@ def read_rail_file(path) -> list[Demonstration]:
         mat = loadmat(p, struct_as_record=False, squeeze_me=False, variable_names=["dataset"])
     if "dataset" not in mat:
         with reading(p, "invalid MATLAB file"):
-            found = sorted(name for name, _, _ in whosmat(p))
-        raise FormatError(p, f"expected a variable 'dataset', found {found}")
+            found = summarise(map(repr, sorted(name for name, _, _ in whosmat(p))))
+        raise FormatError(p, f"expected a variable 'dataset', found [{found}]")
     records = np.asarray(mat["dataset"])
     if records.dtype != object or records.size == 0:
         raise FormatError(
@@ -80,7 +95,8 @@ def read_rail_file(path) -> list[Demonstration]:
             t = arrays.pop("time").ravel()
             # Streams are stored (n, 3); a 1-D field becomes one column.
             columns = [arr.reshape(arr.shape[0], -1) for arr in arrays.values()]
-            t, *columns, dropped = drop_repeated_times(t, *columns)
+            t, *columns, dropped = check_clock(p, t, *columns, repair_time=repair_time,
+                                               where=f"demonstration dataset[{i}] (its 'time')")
             if dropped:
                 metadata["dropped_samples"] = dropped
             streams = dict(zip((_FIELDS[key] for key in arrays), columns, strict=True))
@@ -95,7 +111,7 @@ def _user_key(order: str):
     return lambda f: (0, int(f.stem), "") if f.stem.isdigit() else (1, 0, f.stem)
 
 
-def load_rail(folder, *, classes=None, order: str = "authors") -> list[Demonstration]:
+def load_rail(folder, *, classes=None, order: str = "authors", repair_time=None) -> list[Demonstration]:
     """Load the RAIL dataset from its folder, class by class and user by user.
 
     Parameters
@@ -110,6 +126,8 @@ def load_rail(folder, *, classes=None, order: str = "authors") -> list[Demonstra
         ``"authors"`` sorts the user files as strings (``1, 10, 2, ..., 9``),
         the order in which the RAIL paper's authors index demonstrations;
         ``"natural"`` sorts them as numbers.
+    repair_time : {None, "drop"}, default=None
+        Passed to :func:`read_rail_file`.
 
     Returns
     -------
@@ -132,6 +150,7 @@ def load_rail(folder, *, classes=None, order: str = "authors") -> list[Demonstra
     """
     if order not in ("authors", "natural"):
         raise ValueError(f"order: expected 'authors' or 'natural', got {order!r}")
+    check_repair_time(repair_time)
     root = Path(folder)
     if not root.is_dir():
         raise FormatError(root, "expected a RAIL folder with one sub-folder per skill, found no directory")
@@ -144,8 +163,8 @@ def load_rail(folder, *, classes=None, order: str = "authors") -> list[Demonstra
     for name in classes:
         key = str(name).lower()
         if key not in subdirs:
-            found = sorted(d.name for d in subdirs.values())
-            raise FormatError(root, f"expected a sub-folder for class {name!r}, found {found}")
+            found = summarise(map(repr, sorted(d.name for d in subdirs.values())))
+            raise FormatError(root, f"expected a sub-folder for class {name!r}, found [{found}]")
         files = sorted(
             (f for f in subdirs[key].iterdir() if f.suffix.lower() == ".mat" and f.is_file()),
             key=_user_key(order),
@@ -153,5 +172,5 @@ def load_rail(folder, *, classes=None, order: str = "authors") -> list[Demonstra
         if not files:
             raise FormatError(subdirs[key], "expected user files '<user>.mat', found none")
         for f in files:
-            demos.extend(read_rail_file(f))
+            demos.extend(read_rail_file(f, repair_time=repair_time))
     return demos

@@ -5,7 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import Demonstration
-from ._errors import HDF5_MAGIC, FormatError, as_file, drop_repeated_times, expect_magic, reading
+from ..core._validation import summarise
+from ._errors import (
+    HDF5_MAGIC,
+    FormatError,
+    as_file,
+    check_clock,
+    check_repair_time,
+    expect_magic,
+    reading,
+    real_array,
+)
 
 __all__ = ["read_robot_h5", "ROBOT_STREAMS"]
 
@@ -26,17 +36,16 @@ def _read_stream(path, h5, name):
     group_name, data_name, clock_name = ROBOT_STREAMS[name]
     if group_name not in h5:
         if name in _REQUIRED:
-            found = sorted(h5.keys())
-            raise FormatError(path, f"expected a group '{group_name}' (stream {name!r}), found {found}")
+            found = summarise(map(repr, sorted(h5.keys())))
+            raise FormatError(path, f"expected a group '{group_name}' (stream {name!r}), found [{found}]")
         return None
     group = h5[group_name]
     for key in (data_name, clock_name):
         if key not in group:
-            raise FormatError(
-                path, f"expected a dataset '{group_name}/{key}', found {sorted(group.keys())}"
-            )
-    clock = np.asarray(group[clock_name][()], dtype=float)
-    data = np.asarray(group[data_name][()], dtype=float)
+            found = summarise(map(repr, sorted(group.keys())))
+            raise FormatError(path, f"expected a dataset '{group_name}/{key}', found [{found}]")
+    clock = real_array(path, group[clock_name][()], f"'{group_name}/{clock_name}'")
+    data = real_array(path, group[data_name][()], f"'{group_name}/{data_name}'")
     if clock.ndim != 2 or clock.shape[1] != 2 or clock.shape[0] == 0:
         raise FormatError(
             path, f"expected '{group_name}/{clock_name}' of shape (n, 2) [seconds, nanoseconds] "
@@ -52,7 +61,7 @@ def _read_stream(path, h5, name):
     return clock, data
 
 
-def read_robot_h5(path) -> Demonstration:
+def read_robot_h5(path, *, repair_time=None) -> Demonstration:
     """Read a robot recording with one HDF5 group (and clock) per sensor.
 
     The groups ``joint_state_info``, ``transform_info``, ``wrench_info`` and
@@ -63,6 +72,13 @@ def read_robot_h5(path) -> Demonstration:
     ----------
     path : str or path-like
         The ``.h5`` file.
+    repair_time : {None, "drop"}, default=None
+        A clock whose stamps repeat, run backwards or never advance is an
+        error naming the stream and the sample (no sample is lost silently).
+        ``"drop"`` drops samples that repeat their clock's previous stamp
+        (keeping the first) and records how many of the joints' (the time
+        base's) were dropped in ``metadata["dropped_samples"]``; backwards
+        or frozen clocks stay errors.
 
     Returns
     -------
@@ -77,7 +93,7 @@ def read_robot_h5(path) -> Demonstration:
     ------
     FormatError
         If the file is not HDF5, or lacks the joints or position streams, or a
-        clock is malformed.
+        clock is malformed or does not increase (see ``repair_time``).
 
     Examples
     --------
@@ -87,6 +103,7 @@ def read_robot_h5(path) -> Demonstration:
     """
     import h5py  # slow to import; only when an HDF5 file is read
 
+    check_repair_time(repair_time)
     p = as_file(path)
     expect_magic(p, HDF5_MAGIC, "HDF5 content")
     with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
@@ -101,7 +118,9 @@ def read_robot_h5(path) -> Demonstration:
 
     clocked, dropped = {}, {}
     for name, (_, data) in raw.items():
-        t_k, data, dropped[name] = drop_repeated_times(clocks[name] - start, data)
+        group, _, clock = ROBOT_STREAMS[name]
+        t_k, data, dropped[name] = check_clock(p, clocks[name] - start, data, repair_time=repair_time,
+                                               where=f"stream {name!r} (clock '{group}/{clock}')")
         # Joint angles are stored wrapped to (-pi, pi]; a jump of 2 pi is not motion.
         clocked[name] = (t_k, np.unwrap(data, axis=0) if name == "joints" else data)
 

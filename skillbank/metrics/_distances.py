@@ -8,12 +8,30 @@ only two diagonals are kept in memory.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..core import Demonstration
-from ..core._validation import check_array, check_fraction
+from ..core._validation import check_array, check_finite_result, check_fraction, numerical_errors
 
-__all__ = ["frechet_distance", "dtw_distance", "dtw_many"]
+__all__ = ["frechet_distance", "dtw_distance", "dtw_many", "metric"]
+
+
+def metric(func):
+    """Run a public metric under :func:`numerical_errors` and check its result is finite.
+
+    Inputs are bounded by the validator; what can still overflow (a jerk on
+    tiny time steps, say) becomes one ValueError naming the metric.
+    """
+    name = func.__name__
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with numerical_errors(name):
+            return check_finite_result(func(*args, **kwargs), name=name)
+
+    return wrapper
 
 
 def _pair(P, Q):
@@ -46,6 +64,7 @@ def _antidiagonal_dp(P, Q, combine):
     return float(prev1[n - 1])
 
 
+@metric
 def frechet_distance(P, Q) -> float:
     """Discrete Fréchet distance between two sampled curves.
 
@@ -82,6 +101,7 @@ def _band(n_rows: int, n_cols: int, window: float | None) -> tuple[np.ndarray, n
     return lo, hi
 
 
+@metric
 def dtw_many(Q: np.ndarray, R: np.ndarray, window: float | None = None) -> np.ndarray:
     """DTW cost of every trajectory in ``Q`` (n, n_rows, d) against one trajectory ``R`` (n_cols, d).
 
@@ -100,6 +120,10 @@ def dtw_many(Q: np.ndarray, R: np.ndarray, window: float | None = None) -> np.nd
     >>> dtw_many(np.array([[[0.0], [0.0], [1.0], [2.0]]]), R).tolist()
     [0.0]
     """
+    Q = check_array(Q, name="Q", ndim=3)
+    R = check_array(R, name="R", ndim=2, n_dims=Q.shape[2])
+    if window is not None:
+        window = check_fraction(window, name="window")
     n, n_rows, _ = Q.shape
     n_cols = R.shape[0]
     lo, hi = _band(n_rows, n_cols, window)
@@ -123,6 +147,7 @@ def dtw_many(Q: np.ndarray, R: np.ndarray, window: float | None = None) -> np.nd
     return prev[:, -1]
 
 
+@metric
 def dtw_distance(P, Q, *, window=None) -> float:
     """Dynamic time warping distance: least total Euclidean cost of a monotone alignment.
 

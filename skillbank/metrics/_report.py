@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import Constraints, resample
-from ..core._validation import check_array
+from ..core._validation import check_array, check_finite_result, numerical_errors
 from ._distances import dtw_distance, frechet_distance
 from ._shape import angular_similarity, curvature_deviation, jerk_cost, path_length, swept_error_area
 
 __all__ = ["constraint_report", "comparison_metrics"]
 
 
+@numerical_errors("constraint_report")
 def constraint_report(Y, constraints, t=None) -> dict:
     """How well ``Y`` meets ``constraints``.
 
@@ -76,6 +77,10 @@ def comparison_metrics(Y, t, reference, constraints) -> dict:
     >>> m["frechet"], round(m["path_length"], 6)
     (0.0, 1.414214)
     """
+    Y = check_array(Y, name="Y", ndim=(1, 2), as_2d=True)
+    reference = check_array(reference, name="reference", ndim=(1, 2), as_2d=True)
+    if not isinstance(constraints, Constraints):
+        raise ValueError(f"constraints: expected a skillbank Constraints, got {type(constraints).__name__}")
     same = Y if Y.shape[0] == reference.shape[0] else resample(Y, reference.shape[0])
     metrics = {
         "frechet": frechet_distance(Y, reference),
@@ -88,5 +93,7 @@ def comparison_metrics(Y, t, reference, constraints) -> dict:
         "jerk_cost": jerk_cost(Y, t) if Y.shape[0] >= 4 else 0.0,
     }
     if constraints.obstacles:
-        metrics["clearance"] = float(constraints.signed_distances(Y).min())
+        with numerical_errors("clearance"):
+            metrics["clearance"] = check_finite_result(float(constraints.signed_distances(Y).min()),
+                                                       name="clearance")
     return {k: float(v) for k, v in metrics.items()}

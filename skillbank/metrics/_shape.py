@@ -6,6 +6,7 @@ import numpy as np
 
 from ..core import Demonstration, laplacian_matrix
 from ..core._validation import check_array, check_time
+from ._distances import metric
 
 __all__ = [
     "swept_error_area", "angular_similarity", "angular_similarity_matrix", "curvature_deviation",
@@ -23,10 +24,16 @@ def _same_length(P, Q, *, min_samples=1):
 
 def _triangle_areas(U, V):
     """Areas of the triangles spanned by rows of U and V, in any dimension (Lagrange's identity)."""
+    # Lagrange's identity takes fourth powers of the coordinates, which overflow from ~1e77 on:
+    # scale each row by a power of two near its size first (exact, so ordinary results are unchanged).
+    size = np.maximum(np.abs(U).max(axis=1, initial=0.0), np.abs(V).max(axis=1, initial=0.0))
+    scale = np.ldexp(1.0, np.frexp(size)[1])[:, None]
+    U, V = U / scale, V / scale
     uu, vv, uv = (np.einsum("ij,ij->i", a, b) for a, b in ((U, U), (V, V), (U, V)))
-    return 0.5 * np.sqrt(np.maximum(uu * vv - uv * uv, 0.0))
+    return 0.5 * np.sqrt(np.maximum(uu * vv - uv * uv, 0.0)) * scale[:, 0] ** 2
 
 
+@metric
 def swept_error_area(P, Q) -> float:
     """Area swept between two curves of equal length.
 
@@ -67,6 +74,7 @@ def _unit_steps(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return D / np.where(moving, norm, 1.0)[..., None], moving
 
 
+@metric
 def angular_similarity_matrix(A, B) -> np.ndarray:
     """Angular similarity of every trajectory of ``A`` with every trajectory of ``B``.
 
@@ -108,6 +116,7 @@ def angular_similarity_matrix(A, B) -> np.ndarray:
     return out
 
 
+@metric
 def angular_similarity(P, Q) -> float:
     """Angular (dis)similarity of two equally long trajectories, as defined by the paper's authors.
 
@@ -141,6 +150,7 @@ def angular_similarity(P, Q) -> float:
     return float(angular_similarity_matrix(P[None], Q[None])[0, 0])
 
 
+@metric
 def curvature_deviation(P, Q, t=None) -> float:
     """Mean Euclidean distance between the Laplacian coordinates of two equally long curves.
 
@@ -166,6 +176,7 @@ def curvature_deviation(P, Q, t=None) -> float:
     return float(np.linalg.norm(R, axis=1).mean())
 
 
+@metric
 def jerk_cost(Y, t) -> float:
     """Integral of the squared jerk, ``int |d^3 Y / dt^3|^2 dt``, on real time stamps.
 
@@ -198,6 +209,7 @@ def jerk_cost(Y, t) -> float:
     return float((36.0 * np.einsum("ij,ij->i", d3, d3) * np.diff(edges)).sum())
 
 
+@metric
 def path_length(Y) -> float:
     """Length of the polyline through the samples.
 

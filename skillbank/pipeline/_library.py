@@ -6,24 +6,18 @@ import numpy as np
 from sklearn.decomposition import PCA
 from tqdm import tqdm
 
-from ..clustering import FEATURE_KINDS, ElasticClustering, nearest_centre, primitive_features
-from ..core import Demonstration, __version__
+from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
+from ..core import Demonstration
 from ..core._validation import check_positive
-from ..segmentation import MultimodalSegmenter
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
+from ._adding import Adding
+from ._adding import check_label as _check_label
 
 __all__ = ["Library", "carry_labels"]
 
-_ASSIGN = ("incremental", "none", "recluster")
 #: The paper's stretching constant for elastic clustering (RAIL experiment).
 DEFAULT_STRETCH = 1.2
-
-
-def _check_label(name, what="label"):
-    if not isinstance(name, str) or not name.strip():
-        raise ValueError(f"{what}: expected a non-empty string, got {name!r}")
-    return name.strip()
 
 
 def _check_id(value, name):
@@ -69,7 +63,31 @@ def carry_labels(old_members: dict, old_labels: dict, new_members: dict) -> dict
     return out
 
 
-class Library:
+def _check_one_dimension(prims) -> None:
+    """One clustering needs one number of position dimensions: name the primitives that differ."""
+    by_dims: dict = {}
+    for p in prims:
+        by_dims.setdefault(p.demo["position"].shape[1], []).append(p.id)
+    if len(by_dims) > 1:
+        groups = sorted(by_dims.items(), key=lambda kv: -len(kv[1]))
+        rest = "; ".join(f"{len(ids)} are {d}-D (ids {', '.join(map(str, ids[:5]))}"
+                         f"{', ...' if len(ids) > 5 else ''})" for d, ids in groups[1:])
+        raise ValueError(f"library: cannot cluster positions of different dimensions together: "
+                         f"{len(groups[0][1])} primitive(s) are {groups[0][0]}-D, {rest}; remove those "
+                         "demonstrations or keep them in another library")
+
+
+def _ticker(bar):
+    """A ``progress(done, total)`` callback that moves a tqdm bar."""
+
+    def tick(done, total):
+        bar.total = total
+        bar.update(done - bar.n)
+
+    return tick
+
+
+class Library(Adding):
     """A skill library: the pipeline from demonstrations to reusable skills, over a store.
 
     ``Library`` adds demonstrations (cut into primitives by
@@ -91,12 +109,17 @@ class Library:
         False raises ValueError when the library does not exist.
     timeout : float, default=60.0
         Seconds a SQLite writer waits for another writer before giving up.
+    readonly : bool, default=False
+        Open the store read-only: it writes nothing (a library in a folder the
+        user may not write can be read: listed, reused, exported), and every
+        method that would change the library raises ValueError. Never creates.
 
     Raises
     ------
     ValueError
         One line, for a file that is not SQLite, is corrupt, is not a
-        skillbank library or was written by a newer schema version.
+        skillbank library or was written by a newer schema version; and for
+        one opened for writing where its file or folder is read-only.
 
     Examples
     --------
@@ -112,9 +135,11 @@ class Library:
 
     schema_version = SCHEMA_VERSION
 
-    def __init__(self, location, *, create: bool = True, timeout: float = 60.0):
+    def __init__(self, location, *, create: bool = True, timeout: float = 60.0, readonly: bool = False):
         if isinstance(location, Store):
             self.store = location
+        elif readonly:
+            self.store = open_store(location, create=False, timeout=timeout, readonly=True)
         else:
             self.store = open_store(location, create=create, timeout=timeout)
 
@@ -137,106 +162,7 @@ class Library:
     def __repr__(self) -> str:
         return f"Library({self.store.location!r})"
 
-    # -- adding -----------------------------------------------------------------------------------
-    @staticmethod
-    def _bounds(demo, segment, segmentation):
-        if not segment:
-            return [(0, demo.n_steps)], {"segment": False}
-        params = dict(segmentation or {})
-        streams = params.pop("streams", None)
-        result = MultimodalSegmenter(**params).fit(demo, streams).result_
-        return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
-                               "streams": streams, "requested": params, "resolved": result.params,
-                               "mode": result.mode, "skillbank_version": __version__}
-
-    def _assign(self, parts, cache: dict):
-        """Clusters of the current version for primitive samples ``parts`` (None when they cannot join)."""
-        version = self.store.current_version()
-        if version is None:
-            return None
-        if cache.get("version") != version:
-            cache.clear()
-            cache.update(self.store.version(version))
-        p = cache["params"]
-        try:
-            F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
-        except ValueError:  # another number of dimensions, or too short: stays unclustered
-            return None
-        if F.shape[1] != cache["pca_mean"].shape[0]:
-            return None
-        X = (F - cache["pca_mean"]) @ cache["pca_components"].T
-        return {"version": version, "clusters": nearest_centre(X, cache["centers"]).tolist(), "features": X}
-
-    def add(self, demo, *, segment: bool = True, segmentation=None, label=None, source=None,
-            assign: str = "incremental") -> int:
-        """Store a demonstration and its primitives in one transaction; returns its id.
-
-        Parameters
-        ----------
-        demo : Demonstration
-            Needs a ``"position"`` stream (clustering and reuse work on it).
-        segment : bool, default=True
-            Cut it with :func:`skillbank.segmentation.segment`; False stores it
-            as one primitive.
-        segmentation : dict, optional
-            Keyword arguments of the segmenter, plus ``"streams"``.
-        label : str, optional
-            Label every new primitive.
-        source : str, optional
-            Default: ``demo.metadata["source"]``.
-        assign : {"incremental", "none", "recluster"}, default="incremental"
-            ``"incremental"`` puts each new primitive in the nearest cluster of
-            the current clustering (features from that clustering's
-            featuriser); ``"recluster"`` reclusters everything afterwards with
-            the last parameters; ``"none"`` leaves them unclustered.
-
-        Examples
-        --------
-        >>> lib.add(demo, segmentation={"window": 16})  # doctest: +SKIP
-        3
-        """
-        return self.add_many([demo], segment=segment, segmentation=segmentation, label=label,
-                             source=source, assign=assign)[0]
-
-    def add_many(self, demos, *, segment: bool = True, segmentation=None, label=None, source=None,
-                 assign: str = "incremental", progress: bool = False) -> list:
-        """Add several demonstrations, each in its own transaction; returns their ids.
-
-        With ``assign="recluster"`` the library is reclustered once, at the end.
-        ``progress`` shows a tqdm bar. Other parameters are :meth:`add`'s.
-
-        Examples
-        --------
-        >>> lib.add_many(demos, segment=False, progress=True)  # doctest: +SKIP
-        [1, 2, 3]
-        """
-        if assign not in _ASSIGN:
-            raise ValueError(f"assign: expected one of {list(_ASSIGN)}, got {assign!r}")
-        label = None if label is None else _check_label(label)
-        if segmentation is not None and not isinstance(segmentation, dict):
-            raise ValueError(f"segmentation: expected a dict of segmenter parameters, got "
-                             f"{type(segmentation).__name__}")
-        demos = list(demos)
-        for k, demo in enumerate(demos):
-            if not isinstance(demo, Demonstration):
-                raise ValueError(f"demos[{k}]: expected a Demonstration, got {type(demo).__name__}")
-            if "position" not in demo.streams:
-                raise ValueError(f"demos[{k}]: expected a 'position' stream, got streams {demo.stream_names}")
-        ids, cache = [], {}
-        for demo in tqdm(demos, desc="adding", unit="demo", disable=not progress):
-            bounds, provenance = self._bounds(demo, segment, segmentation)
-            src = source if source is not None else demo.metadata.get("source")
-            parts = [demo.slice(a, b) for a, b in bounds]
-            members = self._assign(parts, cache) if assign == "incremental" else None
-            did, _ = self.store.add_demonstration(demo, bounds, source=None if src is None else str(src),
-                                                  label=label, provenance=provenance, members=members)
-            ids.append(did)
-        if assign == "recluster" and ids:
-            params = self.clustering_params() or {}
-            keep = ("stretch", "features", "n_points", "n_components", "random_state")
-            self.cluster(**{k: params[k] for k in keep if k in params})
-        return ids
-
+    # -- removing -------------------------------------------------------------------------------
     def remove(self, demo_id) -> None:
         """Delete a demonstration with its primitives, their memberships and labels.
 
@@ -248,7 +174,7 @@ class Library:
 
     # -- clustering and labels --------------------------------------------------------------------
     def cluster(self, *, stretch=None, features: str = "default", n_points: int = 16, n_components: int = 3,
-                random_state=0) -> int:
+                random_state=0, progress: bool = False) -> int:
         """Cluster every primitive with elastic clustering; records and returns a new version.
 
         Features: ``features`` (see :func:`~skillbank.clustering.primitive_features`)
@@ -259,7 +185,9 @@ class Library:
         (:func:`carry_labels`). The version is written in one transaction;
         the fit itself runs outside it, so other processes keep adding
         meanwhile; primitives added while the fit ran are then assigned to the
-        new version's nearest clusters, as later adds are.
+        new version's nearest clusters, as later adds are. Every primitive is
+        a member of the new version, including those an add left unclustered
+        (``summary()["unassigned"]``).
 
         Parameters
         ----------
@@ -268,6 +196,8 @@ class Library:
         features : {"default", "position"}, default="default"
         n_points, n_components : int
         random_state : int or None, default=0
+        progress : bool, default=False
+            A tqdm bar on stderr over the steps (loading, features, fit, writing).
 
         Examples
         --------
@@ -281,33 +211,53 @@ class Library:
         n_components = check_positive(n_components, name="n_components", integer=True)
         if n_points < 2:
             raise ValueError(f"n_points: expected an integer >= 2, got {n_points}")
-        old = self.store.current_version()
-        prims = self.store.primitives(load=True)
-        if len(prims) < 2:
-            raise ValueError(f"library: expected at least 2 primitives to cluster, got {len(prims)}")
-        F = primitive_features([p.demo for p in prims], kind=features, n_points=n_points)
-        pca = PCA(n_components=min(n_components, F.shape[0], F.shape[1]), random_state=random_state).fit(F)
-        X = (F - pca.mean_) @ pca.components_.T
-        model = ElasticClustering(stretch=stretch, random_state=random_state).fit(X)
-        params = {"stretch": float(stretch), "features": features, "n_points": int(n_points),
-                  "n_components": int(pca.components_.shape[0]), "random_state": random_state,
-                  "method": "ElasticClustering", "criterion": model.criterion,
-                  "min_separation": model.min_separation, "n_primitives": len(prims),
-                  "energy": float(model.energy_)}
-        new_members = {p.id: int(c) for p, c in zip(prims, model.labels_, strict=True)}
-        labels = {} if old is None else carry_labels(self.store.members(old), self.store.cluster_labels(old),
-                                                     new_members)
-        version = self.store.add_version(
-            params=params, centers=model.cluster_centers_, pca_mean=pca.mean_,
-            pca_components=pca.components_, labels=labels,
-            members=[(p.id, int(c), x) for p, c, x in zip(prims, model.labels_, X, strict=True)])
-        # Primitives other processes added while the fit ran join the new version as adds would.
-        late = [q for q in self.store.primitives(load=True) if q.id not in new_members]
+        self._check_writable("record a clustering")
+        with tqdm(total=4, desc="clustering", unit="step", disable=not progress) as bar:
+            bar.set_postfix_str("loading primitives")
+            old = self.store.current_version()
+            prims = self.store.primitives(load=True)
+            if len(prims) < 2:
+                raise ValueError(f"library: expected at least 2 primitives to cluster, got {len(prims)}")
+            _check_one_dimension(prims)
+            bar.update()
+            bar.set_postfix_str("features")
+            F = primitive_features([p.demo for p in prims], kind=features, n_points=n_points)
+            pca = PCA(n_components=min(n_components, *F.shape), random_state=random_state).fit(F)
+            X = (F - pca.mean_) @ pca.components_.T
+            bar.update()
+            bar.set_postfix_str("fitting")
+            model = ElasticClustering(stretch=stretch, random_state=random_state).fit(X)
+            bar.update()
+            bar.set_postfix_str("writing")
+            # n_dims lets an add say why a primitive of another dimension cannot join
+            params = {"stretch": float(stretch), "features": features, "n_points": int(n_points),
+                      "n_components": int(pca.components_.shape[0]), "random_state": random_state,
+                      "method": "ElasticClustering", "criterion": model.criterion,
+                      "min_separation": model.min_separation, "n_primitives": len(prims),
+                      "energy": float(model.energy_), "n_dims": int(prims[0].demo["position"].shape[1])}
+            new_members = {p.id: int(c) for p, c in zip(prims, model.labels_, strict=True)}
+            labels = {} if old is None else carry_labels(self.store.members(old),
+                                                         self.store.cluster_labels(old), new_members)
+            version = self.store.add_version(
+                params=params, centers=model.cluster_centers_, pca_mean=pca.mean_,
+                pca_components=pca.components_, labels=labels,
+                members=[(p.id, int(c), x) for p, c, x in zip(prims, model.labels_, X, strict=True)])
+            self._assign_late(version, set(new_members))
+            bar.update()
+        return version
+
+    def _assign_late(self, version: int, fitted: set) -> None:
+        """Primitives other processes added while the fit ran join the new version as adds would."""
+        late = [q for q in self.store.primitives(load=False) if q.id not in fitted]
+        if not late:
+            return
+        ids = {q.id for q in late}
+        late = [q for did in sorted({q.demonstration_id for q in late})
+                for q in self.store.primitives(demonstration=did) if q.id in ids]
         found = self._assign([q.demo for q in late], {}) if late else None
         if found is not None and found["version"] == version:
             self.store.add_members(version, [(q.id, c, x) for q, c, x in
                                              zip(late, found["clusters"], found["features"], strict=True)])
-        return version
 
     def clustering_params(self, version=None):
         """Parameters of a clustering version (default: the current one), or None before any."""
@@ -377,9 +327,14 @@ class Library:
         Returns
         -------
         dict
-            ``{"n_demonstrations": int, "skills": [{"cluster", "label", "count"}],
+            ``{"n_demonstrations": int, "version": int or None,
+            "skills": [{"cluster", "label", "count"}],
+            "unassigned": {"count": int, "ids": [primitive ids]},
             "primitives": [{"id", "demonstration", "cluster", "label", "n_steps"}]}``;
-            skills are the clusters of the current version.
+            skills are the clusters (0..k-1) of the current clustering
+            ``version``; ``unassigned`` the primitives in none of them (an
+            add with ``assign="none"``, a primitive that could not join, or
+            a recluster that was interrupted): :meth:`cluster` assigns them.
         """
         version = self.store.current_version()
         skills = []
@@ -389,7 +344,9 @@ class Library:
             labels = self.store.cluster_labels(version)
             skills = [{"cluster": k, "label": labels.get(k), "count": int(counts[k])} for k in range(n)]
         prims = self.store.primitives(load=False)
-        return {"n_demonstrations": len(self.store.demonstration_ids()), "skills": skills,
+        unassigned = [p.id for p in prims if p.cluster is None]
+        return {"n_demonstrations": len(self.store.demonstration_ids()), "version": version, "skills": skills,
+                "unassigned": {"count": len(unassigned), "ids": unassigned},
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
                                 "label": p.label, "n_steps": p.n_steps} for p in prims]}
 
@@ -414,7 +371,7 @@ class Library:
         return prims
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
-              shortlist: int = SHORTLIST, random_state=None):
+              shortlist: int = SHORTLIST, random_state=None, progress: bool = False):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -422,6 +379,8 @@ class Library:
         that the edit deformed least by the paper's curve length;
         ``"length"`` orders all of them by curve length; ``"deformation"``
         and ``"endpoints"`` by how far each candidate is from the task.
+        ``progress`` shows a tqdm bar on stderr over the candidates adapted
+        (the result is the same).
 
         Returns
         -------
@@ -433,17 +392,64 @@ class Library:
         >>> lib.reuse("press", Constraints(start=[0, 0, 0.2], goal=[0.3, 0.1, 0.0]))  # doctest: +SKIP
         """
         prims = self.skill(skill)  # a clear error for an empty skill before any fitting
-        return reuse([p.demo for p in prims], constraints, method=method, k=k,
-                     ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state)
+        with tqdm(total=len(prims), desc="adapting", unit="candidate", disable=not progress) as bar:
+            return reuse([p.demo for p in prims], constraints, method=method, k=k,
+                         ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
+                         progress=_ticker(bar) if progress else None)
 
-    def export(self, folder):
-        """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path."""
-        return self.store.export(folder)
+    def export(self, folder, *, progress: bool = False):
+        """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.
+
+        ``progress`` shows a tqdm bar on stderr over the demonstrations written.
+        """
+        if not progress:
+            return self.store.export(folder)
+        with tqdm(desc="exporting", unit="demo") as bar:
+            return self.store.export(folder, progress=_ticker(bar))
 
     def import_folder(self, folder) -> dict:
-        """Add everything from a folder written by :meth:`export`, in one transaction.
+        """Import a folder written by :meth:`export`; importing it again changes nothing.
 
-        Into an empty library the ids are kept; otherwise they are renumbered.
-        Returns ``{"demonstrations": {old: new}, "primitives": {...}, "versions": {...}}``.
+        The whole folder is checked first (paths confined to it, the manifest
+        validated, the files checked against it), so a bad folder changes
+        nothing; the import itself is one transaction.
+
+        - Into an **empty** library: an exact copy (ids, clustering versions,
+          memberships and labels kept).
+        - Into a **non-empty** library: a merge. Demonstrations the library
+          already holds (same samples, streams and metadata) are skipped; the
+          others are added, renumbered, with their primitives and the
+          primitives' own labels. The imported clustering versions are not
+          added (they describe another population): the current version
+          stays current with its labels, and the new primitives join its
+          nearest clusters, as :meth:`add` would put them.
+
+        Returns
+        -------
+        dict
+            ``{"mode": "copy" or "merge", "demonstrations": {old: new},
+            "primitives": {old: new}, "versions": {old: new},
+            "skipped": {old demonstration id: id already stored},
+            "assigned": {new primitive id: cluster}}``.
+
+        Examples
+        --------
+        >>> lib.import_folder("backup")["skipped"]  # doctest: +SKIP
+        {1: 1, 2: 2}
         """
-        return self.store.import_folder(folder)
+        result = self.store.import_folder(folder)
+        result["assigned"] = {}
+        if result["mode"] != "merge":
+            return result
+        # A second transaction: a crash in between leaves the new primitives unclustered (as assign="none").
+        cache, by_version = {}, {}
+        for did in sorted(result["demonstrations"].values()):
+            prims = self.store.primitives(demonstration=did, load=True)
+            found = self._assign([p.demo for p in prims], cache) if prims else None
+            if found is not None:
+                by_version.setdefault(found["version"], []).extend(
+                    zip([p.id for p in prims], found["clusters"], found["features"], strict=True))
+        for version, members in by_version.items():
+            self.store.add_members(version, members)
+            result["assigned"].update({int(p): int(c) for p, c, _ in members})
+        return result

@@ -127,7 +127,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
     Returns
     -------
     pathlib.Path
-        ``path``.
+        The file written (``.png`` added to a name without extension).
 
     Raises
     ------
@@ -147,6 +147,8 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
     if not labelings:
         raise ValueError("labelings: expected at least one clustering, got none")
     rows = {str(k): _as_labels(v, n, f"labelings[{k!r}]") for k, v in labelings.items()}
+    # panels name each cluster by its own label, as the labels, 'skillbank cluster' and the library do
+    ids = {str(k): np.unique(np.asarray(v)) for k, v in labelings.items()}
     cls = None
     if classes is not None:
         raw_classes = np.asarray(classes)
@@ -154,6 +156,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
         if class_names is None:
             class_names = [str(c) for c in np.unique(raw_classes)]
         rows = {"ground truth": cls, **rows}
+        ids = {"ground truth": np.unique(raw_classes), **ids}
     trajs = None
     if trajectories is not None:
         trajs = [check_array(Y, name=f"trajectories[{i}]", ndim=(1, 2), as_2d=True)
@@ -182,7 +185,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
         line_colours = [_colour(c) for c in (cls if cls is not None else rank[labels])]
         for j, cid in enumerate(order[:n_cols - 1]):
             members = np.flatnonzero(labels == cid)
-            label = class_names[cid] if truth and class_names else f"cluster {j + 1}"
+            label = class_names[cid] if truth and class_names else f"cluster {ids[name][cid]}"
             _trajectory_panel(fig, grid[r, j + 1], [trajs[i] for i in members],
                               [line_colours[i] for i in members], limits, f"{label} ({members.size})")
         if order.size > n_cols - 1:

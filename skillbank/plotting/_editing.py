@@ -15,10 +15,10 @@ from matplotlib.patches import Polygon
 
 from ..core import Constraints, Demonstration
 from ..core._validation import check_array
+from ._segmentation import _save
 
 __all__ = ["draw_edit", "plot_edit"]
 
-_DPI = 150
 _DEMO, _OTHER, _REPRO, _OBSTACLE = "#7f7f7f", "#c7c7c7", "#d62728", "#1f77b4"
 
 
@@ -140,7 +140,8 @@ def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, titl
     ----------
     reproduction : array-like of shape (n_steps, 2 or 3) or Demonstration
     path : str or path-like
-        Output image; the format follows the extension (``.png``, ``.pdf``, ``.svg``).
+        Output image; the format follows the extension (``.png``, ``.pdf``, ``.svg``; none
+        adds ``.png``). Parent folders are created.
     demo, demos, constraints
         As in :func:`draw_edit`.
     title : str, optional
@@ -148,6 +149,7 @@ def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, titl
     Returns
     -------
     pathlib.Path
+        The file written (see :func:`figure_path`).
 
     Examples
     --------
@@ -167,6 +169,4 @@ def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, titl
         ax.set_zlabel("z")
     ax.set_xlabel("x")
     ax.set_ylabel("y")
-    path = Path(path)
-    fig.savefig(path, dpi=_DPI, bbox_inches="tight")
-    return path
+    return _save(fig, path)

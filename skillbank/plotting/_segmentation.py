@@ -9,12 +9,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.backend_bases import FigureCanvasBase
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..segmentation import SegmentationResult
 
 __all__ = [
+    "figure_path",
     "plot_jerk_profile",
     "plot_keypoint_probability",
     "plot_segments",
@@ -49,9 +51,42 @@ def _check_segmented_stream(result: SegmentationResult, stream):
     return result.streams[stream]
 
 
-def _save(fig: Figure, path) -> Path:
-    """Write ``fig`` to ``path`` (parents created); every plotting module saves through here."""
+def figure_path(path, *, name: str = "path") -> Path:
+    """The file a figure written to ``path`` really goes to.
+
+    The extension names the format (``.png``, ``.pdf``, ``.svg``, ...); a name
+    without one gets ``.png``, as matplotlib would add, so ``"out/fig"`` and
+    a folder ``"out"`` are written to ``out/fig.png`` and ``out.png``.
+
+    Raises
+    ------
+    ValueError
+        If the extension is not a format matplotlib writes (``name`` names the argument).
+
+    Examples
+    --------
+    >>> figure_path("fig").name, figure_path("fig.PDF").name
+    ('fig.png', 'fig.PDF')
+    >>> figure_path("fig.txt", name="plot")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: plot: expected a figure file name ending in one of .avif, ..., got 'fig.txt'
+    """
     path = Path(path)
+    suffix = path.suffix.lower()[1:]
+    if not suffix:
+        return path.with_name(path.name.rstrip(".") + ".png")
+    formats = sorted(FigureCanvasBase.get_supported_filetypes())
+    if suffix not in formats:
+        raise ValueError(f"{name}: expected a figure file name ending in one of "
+                         f"{', '.join('.' + f for f in formats)} (or no extension for .png), "
+                         f"got {str(path)!r}")
+    return path
+
+
+def _save(fig: Figure, path) -> Path:
+    """Write ``fig`` (parents created) and return the file written; every plotting module saves here."""
+    path = figure_path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=_DPI, bbox_inches="tight")
     return path

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core import Constraints, Demonstration, resample
 from ..core._params import NotFittedError, Params
-from ..core._validation import check_array, check_positive
+from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors
 from ..editing import lte
 
 __all__ = ["Representation", "as_constraints", "edit_summary"]
@@ -162,15 +162,25 @@ class Representation(Params):
         self
         """
         pairs = self._demos(demos)
-        self.n_dims_ = int(pairs[0][1].shape[1])
-        self.n_demos_ = len(pairs)
-        n_ref = int(round(float(np.median([Y.shape[0] for _, Y in pairs]))))
-        start = float(np.mean([t[0] for t, _ in pairs]))
-        stop = float(np.mean([t[-1] for t, _ in pairs]))
-        self.t_ = np.linspace(start, stop, n_ref)
-        self._durations = [float(t[-1] - t[0]) for t, _ in pairs]
-        self._fit([resample(Y, Y.shape[0], t=t) for t, Y in pairs])
+        step = f"{type(self).__name__}.fit"
+        with numerical_errors(step):
+            self.n_dims_ = int(pairs[0][1].shape[1])
+            self.n_demos_ = len(pairs)
+            n_ref = int(round(float(np.median([Y.shape[0] for _, Y in pairs]))))
+            start = float(np.mean([t[0] for t, _ in pairs]))
+            stop = float(np.mean([t[-1] for t, _ in pairs]))
+            self.t_ = np.linspace(start, stop, n_ref)
+            self._durations = [float(t[-1] - t[0]) for t, _ in pairs]
+            self._fit([resample(Y, Y.shape[0], t=t) for t, Y in pairs])
+        self._check_learned(step)
         return self
+
+    def _check_learned(self, step: str) -> None:
+        """Every learned float array or number (attributes ending in ``_``) must be finite."""
+        for key, value in vars(self).items():
+            if key.endswith("_") and not key.startswith("_") and isinstance(value, (float, np.ndarray)):
+                if not isinstance(value, np.ndarray) or value.dtype.kind == "f":
+                    check_finite_result(value, name=f"{step} ({key})")
 
     # ---------------------------------------------------------------- output
     def _check_fitted(self):
@@ -223,15 +233,24 @@ class Representation(Params):
         Demonstration
             Stream ``"position"`` of shape (n_steps, n_dims); metadata holds
             ``"representation"`` and, when obstacles were given, the
-            ``"obstacle_editing"`` outcome.
+            outcome of the obstacle post-edit in ``"edit"``.
+
+        Raises
+        ------
+        ValueError
+            On invalid constraints (naming them), and, naming
+            ``<Class>.reproduce``, when the computation overflows or its
+            result is not finite.
         """
         self._check_fitted()
         n_steps = self._n_steps(n_steps)
         constraints = as_constraints(constraints)
         constraints.check_dims(self.n_dims_)
-        Y = self._reproduce(constraints, n_steps)
-        metadata = {"representation": type(self).__name__}
-        t = self._time(n_steps)
+        step = f"{type(self).__name__}.reproduce"
+        with numerical_errors(step):
+            Y = check_finite_result(self._reproduce(constraints, n_steps), name=step)
+            metadata = {"representation": type(self).__name__}
+            t = self._time(n_steps)
         if constraints.obstacles and not self.avoids_obstacles:
             Y = self._avoid_obstacles(Y, t, constraints, metadata)
         return Demonstration(t, {"position": Y}, metadata)

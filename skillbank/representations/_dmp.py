@@ -111,14 +111,16 @@ class DMP(Representation):
         # Demonstrations' own durations: each is stretched to the same phase course.
         durations = self._durations
         for Y, T in zip(Ys, durations, strict=True):
-            t = np.linspace(0.0, T, Y.shape[0])
-            xd = np.gradient(Y, t, axis=0, edge_order=2)
-            xdd = np.gradient(xd, t, axis=0, edge_order=2)
-            s = np.exp(-a_s * t / T)[:, None]
+            # Derivatives in the phase time u = t / T: T x' and T^2 x'' directly, so neither a
+            # very long nor a very short duration overflows (T^2 of 1e-200 s, 1 / dt^2, ...).
+            u = np.linspace(0.0, 1.0, Y.shape[0])
+            xu = np.gradient(Y, u, axis=0, edge_order=2)
+            xuu = np.gradient(xu, u, axis=0, edge_order=2)
+            s = np.exp(-a_s * u)[:, None]
             g, x0 = Y[-1], Y[0]
-            targets.append((T**2 * xdd + D * T * xd) / K - (g - Y) + (g - x0) * s)
+            targets.append((xuu + D * xu) / K - (g - Y) + (g - x0) * s)
             rows.append(self._features(s[:, 0]))
-            v0.append(xd[0])
+            v0.append(xu[0] / T)
         Phi, F = np.vstack(rows), np.vstack(targets)
         G = Phi.T @ Phi
         G[np.diag_indices_from(G)] += reg * max(np.trace(G) / n_basis, np.finfo(float).tiny)
@@ -146,15 +148,15 @@ class DMP(Representation):
         from scipy.signal import lfilter, lfiltic  # 0.4 s to import (scipy.stats); only when a DMP runs
 
         K, D, a_s = self._gains()
-        tau = self.tau_
-        dt = tau / (n_steps - 1)
-        t = np.linspace(0.0, tau, n_steps)
-        s = np.exp(-a_s * t / tau)
+        # Integrated in the phase time u = t / tau (the system is the same with tau = 1 and the
+        # state v = tau x'), so the duration enters only through the initial velocity.
+        dt = 1.0 / (n_steps - 1)
+        s = np.exp(-a_s * np.linspace(0.0, 1.0, n_steps))
         f = self._features(s) @ self.weights_  # (n_steps, n_dims)
-        u = K * (g - np.outer(s, g - x0) + f) / tau
+        u = K * (g - np.outer(s, g - x0) + f)
         M = np.zeros((4, 4))
-        M[0, 1] = 1.0 / tau
-        M[1, 0], M[1, 1], M[1, 2] = -K / tau, -D / tau, 1.0
+        M[0, 1] = 1.0
+        M[1, 0], M[1, 1], M[1, 2] = -K, -D, 1.0
         M[2, 3] = 1.0
         E = expm(M * dt)
         Phi, b_u, b_du = E[:2, :2], E[:2, 2], E[:2, 3]
@@ -163,7 +165,7 @@ class DMP(Representation):
         w = b_u[:, None, None] * u[None, :-1] + b_du[:, None, None] * du[None]  # (2, n-1, d)
         x = np.empty((n_steps, x0.shape[0]))
         x[0] = x0
-        q0 = np.stack([x0, tau * xd0])
+        q0 = np.stack([x0, self.tau_ * xd0])
         x[1] = Phi[0] @ q0 + w[0, 0]
         if n_steps > 2:
             tr, det = np.trace(Phi), np.linalg.det(Phi)

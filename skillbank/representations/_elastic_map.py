@@ -8,7 +8,7 @@ from scipy.linalg import solveh_banded
 from scipy.spatial import cKDTree
 
 from ..core import resample
-from ..core._validation import check_array, check_positive
+from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors
 from ._base import Representation
 
 __all__ = ["ElasticMap"]
@@ -164,12 +164,13 @@ class ElasticMap(Representation):
         0.0
         """
         self._check_fitted()
-        nodes = np.asarray(nodes, dtype=float)
         nodes = check_array(nodes, name="nodes", n_dims=self.n_dims_, min_samples=self.min_samples)
         stretch, bend, _, _ = self._params()
-        dist, _ = cKDTree(self._augment(nodes)).query(self._points)
-        K = _smoothness(nodes.shape[0], stretch, bend)
-        return float(np.mean(dist**2) + np.einsum("ij,ij->", nodes, K @ nodes))
+        with numerical_errors("ElasticMap.energy"):
+            dist, _ = cKDTree(self._augment(nodes)).query(self._points)
+            K = _smoothness(nodes.shape[0], stretch, bend)
+            energy = float(np.mean(dist**2) + np.einsum("ij,ij->", nodes, K @ nodes))
+        return check_finite_result(energy, name="ElasticMap.energy")
 
     def _em(self, nodes, fixed):
         """EM from ``nodes`` with ``fixed`` (index -> position) held; returns the map."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from ..core._validation import check_positive
+from ..core._validation import check_finite_result, check_positive, numerical_errors
 from ._base import Representation, as_constraints
 
 __all__ = ["ProMP", "gaussian_basis"]
@@ -229,13 +229,16 @@ class ProMP(Representation):
         >>> bool(std[-1, 1] > std[0, 1])
         True
         """
-        mean, cov, Phi = self._posterior(constraints, n_steps)
-        K = int(self.n_basis)
-        std = np.empty((Phi.shape[0], self.n_dims_))
-        for j in range(self.n_dims_):
-            block = cov[j * K:(j + 1) * K, j * K:(j + 1) * K]
-            std[:, j] = np.sqrt(np.maximum(np.einsum("ik,kl,il->i", Phi, block, Phi), 0.0))
-        return self._trajectory(mean, Phi), std
+        step = "ProMP.mean_and_std"
+        with numerical_errors(step):
+            mean, cov, Phi = self._posterior(constraints, n_steps)
+            K = int(self.n_basis)
+            std = np.empty((Phi.shape[0], self.n_dims_))
+            for j in range(self.n_dims_):
+                block = cov[j * K:(j + 1) * K, j * K:(j + 1) * K]
+                std[:, j] = np.sqrt(np.maximum(np.einsum("ik,kl,il->i", Phi, block, Phi), 0.0))
+            mean = self._trajectory(mean, Phi)
+        return check_finite_result(mean, name=step), check_finite_result(std, name=step)
 
     def sample(self, n, constraints=None, n_steps=None):
         """Draw trajectories from the (conditioned) distribution.
@@ -260,11 +263,13 @@ class ProMP(Representation):
         (4, 50, 2)
         """
         n = check_positive(n, name="n", integer=True)
-        mean, cov, Phi = self._posterior(constraints, n_steps)
         from sklearn.utils import check_random_state  # slow to import; only when sampling
 
-        rng = check_random_state(self.random_state)
-        vals, vecs = np.linalg.eigh(cov)
-        root = vecs * np.sqrt(np.maximum(vals, 0.0))
-        W = mean + rng.standard_normal((n, mean.shape[0])) @ root.T
-        return np.einsum("ik,njk->nij", Phi, W.reshape(n, self.n_dims_, -1))
+        with numerical_errors("ProMP.sample"):
+            mean, cov, Phi = self._posterior(constraints, n_steps)
+            rng = check_random_state(self.random_state)
+            vals, vecs = np.linalg.eigh(cov)
+            root = vecs * np.sqrt(np.maximum(vals, 0.0))
+            W = mean + rng.standard_normal((n, mean.shape[0])) @ root.T
+            out = np.einsum("ik,njk->nij", Phi, W.reshape(n, self.n_dims_, -1))
+        return check_finite_result(out, name="ProMP.sample")

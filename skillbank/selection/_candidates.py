@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core import Constraints, Demonstration, resample
-from ..core._validation import check_array, check_positive, check_time
+from ..core._validation import check_array, check_positive, check_time, numerical_errors
 from ..editing import lte
 
 __all__ = ["Candidate", "Selection", "select_candidates", "RANKINGS", "SHORTLIST"]
@@ -133,6 +133,7 @@ def _arrays(primitives, ids, t, min_samples):
     return out, rejected, ids
 
 
+@numerical_errors("select_candidates")
 def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = "shortlist",
                       shortlist: int = SHORTLIST, min_samples: int = 2, **lte_params) -> Selection:
     """Adapt every candidate to ``constraints`` with LTE, drop the failures, rank the rest.

@@ -7,16 +7,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Demonstration
-from ..core._validation import check_positive
+from ..core import Constraints, Demonstration
+from ..core._validation import check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, representation
-from ._candidates import SHORTLIST, Selection, select_candidates
+from ._candidates import SHORTLIST, Selection, _check_ids, select_candidates
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
 
 #: The method names, in the registry's order (``skillbank.representations.REPRESENTATIONS``).
 METHODS = tuple(REPRESENTATIONS)
 _WORDS = {"via": "via-points", "start_velocity": "start velocity", "end_velocity": "end velocity"}
+#: Candidates adapted between two calls of :func:`reuse`'s ``progress``.
+_CHUNK = 256
+# select_candidates' ranking, to merge the selections of chunks into the one of a single pass
+# (a stable sort of the chunks' candidates, in input order, by the same key gives the same order).
+_KEYS = {
+    "length": lambda c: (c.length,),
+    "endpoints": lambda c: (c.endpoint_distance, c.length),
+    "deformation": lambda c: (c.deformation, c.length),
+    "shortlist": lambda c: (c.deformation, c.length),
+}
 
 
 @dataclass
@@ -132,8 +142,12 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     cls = representation(method)
     if not isinstance(selection, Selection):
         raise ValueError(f"selection: expected a Selection, got {type(selection).__name__}")
+    if t is not None:
+        t = check_time(t, name="t", min_samples=cls.min_samples)
     if not selection.candidates:
-        reasons = "; ".join(f"{i}: {r}" for i, r in selection.rejected.items())
+        # The first few reasons and a count: one line even for a skill of thousands of primitives
+        # (every reason is in Selection.rejected and in ReuseResult.rejected of a successful reuse).
+        reasons = summarise((f"{i}: {r}" for i, r in selection.rejected.items()), sep="; ")
         raise ValueError(f"no usable candidate: {reasons}")
     k = _check_k(k, method, len(selection.candidates))
     chosen = selection.candidates[:k]
@@ -153,11 +167,12 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
         model.fit([c.demo() for c in chosen])
         out = model.reproduce(task, n_steps=None if t is None else len(t))
     notes += [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
-    time = out.t if t is None else np.asarray(t, dtype=float)
+    time = out.t if t is None else t
     Y = out["position"]
-    error = constraints.position_error(Y)
-    vel_error = constraints.velocity_error(Y, time)
-    collision = constraints.collides(Y) if constraints.obstacles else False
+    with numerical_errors(f"reuse ({method} result check)"):
+        error = constraints.position_error(Y)
+        vel_error = constraints.velocity_error(Y, time)
+        collision = constraints.collides(Y) if constraints.obstacles else False
     used = [c.id for c in chosen]
     message = (f"{method} from {k} of {len(selection.candidates)} usable candidate(s) "
                f"({len(selection.rejected)} rejected, ranked by {selection.rank}); constraint error "
@@ -173,8 +188,37 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     )
 
 
+def _select_in_chunks(primitives, constraints, progress, *, ids, rank, shortlist, **options) -> Selection:
+    """:func:`select_candidates`, calling ``progress(done, total)`` after every chunk; the same selection."""
+    n = len(primitives) if isinstance(primitives, (list, tuple)) else 0
+    # Chunks of Demonstrations only (messages about arrays name their index in the whole list), and
+    # only when the task fixes the dimension (otherwise the first candidate does, for all).
+    one_pass = n <= _CHUNK or rank not in _KEYS or not isinstance(constraints, Constraints) or \
+        constraints.n_dims is None or not all(isinstance(p, Demonstration) for p in primitives)
+    if one_pass:
+        selection = select_candidates(primitives, constraints, ids=ids, rank=rank, shortlist=shortlist,
+                                      **options)
+        progress(n, n)
+        return selection
+    ids = _check_ids(ids, n)
+    shortlist = check_positive(shortlist, name="shortlist", integer=True)
+    candidates, rejected = [], {}
+    for start in range(0, n, _CHUNK):
+        part = select_candidates(primitives[start:start + _CHUNK], constraints, ids=ids[start:start + _CHUNK],
+                                 rank="deformation" if rank == "shortlist" else rank, shortlist=shortlist,
+                                 **options)
+        candidates += part.candidates
+        rejected.update(part.rejected)
+        progress(min(start + _CHUNK, n), n)
+    candidates.sort(key=_KEYS[rank])
+    if rank == "shortlist":
+        candidates[:shortlist] = sorted(candidates[:shortlist], key=lambda c: c.length)
+    rejected = {i: rejected[i] for i in ids if i in rejected}  # input order, as in one pass
+    return Selection(candidates=candidates, rejected=rejected, rank=rank)
+
+
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
-          rank: str = "shortlist", shortlist: int = SHORTLIST) -> ReuseResult:
+          rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
@@ -220,6 +264,9 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         the paper's curve length to every candidate.
     shortlist : int, default=3
         Size of the shortlist for ``rank="shortlist"``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` while the candidates are adapted
+        (they are then adapted in chunks; the result is the same).
 
     Returns
     -------
@@ -229,7 +276,9 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     ------
     ValueError
         ``"no usable candidate: <id>: <reason>; ..."`` when every candidate is
-        rejected, or on malformed input.
+        rejected (the first three reasons, then ``"and <n> more"``), or on
+        malformed input (naming the argument), or, naming the step, when a
+        computation overflows.
 
     Examples
     --------
@@ -245,6 +294,10 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     cls = representation(method)
     if k is not None and cls.single_demo:
         _check_k(k, method, 1)
-    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
-                                  min_samples=cls.min_samples)
+    if progress is None:
+        selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
+                                      min_samples=cls.min_samples)
+    else:
+        selection = _select_in_chunks(primitives, constraints, progress, ids=ids, t=t, rank=rank,
+                                      shortlist=shortlist, min_samples=cls.min_samples)
     return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t)

@@ -16,6 +16,7 @@ and concurrent writers are serialised by the backend. A second backend
 
 from __future__ import annotations
 
+import operator
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
@@ -23,7 +24,10 @@ import numpy as np
 
 from ..core import Demonstration
 
-__all__ = ["Store", "Primitive"]
+__all__ = ["Store", "Primitive", "check_item", "check_items"]
+
+#: The keys of an item of :meth:`Store.add_demonstrations`: the parameters of :meth:`Store.add_demonstration`.
+ITEM_KEYS = ("demo", "bounds", "source", "label", "provenance", "members")
 
 
 @dataclass
@@ -62,6 +66,72 @@ class Primitive:
 
 
 
+def _name(where: str, key: str) -> str:
+    return f"{where}[{key!r}]" if where else key
+
+
+def check_item(item, where: str = "") -> dict:
+    """Check one item of :meth:`Store.add_demonstrations`; returns it with every key and integer bounds.
+
+    ``where`` prefixes the names in messages (``"items[2]"``); empty, they
+    name the parameters of :meth:`Store.add_demonstration`.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 10)
+    >>> check_item({"demo": Demonstration.from_array(np.c_[t, t], t), "bounds": [(0, 4), (4, 10)]})["bounds"]
+    [(0, 4), (4, 10)]
+    >>> check_item({"demo": Demonstration.from_array(np.c_[t, t], t), "bounds": [(4, 2)]}, "items[0]")
+    Traceback (most recent call last):
+    ...
+    ValueError: items[0]['bounds']: expected sample ranges (start, stop), 0 <= start < stop <= 10, got (4, 2)
+    """
+    what = where or "item"
+    if not isinstance(item, dict):
+        raise ValueError(f"{what}: expected a dict with 'demo' and 'bounds', got {type(item).__name__}")
+    unknown = sorted(set(item) - set(ITEM_KEYS), key=str)
+    if unknown:
+        raise ValueError(f"{what}: unknown key(s) {unknown}; expected some of {list(ITEM_KEYS)}")
+    demo = item.get("demo")
+    if not isinstance(demo, Demonstration):
+        raise ValueError(f"{_name(where, 'demo')}: expected a Demonstration, got {type(demo).__name__}")
+    name = _name(where, "bounds")
+    try:
+        bounds = [(operator.index(a), operator.index(b)) for a, b in item.get("bounds")]
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a list of integer pairs (start, stop), "
+                         f"got {str(item.get('bounds'))[:80]}") from None
+    for a, b in bounds:
+        if not 0 <= a < b <= demo.n_steps:
+            raise ValueError(f"{name}: expected sample ranges (start, stop), 0 <= start < stop <= "
+                             f"{demo.n_steps}, got {(a, b)}")
+    members = item.get("members")
+    if members is not None:
+        mname = _name(where, "members")
+        if not isinstance(members, dict) or not {"version", "clusters", "features"} <= set(members):
+            raise ValueError(f"{mname}: expected a dict with 'version', 'clusters' and 'features'")
+        if not len(members["clusters"]) == len(members["features"]) == len(bounds):
+            raise ValueError(f"{mname}: expected one cluster and one feature row per bound ({len(bounds)}), "
+                             f"got {len(members['clusters'])} and {len(members['features'])}")
+    return {**dict.fromkeys(ITEM_KEYS), **item, "bounds": bounds}
+
+
+def check_items(items) -> list:
+    """Check the items of :meth:`Store.add_demonstrations` with :func:`check_item`, naming ``items[k]``.
+
+    Examples
+    --------
+    >>> check_items([{"bounds": [(0, 1)]}])
+    Traceback (most recent call last):
+    ...
+    ValueError: items[0]['demo']: expected a Demonstration, got NoneType
+    """
+    if isinstance(items, (dict, str, bytes)) or not isinstance(items, (list, tuple)):
+        raise ValueError(f"items: expected a list of dicts with 'demo' and 'bounds', "
+                         f"got {type(items).__name__}")
+    return [check_item(item, f"items[{k}]") for k, item in enumerate(items)]
+
+
 class Store(ABC):
     """Abstract storage backend of a skill library (see the module docstring).
 
@@ -72,11 +142,18 @@ class Store(ABC):
     #: The URL scheme this backend serves (``"sqlite"`` for ``sqlite:///path`` and plain paths).
     scheme: str = ""
 
+    #: True for a store opened read-only (``readonly=True``): it writes nothing, and every write
+    #: method raises ValueError in one line.
+    readonly: bool = False
+
     # -- life cycle ---------------------------------------------------------------------------
     @classmethod
     @abstractmethod
     def from_url(cls, url: str, *, create: bool = True, **options) -> Store:
-        """Open the library at ``url`` (``<scheme>://...``), creating it when ``create``."""
+        """Open the library at ``url`` (``<scheme>://...``), creating it when ``create``.
+
+        A backend that can open read-only takes ``readonly=True`` among the ``options``.
+        """
 
     @property
     @abstractmethod
@@ -101,10 +178,11 @@ class Store(ABC):
         """The backend's integrity check: ``"ok"`` for a sound library."""
 
     # -- demonstrations and primitives ------------------------------------------------------
-    @abstractmethod
     def add_demonstration(self, demo: Demonstration, bounds, *, source=None, label=None, provenance=None,
                           members=None) -> tuple[int, list[int]]:
         """Store ``demo`` and one primitive per ``(start, stop)`` of ``bounds``, in one transaction.
+
+        The one-item case of :meth:`add_demonstrations`.
 
         Parameters
         ----------
@@ -124,6 +202,28 @@ class Store(ABC):
         Returns
         -------
         (demonstration id, list of primitive ids)
+        """
+        item = check_item({"demo": demo, "bounds": bounds, "source": source, "label": label,
+                           "provenance": provenance, "members": members})
+        return self.add_demonstrations([item])[0]
+
+    @abstractmethod
+    def add_demonstrations(self, items) -> list[tuple[int, list[int]]]:
+        """Store several demonstrations with their primitives in **one** transaction: all or none.
+
+        Parameters
+        ----------
+        items : list of dict
+            One per demonstration, with the parameters of
+            :meth:`add_demonstration` as keys: ``"demo"`` and ``"bounds"``,
+            optionally ``"source"``, ``"label"``, ``"provenance"``,
+            ``"members"``. Checked with :func:`check_items` before the
+            transaction begins (messages name ``items[k]``).
+
+        Returns
+        -------
+        list of (demonstration id, list of primitive ids)
+            In the order of ``items``.
         """
 
     @abstractmethod
@@ -195,9 +295,34 @@ class Store(ABC):
 
     # -- transfer ------------------------------------------------------------------------------
     @abstractmethod
-    def export(self, folder):
-        """Write everything to ``folder`` (NPZ files and ``manifest.json``); returns the manifest path."""
+    def export(self, folder, *, progress=None):
+        """Write everything to ``folder`` (NPZ files and ``manifest.json``); returns the manifest path.
+
+        ``progress``, when given, is called as ``progress(done, total)`` with
+        the number of demonstrations written so far and their total.
+        """
 
     @abstractmethod
     def import_folder(self, folder) -> dict:
-        """Add the contents of an exported folder in one transaction; returns the id maps."""
+        """Import an exported folder in one transaction, after checking all of it; a bad one changes nothing.
+
+        Every path the manifest names must resolve, after links, to a regular
+        file inside ``folder``; the manifest is validated against its schema
+        and the files against the manifest before the transaction begins
+        (:func:`skillbank.store._manifest.read_export`). Messages name the
+        manifest entry and never quote a file's contents.
+
+        Into an empty library (no demonstrations, no versions): an exact copy,
+        ids kept. Into a non-empty one: a merge that skips demonstrations
+        already stored (same content hash), adds the others renumbered with
+        their primitives and the primitives' own labels, and adds no
+        clustering version (the current one stays current; the new primitives
+        are left unclustered for the pipeline to assign).
+
+        Returns
+        -------
+        dict
+            ``{"mode": "copy" or "merge", "demonstrations": {old: new},
+            "primitives": {old: new}, "versions": {old: new},
+            "skipped": {old demonstration id: id already stored}}``.
+        """

@@ -4,11 +4,19 @@ The schema version is SQLite's ``PRAGMA user_version``; ``meta`` holds
 ``application = skillbank``. Version 1 (the first released layout) lacked
 segmentation provenance and did not record how a primitive joined its cluster;
 :func:`migrate` brings it to version 2.
+
+A file is identified (version, tables, ``meta``) before anything is written to
+it, so a foreign SQLite file is refused exactly as it was found. A read-only
+connection (:func:`connect` with ``readonly=True``) writes nothing at all: it
+opens the file with SQLite's ``mode=ro``, and where the folder cannot be
+written (so WAL's ``-shm`` index cannot be created) and no ``-wal`` file holds
+changes, also ``immutable=1``, which reads the file without the index.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import sqlite3
 import time
 from datetime import datetime, timezone
@@ -64,6 +72,9 @@ def database_errors(path):
     except sqlite3.OperationalError as exc:
         if "locked" in str(exc) or "busy" in str(exc):
             raise
+        if "readonly" in str(exc):
+            raise ValueError(f"library {str(path)!r} cannot be changed: it is read-only here ({exc})"
+                             ) from None
         raise ValueError(f"library {str(path)!r}: {exc}") from None
     except sqlite3.DatabaseError as exc:
         raise ValueError(f"library {str(path)!r} is not a readable skillbank library: {exc}") from None
@@ -136,50 +147,111 @@ def _tables(conn) -> set:
     return {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
 
 
-def _prepare(conn, path) -> int:
+def _identify(conn, path) -> int:
+    """The schema version of the file, after checking that it is a skillbank library (or empty).
+
+    Reads only: a foreign file is refused before anything is written to it.
+    """
     version = conn.execute("PRAGMA user_version").fetchone()[0]
     if version > SCHEMA_VERSION:
         raise ValueError(f"library {str(path)!r} has schema version {version}, written by a newer skillbank; "
                          f"this one reads versions up to {SCHEMA_VERSION}")
+    tables = _tables(conn) - {"sqlite_sequence"}
+    if version == 0 and not tables:
+        return 0
+    app = None
+    if version > 0 and "meta" in tables:
+        app = conn.execute("SELECT value FROM meta WHERE key = ?", ("application",)).fetchone()
+    if app is None or app[0] != APPLICATION:
+        raise ValueError(f"library {str(path)!r} is a SQLite file but not a skillbank library "
+                         f"(tables {sorted(tables)[:5]})")
+    return version
+
+
+def _prepare(conn, path) -> int:
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
     if version == SCHEMA_VERSION:
         return version
     with transaction(conn):
-        version = conn.execute("PRAGMA user_version").fetchone()[0]  # another process may have won
-        tables = _tables(conn) - {"sqlite_sequence"}
+        version = _identify(conn, path)  # again, under the write lock: another process may have won
         if version == 0:
-            if tables:
-                raise ValueError(f"library {str(path)!r} is a SQLite file but not a skillbank library "
-                                 f"(tables {sorted(tables)[:5]})")
             _create(conn)
         elif version < SCHEMA_VERSION:
             migrate(conn, version)
     return version
 
 
-def connect(path, *, timeout: float = 60.0, create: bool = True) -> sqlite3.Connection:
+def _folder_writable(folder) -> bool:
+    """Whether this process may create files in ``folder`` (WAL's side files live there)."""
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def _open_readonly(path: Path, timeout: float) -> sqlite3.Connection:
+    # mode=ro never writes the library. In WAL mode a reader also needs the -shm index: SQLite
+    # creates it when the folder is writable; where it is not, immutable=1 reads the file
+    # without it, which is right as long as no -wal file holds changes not yet in the file.
+    # When one does (a writer has the library open), that writer's -shm exists and mode=ro
+    # reads through it.
+    wal = path.with_name(path.name + "-wal")
+    immutable = not _folder_writable(path.parent) and not (wal.exists() and wal.stat().st_size > 0)
+    uri = path.resolve().as_uri() + ("?mode=ro&immutable=1" if immutable else "?mode=ro")
+    return sqlite3.connect(uri, uri=True, timeout=timeout, isolation_level=None)
+
+
+def _check_writable(path: Path) -> None:
+    file_ok = not path.exists() or os.access(path, os.W_OK)
+    if not (file_ok and _folder_writable(path.parent)):
+        raise ValueError(f"library {str(path)!r} is read-only here (its file or its folder is not writable): "
+                         "it cannot be changed; 'library list', 'reuse' and 'export' can read it")
+
+
+def connect(path, *, timeout: float = 60.0, create: bool = True,
+            readonly: bool = False) -> sqlite3.Connection:
     """Open (and create or migrate) the library file at ``path``.
+
+    Parameters
+    ----------
+    path : path-like
+    timeout : float
+        Seconds a writer waits for the write lock.
+    create : bool
+        Create the library when the file does not exist.
+    readonly : bool
+        Open without writing anything (no creation, migration or WAL switch;
+        see the module docstring).
 
     Raises
     ------
     ValueError
         A one-line message for a file that is not SQLite, is corrupt, is not a
-        skillbank library, or has a newer schema version.
+        skillbank library, or has a newer schema version; for a read-only
+        opening, also for a missing or empty file or one that needs migrating.
     """
     path = Path(path)
     _check_header(path)
-    if not create and not path.exists():
+    if (readonly or not create) and not path.exists():
         raise ValueError(f"library {str(path)!r} does not exist; create it with 'skillbank library init'")
     if not path.parent.exists():
         raise ValueError(f"library {str(path)!r}: folder {str(path.parent)!r} does not exist")
-    conn = sqlite3.connect(str(path), timeout=timeout, isolation_level=None)
+    if readonly and path.stat().st_size == 0:
+        raise ValueError(f"library {str(path)!r} is empty, not a skillbank library")
+    if readonly:
+        conn = _open_readonly(path, timeout)
+    else:
+        _check_writable(path)
+        conn = sqlite3.connect(str(path), timeout=timeout, isolation_level=None)
     try:
         with database_errors(path):
             conn.execute("PRAGMA foreign_keys = ON")
-            _wal(conn)
-            _prepare(conn, path)
-            app = conn.execute("SELECT value FROM meta WHERE key = ?", ("application",)).fetchone()
-            if app is None or app[0] != APPLICATION:
-                raise ValueError(f"library {str(path)!r} is a SQLite file but not a skillbank library")
+            version = _identify(conn, path)
+            if readonly:
+                if version < SCHEMA_VERSION:
+                    raise ValueError(f"library {str(path)!r} has schema version {version}; open it once "
+                                     f"read-write (any 'skillbank library' command that writes, or "
+                                     f"'library init') to migrate it to version {SCHEMA_VERSION}")
+            else:
+                _wal(conn)
+                _prepare(conn, path)
     except BaseException:
         conn.close()
         raise

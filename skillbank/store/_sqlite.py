@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ._arrays import from_json, from_npy, to_json, to_npy
-from ._base import Primitive, Store
+from ._base import Primitive, Store, check_items
 from ._records import insert_demonstration, load_demonstrations, primitive_demo
 from ._schema import connect, database_errors, now, transaction
 from ._transfer import export_library, import_library
@@ -32,12 +32,18 @@ class SQLiteStore(Store):
         False raises ValueError when the file does not exist.
     timeout : float, default=60.0
         Seconds a writer waits for another writer before giving up.
+    readonly : bool, default=False
+        Open without writing anything, not even WAL's side files where the
+        folder cannot be written: a library shared read-only (a folder the
+        user may not write) can be read. Never creates or migrates the
+        library; every write method raises ValueError.
 
     Raises
     ------
     ValueError
         One line, for a file that is not SQLite, is corrupt, is not a
-        skillbank library or was written by a newer schema version.
+        skillbank library or was written by a newer schema version; and
+        when opened for writing where the file or its folder is read-only.
 
     Examples
     --------
@@ -49,9 +55,10 @@ class SQLiteStore(Store):
 
     scheme = "sqlite"
 
-    def __init__(self, path, *, create: bool = True, timeout: float = 60.0):
+    def __init__(self, path, *, create: bool = True, timeout: float = 60.0, readonly: bool = False):
         self.path = Path(path)
-        self._conn = connect(self.path, timeout=timeout, create=create)
+        self.readonly = bool(readonly)
+        self._conn = connect(self.path, timeout=timeout, create=create, readonly=self.readonly)
 
     # -- life cycle -----------------------------------------------------------------------------
     @classmethod
@@ -79,26 +86,37 @@ class SQLiteStore(Store):
     def _errors(self):
         return database_errors(self.path)
 
+    def _writable(self, what: str):
+        """The connection, for a write; one clear line when the library is open read-only."""
+        if self.readonly:
+            raise ValueError(f"library {str(self.path)!r} is open read-only: cannot {what}")
+        return self.conn
+
     def check(self) -> str:
         with self._errors():
             return "; ".join(r[0] for r in self.conn.execute("PRAGMA integrity_check"))
 
     # -- demonstrations and primitives ------------------------------------------------------------
-    def add_demonstration(self, demo, bounds, *, source=None, label=None, provenance=None, members=None):
-        with self._errors(), transaction(self.conn) as conn:
-            did, pids = insert_demonstration(conn, demo, bounds, source=source, label=label,
-                                             provenance=provenance or {})
-            if members is not None:
-                conn.executemany(
-                    "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
-                    "VALUES (?, ?, ?, ?, 'incremental')",
-                    [(int(members["version"]), int(p), int(c), to_npy(x)) for p, c, x in
-                     zip(pids, members["clusters"], members["features"], strict=True)])
-        return did, pids
+    def add_demonstrations(self, items) -> list:
+        items = check_items(items)
+        out = []
+        with self._errors(), transaction(self._writable("add demonstrations")) as conn:
+            for item in items:
+                did, pids = insert_demonstration(conn, item["demo"], item["bounds"], source=item["source"],
+                                                 label=item["label"], provenance=item["provenance"] or {})
+                members = item["members"]
+                if members is not None:
+                    conn.executemany(
+                        "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
+                        "VALUES (?, ?, ?, ?, 'incremental')",
+                        [(int(members["version"]), int(p), int(c), to_npy(x)) for p, c, x in
+                         zip(pids, members["clusters"], members["features"], strict=True)])
+                out.append((did, pids))
+        return out
 
     def remove_demonstration(self, demo_id) -> None:
         demo_id = _check_id(demo_id, "demo_id")
-        with self._errors(), transaction(self.conn) as conn:
+        with self._errors(), transaction(self._writable("remove a demonstration")) as conn:
             if conn.execute("DELETE FROM demonstrations WHERE id = ?", (demo_id,)).rowcount == 0:
                 raise ValueError(f"demo_id: no demonstration with id {demo_id} in the library")
 
@@ -180,7 +198,7 @@ class SQLiteStore(Store):
                                           (version,)).fetchall())
 
     def add_version(self, *, params, centers, pca_mean, pca_components, members, labels=None) -> int:
-        with self._errors(), transaction(self.conn) as conn:
+        with self._errors(), transaction(self._writable("record a clustering")) as conn:
             version = conn.execute(
                 "INSERT INTO cluster_versions (created, params, n_clusters, centers, pca_mean, "
                 "pca_components) VALUES (?, ?, ?, ?, ?, ?)",
@@ -195,7 +213,7 @@ class SQLiteStore(Store):
         return version
 
     def add_members(self, version, members) -> None:
-        with self._errors(), transaction(self.conn) as conn:
+        with self._errors(), transaction(self._writable("assign primitives to clusters")) as conn:
             # a primitive removed meanwhile by another process is skipped, not an error
             conn.executemany(
                 "INSERT OR IGNORE INTO cluster_members (version, primitive_id, cluster, features, assigned) "
@@ -205,7 +223,7 @@ class SQLiteStore(Store):
     def set_label(self, name, *, cluster=None, primitive=None) -> None:
         if (cluster is None) == (primitive is None):
             raise ValueError("label: give exactly one of cluster= or primitive=")
-        with self._errors(), transaction(self.conn) as conn:
+        with self._errors(), transaction(self._writable("label")) as conn:
             if primitive is not None:
                 pid = _check_id(primitive, "primitive")
                 if conn.execute("UPDATE primitives SET label = ? WHERE id = ?", (name, pid)).rowcount == 0:
@@ -225,10 +243,13 @@ class SQLiteStore(Store):
                              (version, k, name))
 
     # -- transfer --------------------------------------------------------------------------------
-    def export(self, folder):
+    def export(self, folder, *, progress=None):
         with self._errors():
-            return export_library(self.conn, folder)
+            if progress is None:
+                return export_library(self.conn, folder)
+            return export_library(self.conn, folder, progress=progress)
 
     def import_folder(self, folder) -> dict:
+        self._writable("import")
         with self._errors():
             return import_library(self.conn, folder)

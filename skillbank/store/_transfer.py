@@ -2,30 +2,31 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
 import numpy as np
 
-from ..io import read_npz, write_npz
+from ..core import Demonstration
+from ..io import write_npz
 from ._arrays import from_json, from_npy, to_json, to_npy
-from ._records import load_demonstrations
+from ._manifest import FORMAT, MANIFEST, read_export
+from ._records import chunks, load_demonstrations, placeholders
 from ._schema import SCHEMA_VERSION, now, transaction
 
-__all__ = ["export_library", "import_library", "MANIFEST", "FORMAT"]
-
-MANIFEST = "manifest.json"
-FORMAT = "skillbank-library"
+__all__ = ["export_library", "import_library", "content_hash", "MANIFEST", "FORMAT"]
 
 
-def export_library(conn, folder) -> Path:
+def export_library(conn, folder, *, progress=None) -> Path:
     """Write every demonstration, primitive, clustering version, label and provenance to ``folder``.
 
     Layout: ``demonstrations/demo_<id>.npz`` (``t``, every stream, metadata;
     see :func:`skillbank.io.write_npz`), ``versions/version_<n>.npz`` (centres,
     PCA arrays, members, their clusters and features) and ``manifest.json``
     (everything else). Runs in one read transaction, so it is a consistent
-    snapshot even while other processes write.
+    snapshot even while other processes write. ``progress``, when given, is
+    called as ``progress(done, total)`` with the demonstrations written so far.
 
     Returns
     -------
@@ -45,7 +46,9 @@ def export_library(conn, folder) -> Path:
         rows = conn.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
                             "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
                             "ORDER BY d.id").fetchall()
-        for did, source, created, kind, params, p_created in rows:
+        if progress is not None:
+            progress(0, len(rows))
+        for done, (did, source, created, kind, params, p_created) in enumerate(rows, 1):
             demo = load_demonstrations(conn, [did])[did]
             name = f"demonstrations/demo_{did:06d}.npz"
             write_npz(demo, folder / name)
@@ -56,6 +59,8 @@ def export_library(conn, folder) -> Path:
                 "provenance": None if kind is None else {"kind": kind, "params": from_json(params),
                                                          "created": p_created},
                 "primitives": [{"id": i, "start": a, "stop": b, "label": lab} for i, a, b, lab in prims]})
+            if progress is not None:
+                progress(done, len(rows))
         for v, created, params, n, centers, mean, comps in conn.execute(
                 "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
                 "FROM cluster_versions ORDER BY version").fetchall():
@@ -85,84 +90,125 @@ def export_library(conn, folder) -> Path:
     return path
 
 
-def _read_manifest(folder: Path) -> dict:
-    path = folder / MANIFEST
-    if not path.is_file():
-        raise ValueError(f"folder: expected {MANIFEST} in {str(folder)!r} (written by 'library export')")
-    try:
-        manifest = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{str(path)!r}: not valid JSON ({exc})") from None
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        raise ValueError(f"{str(path)!r}: expected format {FORMAT!r}")
-    if int(manifest.get("schema_version", 0)) > SCHEMA_VERSION:
-        raise ValueError(f"{str(path)!r}: exported by a newer skillbank (schema version "
-                         f"{manifest['schema_version']}, this one reads up to {SCHEMA_VERSION})")
-    return manifest
+def content_hash(demo: Demonstration) -> str:
+    """SHA-256 over ``t``, every stream (name, dtype, shape, bytes, in order) and the metadata JSON.
+
+    Two demonstrations with the same hash hold the same samples, streams and
+    metadata; ``library import`` uses it to skip what a library already holds.
+
+    Examples
+    --------
+    >>> a = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 1})
+    >>> b = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 2})
+    >>> content_hash(a) == content_hash(Demonstration(a.t, dict(a.streams), {"user": 1}))
+    True
+    >>> content_hash(a) == content_hash(b)
+    False
+    """
+    h = hashlib.sha256()
+
+    def field(data: bytes) -> None:  # length-prefixed, so field boundaries cannot be shifted
+        h.update(len(data).to_bytes(8, "little"))
+        h.update(data)
+
+    for name, arr in (("t", demo.t), *demo.streams.items()):
+        arr = np.ascontiguousarray(arr)
+        field(name.encode("utf-8"))
+        field(f"{arr.dtype.str} {arr.shape}".encode())
+        field(arr.tobytes())
+    field(to_json(demo.metadata).encode("utf-8"))
+    return h.hexdigest()
 
 
-def _npz(path: Path) -> dict:
-    if not path.is_file():
-        raise ValueError(f"import: missing file {str(path)!r} named in the manifest")
-    with np.load(path, allow_pickle=False) as archive:
-        return {k: archive[k] for k in archive.files}
+def _existing_hashes(conn, n_steps) -> dict:
+    """``{content hash: id}`` of the stored demonstrations with one of the lengths ``n_steps``."""
+    lengths = sorted(set(n_steps))
+    ids = [r[0] for part in chunks(lengths) for r in conn.execute(
+        f"SELECT id FROM demonstrations WHERE n_steps IN ({placeholders(len(part))})", part)]
+    out = {}
+    for part in chunks(sorted(ids)):  # a chunk at a time: memory stays bounded on a large library
+        for did, demo in sorted(load_demonstrations(conn, part).items()):
+            out.setdefault(content_hash(demo), did)
+    return out
+
+
+def _insert_demonstration(conn, d, *, keep_id: bool) -> tuple:
+    demo, prov, pid = d["demo"], d["provenance"], None
+    if prov is not None:
+        pid = conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
+                           (prov["kind"], to_json(prov["params"]), prov["created"])).lastrowid
+    did = conn.execute(
+        "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, provenance_id) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?)",
+        (d["id"] if keep_id else None, d["source"], demo.n_steps, to_npy(demo.t), to_json(demo.metadata),
+         d["created"] or now(), pid)).lastrowid
+    conn.executemany("INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
+                     [(did, n, k, to_npy(a)) for k, (n, a) in enumerate(demo.streams.items())])
+    prims = {}
+    for p in d["primitives"]:
+        prims[p["id"]] = conn.execute(
+            "INSERT INTO primitives (id, demonstration_id, start, stop, label) VALUES (?, ?, ?, ?, ?)",
+            (p["id"] if keep_id else None, did, p["start"], p["stop"], p["label"])).lastrowid
+    return did, prims
+
+
+def _insert_version(conn, v, primitives: dict) -> int:
+    a = v["arrays"]
+    conn.execute(
+        "INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
+        "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
+        (v["version"], v["created"], to_json(v["params"]), v["n_clusters"], to_npy(a["centers"]),
+         to_npy(a["pca_mean"]), to_npy(a["pca_components"])))
+    conn.executemany(
+        "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
+        "VALUES (?, ?, ?, ?, ?)",
+        [(v["version"], primitives[i], c, to_npy(f), s) for i, c, f, s in zip(
+            a["member_ids"], a["member_clusters"], a["member_features"], a["member_assigned"], strict=True)])
+    conn.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
+                     [(v["version"], c, lab) for c, lab in v["labels"]])
+    return v["version"]
 
 
 def import_library(conn, folder) -> dict:
-    """Add the contents of an exported folder in one transaction; returns the id maps.
+    """Import an exported folder in one transaction, after checking all of it.
 
-    Into an empty library every id is kept, so an export/import round trip
-    reproduces the library exactly. Into a non-empty one, ids are renumbered
-    and the imported clustering versions are appended after the existing ones
-    (the last imported version becomes current).
+    Everything is read and checked first (:func:`~skillbank.store._manifest.read_export`:
+    paths confined to the folder, the manifest validated, the files checked
+    against it), so a bad folder changes nothing. Then:
+
+    - into an **empty** library (no demonstrations, no clustering versions),
+      an exact copy: ids, versions, memberships and labels are kept;
+    - into a **non-empty** library, a merge: a demonstration whose content
+      (:func:`~skillbank.store._manifest.content_hash`) the library already
+      holds is skipped; every other one is added, renumbered, with its
+      primitives and their own labels. The imported clustering versions are
+      not added (they describe another population): the library's current
+      version stays current, with its labels, and the new primitives stay
+      unclustered here (:meth:`skillbank.pipeline.Library.import_folder`
+      assigns them).
+
+    Returns
+    -------
+    dict
+        ``{"mode": "copy" or "merge", "demonstrations": {old: new},
+        "primitives": {old: new}, "versions": {old: new},
+        "skipped": {old demonstration id: id of the copy already stored}}``.
     """
-    folder = Path(folder)
-    manifest = _read_manifest(folder)
-    demos = [(doc, read_npz(folder / doc["file"])) for doc in manifest.get("demonstrations", [])]
-    versions = [(doc, _npz(folder / doc["file"])) for doc in manifest.get("versions", [])]
-    maps = {"demonstrations": {}, "primitives": {}, "versions": {}}
+    doc = read_export(folder)
+    hashes = {d["id"]: content_hash(d["demo"]) for d in doc["demonstrations"]}
+    maps = {"mode": "copy", "demonstrations": {}, "primitives": {}, "versions": {}, "skipped": {}}
     with transaction(conn):
         empty = conn.execute("SELECT (SELECT COUNT(*) FROM demonstrations) + "
                              "(SELECT COUNT(*) FROM cluster_versions)").fetchone()[0] == 0
-        for doc, demo in demos:
-            prov = doc.get("provenance")
-            pid = None
-            if prov is not None:
-                pid = conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
-                                   (prov["kind"], to_json(prov["params"]), prov["created"])).lastrowid
-            did = conn.execute(
-                "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, provenance_id) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?)",
-                (doc["id"] if empty else None, doc.get("source"), demo.n_steps, to_npy(demo.t),
-                 to_json(demo.metadata), doc.get("created") or now(), pid)).lastrowid
-            maps["demonstrations"][int(doc["id"])] = did
-            conn.executemany("INSERT INTO streams (demonstration_id, name, position, data) "
-                             "VALUES (?, ?, ?, ?)",
-                             [(did, n, k, to_npy(a)) for k, (n, a) in enumerate(demo.streams.items())])
-            for p in doc.get("primitives", []):
-                new = conn.execute("INSERT INTO primitives (id, demonstration_id, start, stop, label) "
-                                   "VALUES (?, ?, ?, ?, ?)",
-                                   (p["id"] if empty else None, did, p["start"], p["stop"],
-                                    p.get("label"))).lastrowid
-                maps["primitives"][int(p["id"])] = new
-        for doc, arrays in versions:
-            v = conn.execute(
-                "INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
-                "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
-                (doc["version"] if empty else None, doc["created"], to_json(doc["params"]),
-                 doc["n_clusters"], to_npy(arrays["centers"]), to_npy(arrays["pca_mean"]),
-                 to_npy(arrays["pca_components"]))).lastrowid
-            maps["versions"][int(doc["version"])] = v
-            unknown = [int(i) for i in arrays["member_ids"] if int(i) not in maps["primitives"]]
-            if unknown:
-                raise ValueError(f"import: version {doc['version']} names primitive {unknown[0]}, "
-                                 "which the manifest does not list")
-            conn.executemany(
-                "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
-                "VALUES (?, ?, ?, ?, ?)",
-                [(v, maps["primitives"][int(i)], int(c), to_npy(f), str(a)) for i, c, f, a in zip(
-                    arrays["member_ids"], arrays["member_clusters"], arrays["member_features"],
-                    arrays["member_assigned"], strict=True)])
-            conn.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
-                             [(v, int(lab["cluster"]), lab["label"]) for lab in doc.get("labels", [])])
+        stored = {} if empty else _existing_hashes(conn, [d["demo"].n_steps for d in doc["demonstrations"]])
+        maps["mode"] = "copy" if empty else "merge"
+        for d in doc["demonstrations"]:
+            if hashes[d["id"]] in stored:
+                maps["skipped"][d["id"]] = stored[hashes[d["id"]]]
+                continue
+            did, prims = _insert_demonstration(conn, d, keep_id=empty)
+            maps["demonstrations"][d["id"]] = did
+            maps["primitives"].update(prims)
+        for v in doc["versions"] if empty else ():
+            maps["versions"][v["version"]] = _insert_version(conn, v, maps["primitives"])
     return maps

@@ -65,7 +65,7 @@ def _json(cli, *argv):
     code, out, err = cli("edit", *argv, "--json", "--metrics")
     assert code == 0, err
     doc = json.loads(out)
-    assert set(doc) == {"trajectory", "constraint_error", "collision", "metrics"}
+    assert set(doc) - {"plot"} == {"trajectory", "constraint_error", "collision", "metrics"}
     assert isinstance(doc["constraint_error"], float) and isinstance(doc["collision"], bool)
     return doc, np.array(doc["trajectory"])
 
@@ -131,6 +131,7 @@ def test_out_and_plot(cli, files, tmp_path, suffix):
     out, plot = tmp_path / f"edited.{suffix}", tmp_path / "edit.png"
     doc, Y = _json(cli, *files, "--method", "promp", "--goal", "-1.3,0.1", "--via", "0.3:0.6,1.0",
                    "--obstacle", "sphere:-0.6,0.9,0.1", "--out", out, "--plot", plot)
+    assert doc["plot"] == str(plot)
     back = sio.load(out)
     np.testing.assert_allclose(back["position"], Y, rtol=0, atol=1e-15)
     np.testing.assert_allclose(back.t, np.linspace(0.0, 2.0, 200), atol=1e-15)
@@ -173,7 +174,9 @@ def test_text_output(cli, files, tmp_path):
     (["{0}", "--out", "result.json"], r"out: expected a \.csv or \.npz file name, got 'result\.json'"),
     (["{0}", "{2}"], r"input: '.*forces\.npz' has streams \['force', 'torque'\] and none is 'position'"),
     (["{1}", "{3}", "--method", "promp"], r"input: '.*line3d\.csv' has 3 dimensions, but '.*' has 2"),
-    (["{0}", "--plot", "{4}/no/such/dir/e.png"], r"No such file or directory"),
+    (["{0}", "--plot", "{4}/e.txt"], r"plot: expected a figure file name ending in one of \.avif, .*\.png, .*"
+                                    r"\(or no extension for \.png\), got '.*e\.txt'"),
+    (["{0}", "--out", "{4}/no/such/dir/e.csv"], r"No such file or directory"),
 ])
 def test_errors_exit_2_with_one_line(cli, files, tmp_path, argv, match):
     t = np.linspace(0.0, 1.0, 20)
@@ -186,6 +189,30 @@ def test_errors_exit_2_with_one_line(cli, files, tmp_path, argv, match):
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and err.startswith("skillbank edit: error: ")
     assert re.search(match, err), err
+
+
+@pytest.mark.parametrize("name, written", [
+    ("figs", "figs.png"),  # an existing folder: matplotlib writes next to it, with .png added
+    ("edit", "edit.png"),
+    ("new/sub/edit.pdf", "new/sub/edit.pdf"),  # parents created, as --plot does in every command
+])
+def test_plot_says_the_file_it_really_wrote(cli, files, tmp_path, name, written):
+    (tmp_path / "figs").mkdir()
+    code, out, err = cli("edit", files[0], "--goal", "-1.3,0.0", "--plot", tmp_path / name)
+    assert code == 0, err
+    assert out.splitlines()[-1] == f"  wrote {tmp_path / written}"
+    assert (tmp_path / written).is_file() and (tmp_path / written).stat().st_size > 1000
+    assert (tmp_path / "figs").is_dir()
+    code, out, _ = cli("edit", files[0], "--plot", tmp_path / name, "--json")
+    assert json.loads(out)["plot"] == str(tmp_path / written)
+
+
+def test_bad_plot_name_fails_before_the_work(cli, files, tmp_path, monkeypatch):
+    import skillbank.representations as reps
+
+    monkeypatch.setattr(reps, "fit_reproduce", lambda *a, **k: pytest.fail("edited before checking --plot"))
+    code, out, err = cli("edit", files[0], "--plot", tmp_path / "e.figure")
+    assert code == 2 and out == "" and "plot: expected a figure file name" in err
 
 
 # -- real data --------------------------------------------------------------------------------------

@@ -34,6 +34,10 @@ def test_default_mode_table_and_plot(cli, data_dir, tmp_path):
     assert n_clusters == 3 and misclustered < 20
     assert "  cluster " in out and f"wrote {fig}" in out
     assert fig.read_bytes()[:8] == PNG_MAGIC
+    # the composition table numbers clusters 0..k-1, as the JSON's composition rows are indexed
+    header = lines.index(next(line for line in lines if line.startswith("elastic: "))) + 1
+    ids = [int(line.split()[0]) for line in lines[header + 1:header + 1 + n_clusters]]
+    assert ids == list(range(n_clusters))
 
 
 def test_four_classes_json(cli, data_dir):
@@ -48,7 +52,8 @@ def test_four_classes_json(cli, data_dir):
 @pytest.mark.parametrize(
     ("extra", "match"),
     [
-        (["--classes", "reaching,flying"], r"skillbank experiment: error: classes: expected names among"),
+        (["--classes", "reaching,flying"],
+         r"^skillbank experiment rail: error: classes: expected names among"),
         (["--classes", "reaching"], r"classes: expected at least two different classes"),
     ],
 )

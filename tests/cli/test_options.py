@@ -3,17 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import re
 
+import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from skillbank.cli._options import (
     add_segmentation_options,
     constraints_from_args,
     join_negative_values,
+    margin,
     segmentation_params,
+    size,
 )
 from skillbank.core import Box
 from skillbank.segmentation import MultimodalSegmenter
+from skillbank.segmentation._segmenter import to_samples
 
 
 def test_constraints_from_args():
@@ -64,3 +71,48 @@ def test_options_left_out_are_the_segmenters_defaults():
     given = segmentation_params(p.parse_args(argv))
     assert given == {"threshold": 0.3, "stop_ratio": None, "window": "0.1s", "random_state": None}
     MultimodalSegmenter(**given)  # every key is a segmenter parameter
+
+
+def test_sizes_in_samples_and_seconds():
+    assert (size("64"), size(" 0.1s "), size("1.s"), size("auto")) == (64, "0.1s", "1.0s", "auto")
+    assert (margin("0"), margin("0s"), margin("-0s"), margin("0.0e3s"), margin("5")) == (0, 0, 0, 0, 5)
+    t = np.linspace(0.0, 1.0, 101)  # 0.01 s period
+    assert to_samples(size("1.s"), t, name="window") == 100
+    assert to_samples(size("2.5e-1s"), t, name="window") == 25
+
+
+@pytest.mark.parametrize("value", ["0", "0s", "-0s", "0.0s", "-1", "-0.1s", "nans", "infs", "1e400s", "s",
+                                   "1.5", "ten", "10 samples", ""])
+def test_size_rejects_what_is_not_a_positive_size(value):
+    with pytest.raises(argparse.ArgumentTypeError,
+                       match=rf"expected an integer number of samples > 0 or seconds > 0 like '0.1s', "
+                             rf"got {re.escape(repr(value.strip()))}"):
+        size(value)
+
+
+@pytest.mark.parametrize("value", ["-1", "-0.1s", "nans", "infs", "1.5", "x"])
+def test_margin_rejects_negative_and_non_numbers(value):
+    with pytest.raises(argparse.ArgumentTypeError, match=r"samples >= 0 or seconds >= 0"):
+        margin(value)
+
+
+@given(st.floats(min_value=1e-6, max_value=1e6, allow_nan=False))
+def test_positive_seconds_reach_the_segmenter_unchanged(seconds):
+    text = size(f"{seconds}s")
+    t = np.linspace(0.0, 1.0, 11)
+    # the segmenter reads what the command line wrote, to the same number of samples
+    assert to_samples(text, t, name="window") == max(1, round(seconds / np.median(np.diff(t))))
+
+
+@given(st.integers(min_value=-10**6, max_value=10**6))
+def test_sample_counts(n):
+    if n > 0:
+        assert size(str(n)) == n == margin(str(n))
+    elif n == 0:
+        assert margin("0") == 0
+    else:
+        with pytest.raises(argparse.ArgumentTypeError):
+            margin(str(n))
+    if n <= 0:
+        with pytest.raises(argparse.ArgumentTypeError):
+            size(str(n))

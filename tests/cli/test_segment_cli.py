@@ -1,4 +1,6 @@
 import json
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -65,25 +67,45 @@ def test_npz_input_all_streams_seconds_window_and_text_output(capsys, tmp_path):
 @pytest.mark.parametrize(
     ("args", "match"),
     [
-        (["--window", "0"], r"window: expected an integer > 0, got 0"),
+        (["--window", "0"], r"segment: error: argument --window: expected an integer number of samples > 0 "
+                            r"or seconds > 0 like '0.1s', got '0'"),
+        (["--window", "0s"], r"segment: error: argument --window: expected .* seconds > 0 .*, got '0s'"),
+        (["--window", "0.0e3 s"], r"argument --window: expected .*, got '0.0e3 s'"),
+        (["--min-size=-0.5s"], r"argument --min-size: expected .* seconds > 0 .*, got '-0.5s'"),
+        (["--window", "infs"], r"argument --window: expected .*, got 'infs'"),
+        (["--window", "fasts"], r"argument --window: expected an integer number of samples"),
         (["--window", "fast"], r"argument --window: expected an integer number of samples"),
+        (["--grace", "-1"], r"argument --grace: expected an integer number of samples >= 0 or seconds >= 0"),
         (["--threshold", "2"], r"threshold: expected a number in \[0.0, 1.0\], got 2.0"),
         (["--stream", "force"], r"streams: expected names among \['position'\]"),
         (["--mode", "magic"], r"argument --mode: invalid choice"),
         (["--stop-ratio", "half"], r"argument --stop-ratio: expected a number in \[0, 1\] or 'none'"),
         (["--stop-ratio", "2"], r"stop_ratio: expected a number in \[0.0, 1.0\], got 2.0"),
         (["--min-turn", "270"], r"min_turn: expected a number in \[0.0, 180.0\], got 270.0"),
+        (["--demo", "1"], r"demo: expected an index in 0..0 \(.*demo.csv holds 1 demonstration\), got 1"),
     ],
 )
 def test_bad_parameters_give_one_line_and_status_2(capsys, tmp_path, args, match):
     path = sio.write_csv(synthetic_multistream(), tmp_path / "demo.csv")
-    with pytest.raises(SystemExit) if args[1] in ("fast", "magic", "half") \
-            else _nullcontext():
+    try:
         code = main(["segment", str(path), *args])
-        assert code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1
-    assert pytest.importorskip("re").search(match, err)
+    except SystemExit as exc:  # argparse: a usage error
+        code = exc.code
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("skillbank segment: error: ")
+    assert re.search(match, err), err
+
+
+def test_grace_takes_seconds_and_zero(capsys, tmp_path):
+    path = sio.write_npz(synthetic_multistream(), tmp_path / "demo.npz")
+    keypoints = {}
+    for grace in ("0", "0s", "0.2s", "20"):
+        code, out, err = _run(capsys, "segment", str(path), "--grace", grace, "--json")
+        assert code == 0, err
+        keypoints[grace] = json.loads(out)["keypoints"]
+    # zero seconds is zero samples; 0.2 s is 20 samples at the demo's 0.01 s median period
+    assert keypoints["0"] == keypoints["0s"] and keypoints["0.2s"] == keypoints["20"]
 
 
 def test_bad_files(capsys, tmp_path):
@@ -95,9 +117,69 @@ def test_bad_files(capsys, tmp_path):
         assert err.count("\n") == 1 and "cannot read" in err
 
 
-class _nullcontext:
-    def __enter__(self):
-        return self
+@pytest.mark.parametrize("which", ["seed/r_shape.h5", "rail/REACHING/1.mat"])
+def test_multi_demo_file_says_which_demo_it_used(data_dir, capsys, which):
+    path = str(data_dir / which)
+    n = len(sio.load_all(path))
+    code, out, err = _run(capsys, "segment", path)
+    assert code == 0
+    assert err == (f"skillbank segment: {path} holds {n} demonstrations; segmenting demonstration 0 "
+                   f"(--demo 0..{n - 1} picks another)\n")
+    assert out.startswith(f"{path} (demonstration 0 of {n}): ")
+    code, out, err = _run(capsys, "segment", path, "--demo", "-1", "--json")
+    assert code == 0 and err == ""  # chosen, so nothing to say
+    doc = json.loads(out)
+    assert (doc["demo"], doc["n_demos"]) == (n - 1, n)
+    code, out, err = _run(capsys, "segment", path, "--demo", str(n))
+    assert code == 2 and re.search(rf"demo: expected an index in 0..{n - 1} \(.* holds {n} demonstrations\), "
+                                   rf"got {n}", err)
 
-    def __exit__(self, *exc):
-        return False
+
+def test_single_demo_file_says_nothing(capsys, tmp_path):
+    path = sio.write_npz(synthetic_multistream(), tmp_path / "one.npz")
+    code, out, err = _run(capsys, "segment", str(path), "--json")
+    assert code == 0 and err == ""
+    assert (json.loads(out)["demo"], json.loads(out)["n_demos"]) == (0, 1)
+
+
+def test_csv_out_writes_every_stream_and_replaces_an_earlier_run(capsys, tmp_path):
+    demo = synthetic_multistream()  # streams position (3), gripper (1), force (3)
+    path = sio.write_npz(demo, tmp_path / "pick.npz")
+    out_dir = tmp_path / "segs"
+    out_dir.mkdir()
+    # left by an earlier run: more segments, and a stream this demo no longer has
+    stale = ["pick_segment00_position.csv", "pick_segment07_position.csv", "pick_segment03_torque.csv"]
+    # not this input's segments: kept
+    others = ["pick_segment00.npz", "pick_segment00_segment00_position.csv", "picking_segment00_position.csv",
+              "pick_segmentation.csv", "pick_segment01_notes.txt"]
+    for name in stale + others:
+        (out_dir / name).write_text("old\n")
+    code, out, err = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    expected = [f"pick_segment{i:02d}_{s}.csv" for i in range(3) for s in ("position", "gripper", "force")]
+    assert [Path(f).name for f in doc["files"]] == expected
+    assert sorted(Path(f).name for f in doc["removed"]) == sorted(stale[1:])
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(expected + others)
+    # every stream, every sample, once; values exact (write_csv keeps 17 digits)
+    for name in ("position", "gripper", "force"):
+        parts = [sio.read_csv(out_dir / f"pick_segment{i:02d}_{name}.csv") for i in range(3)]
+        np.testing.assert_array_equal(np.concatenate([d["position"] for d in parts]), demo[name])
+        np.testing.assert_array_equal(np.concatenate([d.t for d in parts]), demo.t)
+        assert parts[0].metadata["columns"][0] == f"{name}_0"
+    # text output lists what it wrote and what it removed
+    (out_dir / "pick_segment05_force.csv").write_text("old\n")
+    code, out, _ = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv")
+    assert code == 0
+    wrote = [line.split("wrote ", 1)[1] for line in out.splitlines() if line.startswith("  wrote ")]
+    assert [Path(w).name for w in wrote] == expected
+    assert f"  removed {out_dir / 'pick_segment05_force.csv'} (from an earlier run)" in out.splitlines()
+
+
+def test_plot_reports_the_file_written(capsys, tmp_path):
+    path = sio.write_npz(synthetic_multistream(), tmp_path / "demo.npz")
+    code, out, _ = _run(capsys, "segment", str(path), "--plot", str(tmp_path / "fig"))
+    assert code == 0 and out.splitlines()[-1] == f"  wrote {tmp_path / 'fig.png'}"
+    assert (tmp_path / "fig.png").read_bytes()[:4] == b"\x89PNG"
+    code, out, err = _run(capsys, "segment", str(path), "--plot", str(tmp_path / "fig.bmp"))
+    assert code == 2 and out == "" and "plot: expected a figure file name ending in one of" in err

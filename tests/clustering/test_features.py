@@ -255,3 +255,16 @@ def test_dtw_features_landmarks_and_errors():
         DTWFeatures(n_landmarks=0).fit(walks)
     with pytest.raises(ValueError, match=r"X: expected trajectories with 2 dimensions, got 3"):
         model.transform([np.zeros((5, 3))])
+
+
+def test_mismatch_messages_are_summarised():
+    """Issue 12, item 6: one short line, however many trajectories disagree."""
+    rng = np.random.default_rng(0)
+    trajs = [rng.normal(size=(10 + k, 2)) for k in range(500)]
+    with pytest.raises(ValueError, match=r"lengths 10, 11, 12 and 497 more; resample them first$"):
+        AngularSimilarityFeatures(representatives=trajs).fit()
+    mixed = [np.zeros((5, 2))] + [np.zeros((5, 3))] * 400
+    match = (r"^X: expected every trajectory to have the same number of dimensions, got X\[0\] has 2, "
+             r"X\[1\] has 3, X\[2\] has 3, X\[3\] has 3 and 397 more$")
+    with pytest.raises(ValueError, match=match):
+        TrajectoryFeatures().fit(mixed)

@@ -133,3 +133,15 @@ def test_real_rail_reaching(data_dir):
     res = LaplacianEditor().fit(demo).edit(c)
     assert res.success and res.constraint_error <= 1e-12 and not c.collides(res.Y)
     assert np.array_equal(res.Y[0], Y[0])
+
+
+def test_obstacle_around_a_pinned_end_is_reported_not_a_clash():
+    """A sphere holding the (pinned) start: before issue 12 a run of one pinned sample followed by free
+    outside samples was taken as movable, the start got an obstacle via-point and lte raised "obstacle
+    via-point fixes sample 0 ... but a constraint already puts it at ...". Now it is reported as pinned."""
+    t = np.linspace(0.0, 1.0, 60)
+    Y = np.column_stack([t, np.sin(np.pi * t), 0.5 * t]) + 0.01
+    for radius in (0.3, 1e9, 1e99):
+        res = lte(Y, Constraints(obstacles=[Sphere([0.0, 0.0, 0.0], radius)]), t=t)
+        assert not res.success and res.collision
+        assert res.message.startswith("sample 0 is pinned by a constraint inside obstacle 0")

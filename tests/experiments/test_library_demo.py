@@ -25,8 +25,9 @@ def check_result(res, out):
     assert "majority" in Path(res["summary"]).read_text()
 
 
-def test_lasa_library_demo(tmp_path):
+def test_lasa_library_demo(tmp_path, capsys):
     res = run_library_demo(tmp_path, segmentation=False)
+    assert capsys.readouterr().err == ""  # no progress bar unless asked for
     check_result(res, tmp_path)
     labels = {r["label"] for r in res["skills"]}
     assert {"Angle", "CShape", "NShape", "WShape", "pick", "place", "return"} <= labels
@@ -38,9 +39,31 @@ def test_lasa_library_demo(tmp_path):
         assert lib.summary()["n_demonstrations"] == res["n_demonstrations"] == 31
         ids = {p.id for p in lib.primitives(label="WShape", load=False)}
         assert set(wshape["used"]) <= ids
-    # a second run replaces the library rather than adding to it
-    again = run_library_demo(tmp_path, segmentation=False)
+    # a second run replaces the library rather than adding to it; this one shows its progress
+    again = run_library_demo(tmp_path, segmentation=False, progress=True)
     assert again["n_demonstrations"] == 31 and again["n_primitives"] == res["n_primitives"]
+    err = capsys.readouterr().err
+    for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
+                 "figure of the clusters", "reusing WShape", "reusing place"):
+        assert step in err, err
+    # 4 steps to build the library, its figure, two reuses; no segmentation here
+    assert "0/7 [00:00, loading LASA]" in err and "6/7" in err
+
+
+def test_progress_steps_are_named_as_they_start(capsys):
+    from skillbank.experiments._library_demo import _Steps
+
+    step = _Steps(3, True)
+    step("first")
+    step("second")
+    step.close()
+    err = capsys.readouterr().err
+    assert "0/3" in err and "first" in err and "1/3" in err and "second" in err
+    assert "1/3 [00:00, first]" not in err  # a step's count is shown with its own name
+    quiet = _Steps(3, False)
+    quiet("first")
+    quiet.close()
+    assert capsys.readouterr().err == ""
 
 
 def test_reused_trajectory_meets_the_task(tmp_path):

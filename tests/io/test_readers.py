@@ -185,7 +185,7 @@ def _rail_struct(n_demos, n=30, fields=("time", "pos", "vel", "acc")):
     return records
 
 
-def test_rail_repeated_time_stamps_are_dropped(tmp_path):
+def test_rail_repeated_time_stamps_are_an_error_unless_dropped(tmp_path, raises_format_error):
     folder = tmp_path / "PUSHING"
     folder.mkdir()
     records = _rail_struct(2)
@@ -193,7 +193,13 @@ def test_rail_repeated_time_stamps_are_dropped(tmp_path):
     t[5] = t[4]  # a repeated stamp
     records[1, 0]["time"] = t
     savemat(folder / "3.mat", {"dataset": records})
-    demos = read_rail_file(folder / "3.mat")
+    # Issue 12: no sample is lost silently; the message names the demonstration and the sample.
+    match = (r"demonstration dataset\[1\] \(its 'time'\): expected strictly increasing time stamps, "
+             r"but sample 5 \(.*\) repeats sample 4 .*1 of 29 steps do not increase; read with "
+             r"repair_time='drop'")
+    with raises_format_error(folder / "3.mat", match):
+        read_rail_file(folder / "3.mat")
+    demos = read_rail_file(folder / "3.mat", repair_time="drop")
     assert [d.n_steps for d in demos] == [30, 29]
     assert demos[1].metadata == {
         "label": "pushing", "user": "3", "index": 1, "source": str(folder / "3.mat"),
@@ -285,3 +291,22 @@ def test_invalid_values_are_reported_with_the_path(handwriting_h5, raises_format
         h5["normalized/2/x"] = np.r_[np.nan, np.arange(19.0)]
     with raises_format_error(path, r"invalid demonstration 'normalized/2': .*expected finite values"):
         read_handwriting_h5(path)
+
+
+def test_complex_datasets_are_rejected_by_name(robot_h5, handwriting_h5, raises_format_error):
+    """Issue 12: complex data is never cast to float (which drops the imaginary part with a warning)."""
+    import h5py
+
+    robot = robot_h5()
+    with h5py.File(robot, "a") as h5:
+        del h5["transform_info/transform_positions"]
+        h5["transform_info/transform_positions"] = np.ones((50, 3)) + 1j
+    with raises_format_error(robot, r"expected real numbers in 'transform_info/transform_positions', found "
+                                    r"complex values \(complex128\)$"):
+        read_robot_h5(robot)
+    hand = handwriting_h5()
+    with h5py.File(hand, "a") as h5:
+        del h5["normalized/1/y"]
+        h5["normalized/1/y"] = np.ones(20) * 1j
+    with raises_format_error(hand, r"expected real numbers in 'normalized/1/y', found complex values"):
+        read_handwriting_h5(hand)

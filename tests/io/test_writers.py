@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from skillbank import Demonstration
+from skillbank.core._validation import MAX_MAGNITUDE
 from skillbank.io import read_csv, read_npz, to_jsonable, write_csv, write_json, write_npz
 
 
@@ -167,7 +168,8 @@ def test_npz_writer_rejects_bad_input(tmp_path):
 
 # ---------------------------------------------------------------- properties
 
-_finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
+# Any value a Demonstration accepts: finite, of magnitude at most MAX_MAGNITUDE (issue 12).
+_finite = st.floats(-MAX_MAGNITUDE, MAX_MAGNITUDE, allow_nan=False, allow_infinity=False, width=64)
 
 
 @st.composite

@@ -264,3 +264,29 @@ def test_reuse_on_rail_pressing(data_dir):
     line = np.linspace(Y[0], Y[-1], 200)
     target = resample(Y, 200)
     assert frechet_distance(near.trajectory["position"], target) < 0.7 * frechet_distance(line, target)
+
+
+def test_rejections_of_a_large_skill_are_summarised_in_one_short_line():
+    """Issue 12, item 6: with every candidate of a large skill rejected, the message was one line of all
+    reasons (644,940 characters at 16,000 primitives); now the first three and a count."""
+    prims = [np.zeros((4, 2))] * 3000
+    with pytest.raises(ValueError) as info:
+        reuse(prims, Constraints(goal=[1.0, 0.0, 0.0]), method="lte")
+    message = str(info.value)
+    assert message == ("no usable candidate: 0: has 2 dimensions, the task has 3; 1: has 2 dimensions, the "
+                       "task has 3; 2: has 2 dimensions, the task has 3 and 2997 more")
+    # Every reason is still kept where a program can read it.
+    sel = select_candidates(prims, Constraints(goal=[1.0, 0.0, 0.0]))
+    assert len(sel.rejected) == 3000
+
+
+def test_numerical_failure_of_one_candidate_is_a_rejection_naming_the_step():
+    """A candidate whose edit overflows (a path near the magnitude bound on tiny time steps, with a
+    velocity constraint) is rejected with lte's one-line reason; the others are used."""
+    t = np.linspace(0.0, 1e-250, 30)
+    huge = Demonstration(t, {"position": 1e99 * np.column_stack([np.linspace(0, 1, 30), np.zeros(30)])})
+    fine = Demonstration(np.linspace(0.0, 1.0, 30), {"position": arcs([0.1], n=30)[0]})
+    task = Constraints(start=[0.0, 0.0], goal=[1.0, 0.0], start_velocity=[1.0, 0.0])
+    res = reuse([huge, fine], task, method="lte", ids=["huge", "fine"])
+    assert res.used == ["fine"]
+    assert res.rejected["huge"].startswith("cannot be edited: lte: ")

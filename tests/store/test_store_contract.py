@@ -146,3 +146,68 @@ def test_urls_and_paths(tmp_path, monkeypatch):
         open_store(3)
     with pytest.raises(ValueError, match=r"does not exist; create it with 'skillbank library init'"):
         open_store(tmp_path / "missing.db", create=False)
+
+
+def test_add_demonstrations_writes_a_batch_in_one_transaction(store):
+    store.add_demonstration(_demo(), [(0, 30)])
+    v = store.add_version(params={}, centers=np.zeros((2, 2)), pca_mean=np.zeros(2), pca_components=np.eye(2),
+                          members=[])
+    items = [{"demo": _demo(seed=k), "bounds": [(0, 10), (10, 30)], "source": f"s{k}", "label": "x",
+              "provenance": {"k": k}} for k in range(3)]
+    items[1]["members"] = {"version": v, "clusters": [1, 0], "features": np.eye(2)}
+    out = store.add_demonstrations(items)
+    assert [did for did, _ in out] == store.demonstration_ids()[1:] and [len(p) for _, p in out] == [2, 2, 2]
+    assert store.provenance(out[2][0]) == {"k": 2}
+    assert [p.id for p in store.primitives(source="s1")] == out[1][1]
+    assert store.members(v) == {out[1][1][0]: 1, out[1][1][1]: 0}
+    assert store.add_demonstrations([]) == []
+    bad = _demo(seed=9)
+    bad.metadata["handle"] = object()  # fails inside the write, after two demonstrations went in
+    with pytest.raises(TypeError):
+        store.add_demonstrations([items[0], items[2], {"demo": bad, "bounds": [(0, 30)]}])
+    assert len(store.demonstration_ids()) == 4 and len(store.primitives()) == 7
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda s, d: s.add_demonstrations({"demo": d, "bounds": [(0, 30)]}),
+     r"^items: expected a list of dicts with 'demo' and 'bounds', got dict"),
+    (lambda s, d: s.add_demonstrations([{"demo": d, "bounds": [(0, 31)]}]),
+     r"^items\[0\]\['bounds'\]: expected sample ranges \(start, stop\), 0 <= start < stop <= 30, "
+     r"got \(0, 31\)"),
+    (lambda s, d: s.add_demonstrations([{"demo": d, "bounds": [(0.5, 3)]}]),
+     r"^items\[0\]\['bounds'\]: expected a list of integer pairs"),
+    (lambda s, d: s.add_demonstrations([{"demo": d, "bounds": [(0, 30)], "colour": 1}]),
+     r"^items\[0\]: unknown key\(s\) \['colour'\]"),
+    (lambda s, d: s.add_demonstrations([{"demo": d, "bounds": [(0, 30)]}, {"bounds": [(0, 30)]}]),
+     r"^items\[1\]\['demo'\]: expected a Demonstration, got NoneType"),
+    (lambda s, d: s.add_demonstrations([{"demo": d, "bounds": [(0, 30)],
+                                         "members": {"version": 1, "clusters": [0, 1], "features": [[0]]}}]),
+     r"^items\[0\]\['members'\]: expected one cluster and one feature row per bound \(1\), got 2 and 1"),
+    (lambda s, d: s.add_demonstration(d, [(5, 2)]), r"^bounds: expected sample ranges .* got \(5, 2\)"),
+])
+def test_batch_errors_name_the_item(store, call, match):
+    with pytest.raises(ValueError, match=match):
+        call(store, _demo())
+    assert store.demonstration_ids() == []
+
+
+def test_a_sqlite_store_opened_read_only_writes_nothing(tmp_path):
+    path = tmp_path / "ro.db"
+    with SQLiteStore(path) as s:
+        did, pids = s.add_demonstration(_demo(), [(0, 30)])
+    before = path.read_bytes()
+    with open_store(f"sqlite:///{path}", readonly=True) as s:
+        assert isinstance(s, SQLiteStore) and s.readonly and s.demonstration_ids() == [did]
+        for write, what in [
+            (lambda: s.add_demonstration(_demo(), [(0, 30)]), "add demonstrations"),
+            (lambda: s.remove_demonstration(did), "remove a demonstration"),
+            (lambda: s.set_label("x", primitive=pids[0]), "label"),
+            (lambda: s.add_members(1, []), "assign primitives to clusters"),
+            (lambda: s.add_version(params={}, centers=np.zeros((1, 2)), pca_mean=np.zeros(2),
+                                   pca_components=np.eye(2), members=[]), "record a clustering"),
+        ]:
+            with pytest.raises(ValueError, match=rf"^library '.*ro\.db' is open read-only: cannot {what}$"):
+                write()
+    assert path.read_bytes() == before
+    with SQLiteStore(path) as s:
+        assert s.readonly is False

@@ -1,0 +1,290 @@
+"""Adding to a library: read, validate and segment every demonstration first, then write them in one go.
+
+The adding half of :class:`skillbank.pipeline.Library` (a mixin: it uses the
+library's ``store`` and ``cluster``). A batch is all or nothing: nothing is
+written until every file is read and every demonstration is cut (and
+assigned), and then everything is written in one transaction of the store
+(:meth:`skillbank.store.Store.add_demonstrations`). ``keep_going`` instead
+sets every failing file aside with its reason and adds the rest, still in one
+transaction.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..clustering import nearest_centre, primitive_features
+from ..core import Demonstration, __version__
+from ..io import FormatError, load, load_all
+from ..segmentation import MultimodalSegmenter
+
+__all__ = ["Adding", "ASSIGN", "check_label"]
+
+ASSIGN = ("incremental", "none", "recluster")
+#: Parameters of the current clustering that a recluster after an add keeps.
+_RECLUSTER_KEEPS = ("stretch", "features", "n_points", "n_components", "random_state")
+
+
+def check_label(name, what="label"):
+    """A stripped non-empty string, else ValueError naming ``what``."""
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"{what}: expected a non-empty string, got {name!r}")
+    return name.strip()
+
+
+def _check_options(assign, label, segmentation):
+    if assign not in ASSIGN:
+        raise ValueError(f"assign: expected one of {list(ASSIGN)}, got {assign!r}")
+    if segmentation is not None and not isinstance(segmentation, dict):
+        raise ValueError(f"segmentation: expected a dict of segmenter parameters, got "
+                         f"{type(segmentation).__name__}")
+    return None if label is None else check_label(label)
+
+
+def _check_demo(demo, name):
+    if not isinstance(demo, Demonstration):
+        raise ValueError(f"{name}: expected a Demonstration, got {type(demo).__name__}")
+    if "position" not in demo.streams:
+        raise ValueError(f"{name}: expected a 'position' stream, got streams {demo.stream_names}")
+
+
+def _file_reason(exc, path) -> str:
+    """What went wrong with a file, without repeating its name (the caller gives it)."""
+    if isinstance(exc, FormatError) and Path(exc.path) == Path(path):
+        return f"cannot read it: {exc.reason}"
+    return " ".join(str(exc).split())
+
+
+class Adding:
+    """``add``, ``add_many`` and ``add_files`` of :class:`~skillbank.pipeline.Library`."""
+
+    def _check_writable(self, what: str) -> None:
+        if getattr(self.store, "readonly", False):
+            raise ValueError(f"library {self.store.location!r} is open read-only: cannot {what}")
+
+    # -- one demonstration ---------------------------------------------------------------------
+    @staticmethod
+    def _bounds(demo, segment, segmentation):
+        if not segment:
+            return [(0, demo.n_steps)], {"segment": False}
+        params = dict(segmentation or {})
+        streams = params.pop("streams", None)
+        result = MultimodalSegmenter(**params).fit(demo, streams).result_
+        return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
+                               "streams": streams, "requested": params, "resolved": result.params,
+                               "mode": result.mode, "skillbank_version": __version__}
+
+    def _assignment(self, parts, cache: dict):
+        """``(members, None)`` in the current version for primitive samples ``parts``, or ``(None, why)``.
+
+        ``why`` is None when there is no clustering to join yet.
+        """
+        version = self.store.current_version()
+        if version is None:
+            return None, None
+        if cache.get("version") != version:
+            cache.clear()
+            cache.update(self.store.version(version))
+        p = cache["params"]
+        dims = sorted({part["position"].shape[1] for part in parts})
+        fitted = p.get("n_dims")  # recorded by cluster() from this release on; older: the width check below
+        if fitted is not None and dims != [fitted]:
+            return None, (f"its positions have {', '.join(map(str, dims))} dimension(s), clustering version "
+                          f"{version} was fitted on {fitted}-D positions")
+        try:
+            F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
+        except ValueError as exc:
+            return None, f"clustering version {version} cannot featurise it: {exc}"
+        width = cache["pca_mean"].shape[0]
+        if F.shape[1] != width:
+            return None, (f"its {F.shape[1]} features do not match the {width} of clustering version "
+                          f"{version} (fitted on positions of another number of dimensions)")
+        X = (F - cache["pca_mean"]) @ cache["pca_components"].T
+        return {"version": version, "clusters": nearest_centre(X, cache["centers"]).tolist(),
+                "features": X}, None
+
+    def _assign(self, parts, cache: dict):
+        """Clusters of the current version for primitive samples ``parts`` (None when they cannot join)."""
+        return self._assignment(parts, cache)[0]
+
+    def _prepare(self, demo, *, segment, segmentation, label, source, assign, cache) -> tuple:
+        """``(store item, why it stays unclustered or None)``: everything but the write."""
+        bounds, provenance = self._bounds(demo, segment, segmentation)
+        src = source if source is not None else demo.metadata.get("source")
+        members, why = None, None
+        if assign == "incremental":
+            members, why = self._assignment([demo.slice(a, b) for a, b in bounds], cache)
+        if why is not None:
+            provenance["assignment"] = {"version": cache["version"], "clustered": False, "reason": why}
+        item = {"demo": demo, "bounds": bounds, "source": None if src is None else str(src), "label": label,
+                "provenance": provenance, "members": members}
+        return item, why
+
+    def _recluster(self, progress: bool = False) -> int:
+        params = self.clustering_params() or {}
+        return self.cluster(**{k: params[k] for k in _RECLUSTER_KEEPS if k in params}, progress=progress)
+
+    # -- batches --------------------------------------------------------------------------------
+    def add(self, demo, *, segment: bool = True, segmentation=None, label=None, source=None,
+            assign: str = "incremental") -> int:
+        """Store a demonstration and its primitives in one transaction; returns its id.
+
+        Parameters
+        ----------
+        demo : Demonstration
+            Needs a ``"position"`` stream (clustering and reuse work on it).
+        segment : bool, default=True
+            Cut it with :func:`skillbank.segmentation.segment`; False stores it
+            as one primitive.
+        segmentation : dict, optional
+            Keyword arguments of the segmenter, plus ``"streams"``.
+        label : str, optional
+            Label every new primitive.
+        source : str, optional
+            Default: ``demo.metadata["source"]``.
+        assign : {"incremental", "none", "recluster"}, default="incremental"
+            ``"incremental"`` puts each new primitive in the nearest cluster of
+            the current clustering (features from that clustering's
+            featuriser); a demonstration that cannot join it (positions of
+            another number of dimensions, say) is left unclustered with a
+            ``UserWarning`` saying why, recorded in its provenance
+            (``provenance(id)["assignment"]``). ``"recluster"`` reclusters
+            everything afterwards with the last parameters; ``"none"`` leaves
+            them unclustered.
+
+        Examples
+        --------
+        >>> lib.add(demo, segmentation={"window": 16})  # doctest: +SKIP
+        3
+        """
+        return self.add_many([demo], segment=segment, segmentation=segmentation, label=label,
+                             source=source, assign=assign)[0]
+
+    def add_many(self, demos, *, segment: bool = True, segmentation=None, label=None, source=None,
+                 assign: str = "incremental", progress: bool = False) -> list:
+        """Add several demonstrations, all or nothing; returns their ids.
+
+        Every demonstration is checked and cut first; then all are written in
+        one transaction. A demonstration that cannot be cut raises ValueError
+        naming it (``demos[k]`` and its source), and nothing is added. With
+        ``assign="recluster"`` the library is reclustered once, at the end
+        (a second transaction: if it is interrupted the new primitives stay
+        unclustered, and :meth:`summary` lists them under ``"unassigned"``).
+        ``progress`` shows a tqdm bar. Other parameters are :meth:`add`'s.
+
+        Examples
+        --------
+        >>> lib.add_many(demos, segment=False, progress=True)  # doctest: +SKIP
+        [1, 2, 3]
+        """
+        label = _check_options(assign, label, segmentation)
+        self._check_writable("add demonstrations")
+        demos = list(demos)
+        for k, demo in enumerate(demos):
+            _check_demo(demo, f"demos[{k}]")
+        cache, prepared = {}, []
+        for k, demo in enumerate(tqdm(demos, desc="segmenting", unit="demo", disable=not progress)):
+            try:
+                prepared.append(self._prepare(demo, segment=segment, segmentation=segmentation, label=label,
+                                              source=source, assign=assign, cache=cache))
+            except ValueError as exc:
+                src = demo.metadata.get("source")
+                name = f"demos[{k}]" + ("" if src is None else f" (source {str(src)!r})")
+                raise ValueError(f"{name}: {exc}; nothing was added") from None
+        written = self.store.add_demonstrations([item for item, _ in prepared])
+        for (did, pids), (_, why) in zip(written, prepared, strict=True):
+            if why is not None:
+                warnings.warn(f"demonstration {did}: {len(pids)} primitive(s) left unclustered: {why}",
+                              UserWarning, stacklevel=2)
+        if assign == "recluster" and written:
+            self._recluster(progress)
+        return [did for did, _ in written]
+
+    def add_files(self, paths, *, index=None, group: str = "normalized", segment: bool = True,
+                  segmentation=None, label=None, assign: str = "incremental", keep_going: bool = False,
+                  progress: bool = False) -> dict:
+        """Read demonstration files and add every demonstration in them as one batch.
+
+        By default all or nothing: every file is read and every
+        demonstration cut before anything is written, then all are written
+        in one transaction; the first bad file raises ValueError naming it,
+        and nothing is added. With ``keep_going=True`` each bad file is set
+        aside with its reason (a file counts as bad when it cannot be read or
+        any of its demonstrations cannot be cut) and the others are added, in
+        one transaction.
+
+        Parameters
+        ----------
+        paths : list of str or path-like
+            Files in any format :func:`skillbank.io.load_all` reads; each
+            demonstration's ``source`` is its file (unless its metadata has one).
+        index : int, optional
+            Add only this demonstration of each file (:func:`skillbank.io.load`).
+        group : str, default="normalized"
+            For handwriting HDF5 files.
+        keep_going : bool, default=False
+        progress : bool, default=False
+            tqdm bars while reading and cutting.
+        segment, segmentation, label, assign
+            As in :meth:`add`.
+
+        Returns
+        -------
+        dict
+            ``{"demonstrations": [ids], "primitives": [[ids] per demonstration],
+            "failed": {file: reason}, "unclustered": {demonstration id: reason},
+            "version": the new clustering version (assign="recluster") or None}``.
+
+        Examples
+        --------
+        >>> lib.add_files(["a.csv", "b.csv"], keep_going=True)["failed"]  # doctest: +SKIP
+        {'b.csv': 'cannot read it: ...'}
+        """
+        label = _check_options(assign, label, segmentation)
+        if isinstance(paths, (str, Path)) or not isinstance(paths, (list, tuple)):
+            raise ValueError(f"paths: expected a list of files, got {type(paths).__name__}")
+        self._check_writable("add demonstrations")
+        failed, read = {}, []
+
+        def fail(path, what, exc):
+            reason = what + _file_reason(exc, path)
+            if not keep_going:
+                raise ValueError(f"{path}: {reason}; nothing was added") from None
+            failed[str(path)] = reason
+
+        for path in tqdm(paths, desc="reading", unit="file", disable=not progress):
+            try:
+                demos = [load(path, index=index, group=group)] if index is not None else \
+                    load_all(path, group=group)
+                for k, demo in enumerate(demos):
+                    _check_demo(demo, "demonstration" if len(demos) == 1 else f"demonstration {k}")
+            except (ValueError, OSError) as exc:
+                fail(path, "", exc)
+                continue
+            for demo in demos:
+                demo.metadata.setdefault("source", str(path))
+            read.append((path, demos))
+        cache, prepared = {}, []
+        for path, demos in tqdm(read, desc="segmenting", unit="file", disable=not progress):
+            items = []
+            try:
+                for demo in demos:
+                    items.append(self._prepare(demo, segment=segment, segmentation=segmentation, label=label,
+                                               source=None, assign=assign, cache=cache))
+            except ValueError as exc:  # raised by the demonstration after the last one prepared
+                fail(path, "" if len(demos) == 1 else f"demonstration {len(items)}: ", exc)
+                continue
+            prepared.extend(items)
+        written = self.store.add_demonstrations([item for item, _ in prepared]) if prepared else []
+        order = {str(p): n for n, p in enumerate(paths)}
+        report = {"demonstrations": [did for did, _ in written], "primitives": [pids for _, pids in written],
+                  "failed": dict(sorted(failed.items(), key=lambda kv: order[kv[0]])),
+                  "unclustered": {did: why for (did, _), (_, why) in zip(written, prepared, strict=True)
+                                  if why is not None},
+                  "version": None}
+        if assign == "recluster" and written:
+            report["version"] = self._recluster(progress)
+        return report
