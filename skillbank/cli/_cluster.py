@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._options import add_repair_option
+
 __all__ = ["add_parser", "run"]
 
 
@@ -34,6 +36,7 @@ def add_parser(sub):
                    help="comma-separated file indices (sorted order) of the representatives for "
                         "--features angular")
     p.add_argument("--seed", type=int, default=None, help="random seed")
+    add_repair_option(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None,
                    help="write a figure of the clusters to this file (.png, .pdf, .svg; no extension: .png)")
@@ -65,7 +68,7 @@ def run(args) -> int:
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     names, demos = None, None
     if path.is_dir():
-        names, demos = load_folder(path)
+        names, demos = load_folder(path, repair_time=args.repair_time)
         missing = [n for n, d in zip(names, demos, strict=True) if "position" not in d.streams]
         if missing:
             raise ValueError(f"input: expected a 'position' stream in every file, missing in {missing[:3]}")

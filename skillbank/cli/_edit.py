@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from ..core import Demonstration
-from ._options import add_constraint_options, constraints_from_args
+from ._options import add_constraint_options, add_repair_option, constraints_from_args
 
 __all__ = ["add_parser", "run"]
 
@@ -33,6 +33,7 @@ def add_parser(sub):
                    help="also compare the result with the demonstration (Fréchet, DTW, swept area, ...); "
                         "Fréchet and DTW take time proportional to the product of the lengths")
     p.add_argument("--out", type=Path, default=None, help="write the result here (.csv or .npz)")
+    add_repair_option(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None,
                    help="write a figure of the edit to this file (.png, .pdf, .svg; no extension: .png)")
@@ -57,7 +58,7 @@ def run(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    demos = load_positions(args.input)
+    demos = load_positions(args.input, repair_time=args.repair_time)
     constraints.check_dims(demos[0]["position"].shape[1])
     out, collision, notes = fit_reproduce(args.method, demos, constraints)
     Y, t = out["position"], out.t

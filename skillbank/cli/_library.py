@@ -161,6 +161,7 @@ def _add(args) -> int:
     segmentation = {"streams": args.stream, **segmentation_params(args)}
     with _open(args) as lib:
         report = lib.add_files(args.files, index=args.demo, group=args.group, segment=not args.whole,
+                               repair_time=args.repair_time,
                                segmentation=segmentation, label=args.label, assign=args.assign,
                                keep_going=args.keep_going, progress=_progress(args))
     command = getattr(args, "command_name", "skillbank library add")

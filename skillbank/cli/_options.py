@@ -17,6 +17,7 @@ from ..core import Constraints, ViaPoint, parse_obstacle
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
+    "add_repair_option",
 ]
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
@@ -110,9 +111,17 @@ def join_negative_values(argv, options=CONSTRAINT_OPTIONS) -> list:
     return out
 
 
+def add_repair_option(p) -> None:
+    """``--repair-time drop``: the documented repair of repeated time stamps (see skillbank.io.load_all)."""
+    p.add_argument("--repair-time", choices=["drop"], default=None,
+                   help="time stamps that repeat are an error naming the stream and sample; 'drop' drops "
+                        "the repeating samples (keeping the first) and records how many in the metadata")
+
+
 def add_segmentation_options(p) -> None:
     """Input selection and :class:`~skillbank.segmentation.MultimodalSegmenter` parameters."""
     keep = argparse.SUPPRESS  # an option not given is not passed: the segmenter's default applies
+    add_repair_option(p)
     p.add_argument("--demo", type=int, default=None,
                    help="which demonstration of a multi-demonstration file (RAIL .mat, handwriting .h5), "
                         "from 0; negative counts from the end")

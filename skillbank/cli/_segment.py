@@ -99,7 +99,7 @@ def run(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    demos = io.load_all(args.input, group=args.group)
+    demos = io.load_all(args.input, group=args.group, repair_time=args.repair_time)
     index = _pick(demos, args.demo, args.input)
     demo = demos[index]
     result = MultimodalSegmenter(**segmentation_params(args)).fit(demo, args.stream).result_

@@ -110,7 +110,7 @@ def detect_format(path) -> str:
     return "csv"
 
 
-def load_all(path, *, group: str = "normalized") -> list[Demonstration]:
+def load_all(path, *, group: str = "normalized", repair_time=None) -> list[Demonstration]:
     """Read every demonstration in a file of any supported format.
 
     Parameters
@@ -118,6 +118,11 @@ def load_all(path, *, group: str = "normalized") -> list[Demonstration]:
     path : str or path-like
     group : str, default="normalized"
         For handwriting HDF5 files, which group to read.
+    repair_time : {None, "drop"}, default=None
+        Time stamps that repeat are an error naming the stream and the sample;
+        ``"drop"`` drops the repeating samples instead (keeping the first) and
+        records ``metadata["dropped_samples"]``. Passed to the robot HDF5,
+        handwriting HDF5 and RAIL readers; CSV and NPZ files must be clean.
 
     Returns
     -------
@@ -135,17 +140,17 @@ def load_all(path, *, group: str = "normalized") -> list[Demonstration]:
     """
     fmt = detect_format(path)
     if fmt == "robot-h5":
-        return [read_robot_h5(path)]
+        return [read_robot_h5(path, repair_time=repair_time)]
     if fmt == "handwriting-h5":
-        return read_handwriting_h5(path, group=group)
+        return read_handwriting_h5(path, group=group, repair_time=repair_time)
     if fmt == "rail-mat":
-        return read_rail_file(path)
+        return read_rail_file(path, repair_time=repair_time)
     if fmt == "npz":
         return [read_npz(path)]
     return [read_csv(path)]
 
 
-def load(path, *, index=None, group: str = "normalized") -> Demonstration:
+def load(path, *, index=None, group: str = "normalized", repair_time=None) -> Demonstration:
     """Read one demonstration from a file of any supported format.
 
     Parameters
@@ -156,6 +161,8 @@ def load(path, *, index=None, group: str = "normalized") -> Demonstration:
         default 0. Negative values count from the end.
     group : str, default="normalized"
         For handwriting HDF5 files, which group to read.
+    repair_time : {None, "drop"}, default=None
+        See :func:`load_all`.
 
     Returns
     -------
@@ -172,7 +179,7 @@ def load(path, *, index=None, group: str = "normalized") -> Demonstration:
     >>> load("rail/REACHING/1.mat", index=2).metadata["index"]  # doctest: +SKIP
     2
     """
-    demos = load_all(path, group=group)
+    demos = load_all(path, group=group, repair_time=repair_time)
     if index is None:
         return demos[0]
     n = len(demos)

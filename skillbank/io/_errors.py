@@ -214,10 +214,10 @@ def describe_content(head: bytes) -> str:
         return "a zip archive"
     if head.startswith(b"\x93NUMPY"):
         return "a single .npy array"
+    # Never quote the bytes: a file named by mistake (or by a hostile manifest) may hold secrets.
     if b"\x00" in head:
-        return f"binary data starting {head[:8]!r}"
-    text = head.decode("utf-8", errors="replace").strip().splitlines()
-    return f"text starting {text[0][:40]!r}" if text else "a blank text file"
+        return "binary data"
+    return "a text file" if head.strip() else "a blank text file"
 
 
 def expect_magic(path: Path, magic, what: str) -> bytes:

@@ -15,8 +15,10 @@ TRAJECTORY_SUFFIXES = (".csv", ".txt", ".npz")
 _PROGRESS_FROM = 20  # files; fewer load too fast for a progress bar to help
 
 
-def load_folder(folder, *, progress: bool = True):
+def load_folder(folder, *, progress: bool = True, repair_time=None):
     """Load every trajectory file (``.csv``, ``.txt``, ``.npz``) of ``folder`` in sorted name order.
+
+    ``repair_time`` is :func:`~skillbank.io.load_all`'s.
 
     Returns
     -------
@@ -37,13 +39,14 @@ def load_folder(folder, *, progress: bool = True):
                          f"{str(folder)!r}, found none")
     bar = tqdm(files, desc="loading", unit="file", leave=False,
                disable=not progress or len(files) < _PROGRESS_FROM)
-    return [f.name for f in files], [load(f) for f in bar]
+    return [f.name for f in files], [load(f, repair_time=repair_time) for f in bar]
 
 
-def load_positions(paths) -> list[Demonstration]:
+def load_positions(paths, *, repair_time=None) -> list[Demonstration]:
     """Load each file as a Demonstration with one ``"position"`` stream.
 
     The file's ``position`` stream is taken, or its only stream.
+    ``repair_time`` is :func:`~skillbank.io.load_all`'s.
 
     Raises
     ------
@@ -61,7 +64,7 @@ def load_positions(paths) -> list[Demonstration]:
         path = Path(path)
         if not path.is_file():
             raise ValueError(f"input: no such file: {str(path)!r}")
-        demo = load(path)
+        demo = load(path, repair_time=repair_time)
         if "position" in demo.streams:
             name = "position"
         elif len(demo.streams) == 1:

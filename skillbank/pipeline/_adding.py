@@ -205,7 +205,7 @@ class Adding:
 
     def add_files(self, paths, *, index=None, group: str = "normalized", segment: bool = True,
                   segmentation=None, label=None, assign: str = "incremental", keep_going: bool = False,
-                  progress: bool = False) -> dict:
+                  progress: bool = False, repair_time=None) -> dict:
         """Read demonstration files and add every demonstration in them as one batch.
 
         By default all or nothing: every file is read and every
@@ -225,6 +225,9 @@ class Adding:
             Add only this demonstration of each file (:func:`skillbank.io.load`).
         group : str, default="normalized"
             For handwriting HDF5 files.
+        repair_time : {None, "drop"}, default=None
+            Repeated time stamps are an error; ``"drop"`` drops them
+            (:func:`skillbank.io.load_all`).
         keep_going : bool, default=False
         progress : bool, default=False
             tqdm bars while reading and cutting.
@@ -257,8 +260,8 @@ class Adding:
 
         for path in tqdm(paths, desc="reading", unit="file", disable=not progress):
             try:
-                demos = [load(path, index=index, group=group)] if index is not None else \
-                    load_all(path, group=group)
+                demos = [load(path, index=index, group=group, repair_time=repair_time)] if index is not None \
+                    else load_all(path, group=group, repair_time=repair_time)
                 for k, demo in enumerate(demos):
                     _check_demo(demo, "demonstration" if len(demos) == 1 else f"demonstration {k}")
             except (ValueError, OSError) as exc:

@@ -156,6 +156,7 @@ def test_bad_input_one_line_exit_2(cli, tmp_path, make, extra, match):
 
 def test_angular_needs_representatives(trajectory_folder):
     args = type("Args", (), {"input": trajectory_folder, "features": "angular", "representatives": None,
+                             "repair_time": None,
                              "seed": 0, "stretch": 1.2, "json": True, "plot": None})()
     with pytest.raises(ValueError, match=r"representatives: --features angular needs --representatives"):
         _cluster.run(args)
@@ -169,6 +170,7 @@ def test_none_needs_equal_lengths(tmp_path):
         sio.write_npz(skillbank.Demonstration.from_array(np.random.default_rng(i).normal(size=(n, 2))),
                       tmp_path / f"{i}.npz")
     args = type("Args", (), {"input": tmp_path, "features": "none", "representatives": None,
+                             "repair_time": None,
                              "seed": 0, "stretch": 1.2, "json": True, "plot": None})()
     with pytest.raises(ValueError, match=r"features: 'none' .* got lengths \[?30, 40\]?"):
         _cluster.run(args)

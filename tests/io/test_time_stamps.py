@@ -117,3 +117,27 @@ def test_check_clock_reports_the_first_offender_and_a_count():
     assert len(str(info.value)) < 300
     kept, n_dropped = check_clock("f.csv", t, where="stream 'x'", repair_time="drop")
     assert kept.tolist() == [0.0, 1.0, 2.0, 3.0, 4.0] and n_dropped == 1000
+
+
+def test_cli_repair_time_flag(robot_h5, tmp_path, capsys):
+    """The commands that read files take ``--repair-time drop``; without it the repeat is an error."""
+    path = robot_h5(n=200)
+    with h5py.File(path, "r") as h5:
+        joints = h5["joint_state_info/joint_time"][()]
+    joints[3] = joints[2]
+    _set(path, "joint_state_info/joint_time", joints)
+    db = tmp_path / "lib.db"
+    assert _main.main(["library", "init", str(db)]) == 0
+    assert _main.main(["library", "add", str(db), str(path), "--whole", "--json"]) == 2
+    assert "sample 3" in capsys.readouterr().err
+    argv = ["library", "add", str(db), str(path), "--whole", "--json"]
+    assert _main.main([*argv, "--repair-time", "drop"]) == 0
+    capsys.readouterr()
+    assert _main.main(["library", "list", str(db), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["primitives"][0]["n_steps"] == 199
+    assert _main.main(["segment", str(path), "--stream", "position", "--json"]) == 2
+    assert "read with repair_time='drop'" in capsys.readouterr().err
+    assert _main.main(["segment", str(path), "--stream", "position", "--repair-time", "drop", "--json"]) == 0
+    assert _main.main(["edit", str(path), "--repair-time", "drop", "--json"]) == 0
+    with pytest.raises(SystemExit):
+        _main.main(["edit", str(path), "--repair-time", "interpolate"])
