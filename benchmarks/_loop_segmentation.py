@@ -9,11 +9,13 @@ samples, and the sliding-window mean sums the whole window at every sample
 * as the reference the benchmark compares the vectorised implementation with;
 * as an independent check of that implementation (``tests/segmentation/test_loop_baseline.py``).
 
-Three pieces are shared with skillbank: ``numpy.percentile`` (for the
+Four pieces are shared with skillbank: ``numpy.percentile`` (for the
 typical speed), :func:`skillbank.segmentation.detect_changepoints`
 (the find_peaks / peak_widths changepoint rule, which runs on the profile and
-is not the hot path) and :func:`skillbank.segmentation.gate_changepoints`
-(the stop-or-turn gate, which loops over changepoints, not samples).
+is not the hot path), :func:`skillbank.segmentation.gate_changepoints`
+(the stop-or-turn gate, which loops over changepoints, not samples) and
+``skillbank.segmentation._roundoff.roundoff_level`` (the values' round-off,
+read off a sample of them and a median of their third differences).
 Only ``mode="deterministic"`` is implemented.
 """
 
@@ -25,13 +27,18 @@ import math
 import numpy as np
 
 from skillbank.segmentation import detect_changepoints, gate_changepoints
+from skillbank.segmentation._roundoff import roundoff_level
 from skillbank.segmentation._segmenter import to_samples
 
-__all__ = ["loop_segment", "loop_gradient", "loop_jerk_profile", "LoopResult"]
+__all__ = ["loop_segment", "loop_gradient", "loop_strided_gradient", "loop_jerk_profile", "loop_stream_jerk",
+           "LoopResult"]
 
-# same values as skillbank.segmentation._profile.FLAT_SCALE and TYPICAL_FRACTION
+# same values as skillbank.segmentation._profile.FLAT_SCALE, TYPICAL_FRACTION, ROUNDOFF_SHARE
+# and ROUNDOFF_TARGET
 _FLAT = 1e-12
 _TYPICAL_FRACTION = 0.05  # relative scale: speed + 0.05 * (95th percentile of speed)
+_ROUNDOFF_SHARE = 1e-2  # round-off allowed in the profile before the jerk is taken over a stride
+_ROUNDOFF_TARGET = 1e-3  # ... and what the stride brings it down to
 
 
 class LoopResult:
@@ -49,15 +56,18 @@ class LoopResult:
         Number of agreeing streams per sample (log of the product, rescaled).
     params : dict of str to dict
         Resolved per-stream settings (window, min_size, grace, ...).
+    steps : dict of str to int
+        Stride, in samples, each stream's jerk was differentiated over.
     """
 
-    def __init__(self, keypoints, changepoints, profiles, raw, support, params):
+    def __init__(self, keypoints, changepoints, profiles, raw, support, params, steps):
         self.keypoints = keypoints
         self.changepoints = changepoints
         self.profiles = profiles
         self.raw = raw
         self.support = support
         self.params = params
+        self.steps = steps
 
 
 # --------------------------------------------------------------------------- derivatives
@@ -119,32 +129,128 @@ def loop_gradient(t: list, f: list, edge_order: int = 2) -> list:
 # --------------------------------------------------------------------------- profile
 
 
-def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust",
-                      grace: int = 0, jerk_norm=None):
-    """Raw jerk norm and normalised windowed profile of one stream, with loops.
+def loop_strided_gradient(t: list, f: list, step: int) -> list:
+    """First derivative from the samples ``step`` either side, one sample at a time.
 
-    ``jerk_norm`` is the absolute jerk norm if already computed (:func:`loop_jerk_norm`).
-    Returns ``(raw, profile)`` as numpy arrays of shape (n_steps,).
+    Inside, the uneven-spacing formula on samples ``i - step``, ``i``, ``i + step``
+    (the stride shrinks to fit near the ends); at the two end samples a
+    one-sided difference over ``step`` samples.
+    """
+    n = len(f)
+    out = [0.0] * n
+    for i in range(1, n - 1):
+        lo, hi = max(i - step, 0), min(i + step, n - 1)
+        dx1, dx2 = t[i] - t[lo], t[hi] - t[i]
+        a = -dx2 / (dx1 * (dx1 + dx2))
+        b = (dx2 - dx1) / (dx1 * dx2)
+        c = dx1 / (dx2 * (dx1 + dx2))
+        out[i] = a * f[lo] + b * f[i] + c * f[hi]
+    end = min(step, n - 1)
+    out[0] = (f[end] - f[0]) / (t[end] - t[0])
+    out[n - 1] = (f[n - 1] - f[n - 1 - end]) / (t[n - 1] - t[n - 1 - end])
+    return out
+
+
+def _window_mean(values: list, window: int) -> list:
+    """Centred sliding-window mean, summing the whole window at every sample; shrinks at the ends."""
+    n = len(values)
+    mean = [0.0] * n
+    half = window // 2
+    for i in range(n):
+        lo = max(0, i - half)
+        hi = min(n, i - half + window)
+        total = 0.0
+        for k in range(lo, hi):
+            total += values[k]
+        mean[i] = total / (hi - lo)
+    return mean
+
+
+def _prominence(values: list, i: int, reach: int) -> float:
+    """Height of ``values[i]`` above the higher of its two bases: the lowest point before
+    higher ground, looked for at most ``reach`` samples away."""
+    bases = []
+    for direction in (-1, 1):
+        k, low = i, values[i]
+        while (0 <= k + direction < len(values) and abs(k + direction - i) <= reach
+               and values[k + direction] <= values[i]):
+            k += direction
+            low = min(low, values[k])
+        bases.append(low)
+    return values[i] - max(bases)
+
+
+def _scale_value(mean: list, normalize: str, grace: int, ripple: float = 0.0, reach: int = 0) -> float:
+    """Divisor of the profile: the maximum, or the median of the five highest interior
+    local maxima, leaving out those that rise above their bases (within ``reach``
+    samples) by more than 0 but no more than ``ripple``."""
+    n = len(mean)
+    if normalize == "max":
+        return max(mean)
+    if normalize != "robust":
+        raise ValueError(f"normalize: expected 'robust' or 'max', got {normalize!r}")
+    inner = mean[grace : n - grace] if n > 2 * grace + 1 else mean
+    peaks = []
+    for i in range(1, len(inner) - 1):
+        if inner[i] >= inner[i - 1] and inner[i] > inner[i + 1]:
+            peaks.append(i)
+    peaks.sort(key=lambda i: -inner[i])  # stable: equal heights keep their order
+    top = []
+    for i in peaks:
+        if len(top) == 5:
+            break
+        # a level piece of a plateau (prominence 0) counts; a rise of no more than ripple does not
+        if ripple <= 0.0 or not 0.0 < _prominence(inner, i, reach) <= ripple:
+            top.append(inner[i])
+    if top:
+        top = [h for h in top if h >= 1e-6 * top[0]]  # round-off ripples on a noiseless line
+    if not top:
+        scale_value = 0.0
+    elif len(top) % 2 == 1:
+        scale_value = top[len(top) // 2]
+    else:
+        scale_value = (top[len(top) // 2 - 1] + top[len(top) // 2]) / 2.0
+    if scale_value <= _FLAT:
+        scale_value = max(mean)
+    return scale_value
+
+
+def loop_stream_jerk(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust",
+                     grace: int = 0):
+    """Jerk norm, raw (scaled) jerk, normalised windowed profile and stride of one stream, with loops.
+
+    Same rule as skillbank: the jerk is taken over single samples unless the
+    values' round-off (``skillbank.segmentation._roundoff``, shared) could add
+    more than 1 % of a typical event to the profile, or pick which peaks set
+    its scale; then over the smallest stride that brings it under 0.1 % (at
+    most window // 16 samples), and the peaks the remaining round-off could
+    have made are left out of the scale.
+
+    Returns ``(jerk_norm, raw, profile, step)``, the arrays as numpy arrays of shape (n_steps,).
     """
     t = [float(v) for v in np.asarray(t, dtype=float)]
     Y = np.asarray(Y, dtype=float)
     if Y.ndim == 1:
         Y = Y[:, None]
     n, dims = Y.shape
+    if scale not in ("relative", "absolute"):
+        raise ValueError(f"scale: expected 'relative' or 'absolute', got {scale!r}")
+    if normalize not in ("robust", "max"):
+        raise ValueError(f"normalize: expected 'robust' or 'max', got {normalize!r}")
 
     # skillbank takes the speed from np.gradient's default edge_order=1, which
     # differs from the jerk's first derivative at the two end samples only
     velocity = [loop_gradient(t, [float(v) for v in Y[:, d]], edge_order=1) for d in range(dims)]
-    raw = list(loop_jerk_norm(t, Y) if jerk_norm is None else jerk_norm)
+    speed = [0.0] * n
+    for i in range(n):
+        total = 0.0
+        for d in range(dims):
+            total += velocity[d][i] * velocity[d][i]
+        speed[i] = math.sqrt(total)
 
     # relative scale: divide by the local speed plus 5 % of the typical speed
+    divisor = None
     if scale == "relative":
-        speed = [0.0] * n
-        for i in range(n):
-            total = 0.0
-            for d in range(dims):
-                total += velocity[d][i] * velocity[d][i]
-            speed[i] = math.sqrt(total)
         typical = float(np.percentile(speed, 95.0))
         # round-off level of the signal: a held signal is not motion
         steps = sorted(t[i + 1] - t[i] for i in range(n - 1))
@@ -153,58 +259,87 @@ def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: 
         flat = 1e-9 * (1.0 + peak) / dt
         if typical <= flat:
             typical = max(speed)
+        divisor = None if typical <= flat else [speed[i] + _TYPICAL_FRACTION * typical for i in range(n)]
+
+    def scaled(values):
+        if scale == "absolute":
+            return list(values)
+        if divisor is None:
+            return [0.0] * n
+        return [values[i] / divisor[i] for i in range(n)]
+
+    lo_i, hi_i = (grace, n - grace) if n > 2 * grace + 1 else (0, n)
+
+    def noise_of(levels, step):
+        level_y = math.sqrt(sum(float(v) * float(v) for v in levels[0]))
+        floor = [0.0] * n
         for i in range(n):
-            if typical <= flat:
-                raw[i] = 0.0
-            else:
-                raw[i] = raw[i] / (speed[i] + _TYPICAL_FRACTION * typical)
-    elif scale != "absolute":
-        raise ValueError(f"scale: expected 'relative' or 'absolute', got {scale!r}")
+            lo, hi = max(i - step, 0), min(i + step, n - 1)
+            span = step * (t[hi] - t[lo]) / (hi - lo)
+            floor[i] = (level_y + speed[i] * float(levels[1])) / span / span / span
+        return max(_window_mean(scaled(floor), window)[lo_i:hi_i])
 
-    # centred sliding-window mean; the window shrinks near the ends
-    mean = [0.0] * n
-    half = window // 2
-    for i in range(n):
-        lo = max(0, i - half)
-        hi = min(n, i - half + window)
-        total = 0.0
-        for k in range(lo, hi):
-            total += raw[k]
-        mean[i] = total / (hi - lo)
+    def ripple_of(noise, step):
+        return 2.0 * noise * math.sqrt((6 * step + 1) / window)
 
-    # normalisation: divide by the maximum ("max"), or by the median of the five
-    # highest local maxima of the interior ("robust"); no clipping
-    if normalize == "max":
-        scale_value = max(mean)
-    elif normalize == "robust":
-        inner = mean[grace : n - grace] if n > 2 * grace + 1 else mean
-        heights = []
-        for i in range(1, len(inner) - 1):
-            if inner[i] >= inner[i - 1] and inner[i] > inner[i + 1]:
-                heights.append(inner[i])
-        top = sorted(heights, reverse=True)[:5]
-        if not top:
-            scale_value = 0.0
-        elif len(top) % 2 == 1:
-            scale_value = top[len(top) // 2]
-        else:
-            scale_value = (top[len(top) // 2 - 1] + top[len(top) // 2]) / 2.0
-        if scale_value <= _FLAT:
-            scale_value = max(mean)
-    else:
-        raise ValueError(f"normalize: expected 'robust' or 'max', got {normalize!r}")
+    def share_of(noise, value):
+        return noise / value if math.isfinite(value) and value > _FLAT else 0.0
+
+    def matters(levels):
+        # round-off could move the profile by 1 % of the scale, or pick the peaks that set it
+        noise = noise_of(levels, 1)
+        if share_of(noise, scale_value) > _ROUNDOFF_SHARE:
+            return True
+        if noise <= 0.0:
+            return False
+        return _scale_value(mean, normalize, grace, ripple_of(noise, 1), window) != scale_value
+
+    step = 1
+    jerk_norm = loop_jerk_norm(t, Y)
+    raw = scaled(jerk_norm)
+    mean = _window_mean(raw, window)
+    scale_value = _scale_value(mean, normalize, grace)
+    levels = (roundoff_level(Y), roundoff_level(np.array(t))[0])
+    if matters(levels):
+        levels = (roundoff_level(Y, empirical=True), roundoff_level(np.array(t), empirical=True)[0])
+        if matters(levels):
+            cap = max(1, min(window // 16, (n - 1) // 6))
+            while True:
+                noise = noise_of(levels, step)
+                share = share_of(noise, scale_value)
+                if share <= _ROUNDOFF_TARGET or step >= cap:
+                    break
+                step = min(cap, max(step + 1, math.ceil(step * (share / _ROUNDOFF_TARGET) ** (1.0 / 3.0))))
+                jerk_norm = loop_jerk_norm(t, Y, step=step)
+                raw = scaled(jerk_norm)
+                mean = _window_mean(raw, window)
+                scale_value = _scale_value(mean, normalize, grace)
+            # then leave out the peaks the remaining round-off could have made
+            scale_value = _scale_value(mean, normalize, grace, ripple_of(noise, step), window)
+
+    # no clipping
     profile = [0.0] * n
     if math.isfinite(scale_value) and scale_value > _FLAT:
         for i in range(n):
             profile[i] = mean[i] / scale_value
-    return np.array(raw), np.array(profile)
+    return np.array(jerk_norm), np.array(raw), np.array(profile), step
+
+
+def loop_jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str = "robust",
+                      grace: int = 0):
+    """Raw jerk norm and normalised windowed profile of one stream, with loops.
+
+    Returns ``(raw, profile)`` as numpy arrays of shape (n_steps,).
+    """
+    _, raw, profile, _ = loop_stream_jerk(t, Y, window=window, scale=scale, normalize=normalize, grace=grace)
+    return raw, profile
 
 
 # --------------------------------------------------------------------------- keypoints
 
 
-def loop_jerk_norm(t, Y) -> list:
-    """Absolute jerk norm per sample, with loops."""
+def loop_jerk_norm(t, Y, step: int = 1) -> list:
+    """Absolute jerk norm per sample, with loops; differences over ``step`` samples."""
     t = [float(v) for v in np.asarray(t, dtype=float)]
     Y = np.asarray(Y, dtype=float)
     if Y.ndim == 1:
@@ -213,7 +348,9 @@ def loop_jerk_norm(t, Y) -> list:
     jerk = []
     for d in range(dims):
         column = [float(v) for v in Y[:, d]]
-        jerk.append(loop_gradient(t, loop_gradient(t, loop_gradient(t, column))))
+        for _ in range(3):
+            column = loop_gradient(t, column) if step == 1 else loop_strided_gradient(t, column, step)
+        jerk.append(column)
     out = [0.0] * n
     for i in range(n):
         out[i] = math.sqrt(sum(jerk[d][i] * jerk[d][i] for d in range(dims)))
@@ -328,15 +465,14 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
     t = np.asarray(demo.t, dtype=float)
     n = demo.n_steps
 
-    profiles, raws, changepoints, curves, params = {}, {}, {}, {}, {}
+    profiles, raws, changepoints, curves, params, steps = {}, {}, {}, {}, {}, {}
     for name in names:
         p = _settings(n, t, window, min_size, threshold, grace, scale, normalize, stop_ratio, min_turn)
-        jerk_norm = loop_jerk_norm(t, demo[name])
-        raw, profile = loop_jerk_profile(t, demo[name], window=p["window"], scale=p["scale"],
-                                         normalize=p["normalize"], grace=p["grace"], jerk_norm=jerk_norm)
+        jerk_norm, raw, profile, steps[name] = loop_stream_jerk(
+            t, demo[name], window=p["window"], scale=p["scale"], normalize=p["normalize"], grace=p["grace"])
         cps, strength = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
                                             grace=p["grace"], **_window_argument(p["window"]))
-        cps = np.asarray(loop_refine(cps, jerk_norm, half_width=max(2, p["window"] // 4)), dtype=int)
+        cps = np.asarray(loop_refine(cps, list(jerk_norm), half_width=max(2, p["window"] // 4)), dtype=int)
         if stop_ratio is not None:
             cps, strength = gate_changepoints(cps, strength, t, demo[name], window=p["window"],
                                               min_size=p["min_size"], grace=p["grace"],
@@ -357,4 +493,4 @@ def loop_segment(demo, streams=None, *, window="auto", min_size="auto", threshol
     peaks, heights = _local_maxima(support, min_height=need - 0.25 - 1e-9)
     shortest = min(p["min_size"] for p in params.values())
     keypoints = _suppress_close(peaks, heights, min_size=shortest, n=n)
-    return LoopResult(keypoints, changepoints, profiles, raws, np.array(support), params)
+    return LoopResult(keypoints, changepoints, profiles, raws, np.array(support), params, steps)

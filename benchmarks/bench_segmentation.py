@@ -20,6 +20,14 @@ r-demos
     All five demonstrations of ``seed/r_shape.h5`` (group "normalized"), one
     after the other, default parameters.
 
+With ``--roundoff``, also: the synthetic motion at 10^4, 10^5 and 10^6 samples
+(seeds 0, 1, 2), segmented at full precision and as a copy with every value
+and time stamp rounded to 12 significant digits (what a CSV written with
+``%.12g`` holds), with default parameters: both copies' keypoints, whether
+they agree within one window, the stride the jerk was taken over, the time,
+and how much of each copy's single-sample jerk is round-off (median of
+|jerk(copy) - jerk(exact)| over the median |jerk(exact)|).
+
 Every figure is the best of several repeats (``time.perf_counter``). The loop
 baseline is timed in the same run; at 10^5 and 10^6 samples it runs once, and
 only when its estimate (per-sample cost measured at 10^4 samples x N) is under
@@ -42,7 +50,7 @@ from scipy.interpolate import CubicSpline
 
 from skillbank import Demonstration
 from skillbank.io import read_handwriting_h5, read_robot_h5
-from skillbank.segmentation import segment
+from skillbank.segmentation import jerk, segment
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import best_of, data_dir  # noqa: E402
@@ -76,6 +84,51 @@ def synthetic_demo(n: int, *, seed: int = 0, n_corners: int = 5) -> Demonstratio
     return Demonstration(t, {"position": path})
 
 
+
+
+def written(x, digits: int = 12) -> np.ndarray:
+    """``x`` as a CSV written with ``%.<digits>g`` holds it."""
+    x = np.asarray(x, dtype=float)
+    return np.array([float(f"{v:.{digits}g}") for v in x.ravel()]).reshape(x.shape)
+
+
+def roundoff_rows(sizes=(10_000, 100_000, 1_000_000), seeds=(0, 1, 2)) -> list:
+    """Full precision against a 12-significant-digit copy of the same synthetic motion."""
+    rows = []
+    for n in sizes:
+        for seed in seeds:
+            demo = synthetic_demo(n, seed=seed)
+            copy = Demonstration(written(demo.t), {"position": written(demo["position"])})
+            full_s, full = best_of(lambda d=demo: segment(d), 1)
+            copy_s, cut = best_of(lambda d=copy: segment(d), 1)
+            window = full.streams["position"].params["window"]
+            exact = np.linalg.norm(jerk(demo.t, demo["position"]), axis=1)
+            noisy = np.linalg.norm(jerk(copy.t, copy["position"]), axis=1)
+            agree = full.keypoints.size == cut.keypoints.size and bool(
+                full.keypoints.size == 0 or np.abs(full.keypoints - cut.keypoints).max() <= window)
+            rows.append({"n_samples": n, "seed": seed, "window": window,
+                         "keypoints_full": full.keypoints.tolist(),
+                         "keypoints_12_digits": cut.keypoints.tolist(),
+                         "agree_within_window": agree,
+                         "step_full": full.streams["position"].jerk_step,
+                         "step_12_digits": cut.streams["position"].jerk_step,
+                         "seconds_full": full_s, "seconds_12_digits": copy_s,
+                         "jerk_roundoff": float(np.median(np.abs(noisy - exact)) / np.median(exact))})
+    return rows
+
+
+def roundoff_report(rows: list) -> str:
+    lines = ["", "full precision against the same motion at 12 significant digits (default parameters):",
+             f"{'n':>8} {'seed':>4} {'jerk round-off':>14} {'stride':>7} {'s full':>7} {'s copy':>7}  "
+             "keypoints (full | 12 digits)"]
+    for r in rows:
+        lines.append(f"{r['n_samples']:>8} {r['seed']:>4} {r['jerk_roundoff']:>14.3g} "
+                     f"{r['step_full']:>3}|{r['step_12_digits']:<3} {r['seconds_full']:>7.3f} "
+                     f"{r['seconds_12_digits']:>7.3f}  {r['keypoints_full']} | {r['keypoints_12_digits']}"
+                     + ("" if r["agree_within_window"] else "  DIFFER"))
+    agree = sum(r["agree_within_window"] for r in rows)
+    lines.append(f"keypoints agree within one window in {agree} of {len(rows)} cases")
+    return "\n".join(lines)
 
 
 def _row(case, n, fast_s, loop_s, extrapolated, fast_kp, loop_kp, note=""):
@@ -169,9 +222,14 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats; baseline only at 10^4 samples")
     parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    parser.add_argument("--roundoff", action="store_true",
+                        help="also compare full precision with a 12-digit copy (10^4 to 10^6 samples)")
     args = parser.parse_args(argv)
     results = run(args.quick)
     print(report(results))
+    if args.roundoff:
+        results["roundoff"] = roundoff_rows()
+        print(roundoff_report(results["roundoff"]))
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=2))
 

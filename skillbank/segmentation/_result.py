@@ -30,6 +30,10 @@ class StreamSegmentation:
         Prominence of each changepoint's jerk event.
     probability : ndarray of shape (n_steps,)
         The stream's keypoint curve (Gaussians over a floor).
+    jerk_step : int
+        Stride, in samples, of the differences the jerk was taken over: 1,
+        unless the values' round-off (few significant digits on a fine grid)
+        would have swamped the jerk (see :func:`~skillbank.segmentation.jerk_profile`).
     """
 
     name: str
@@ -39,6 +43,7 @@ class StreamSegmentation:
     changepoints: np.ndarray
     strength: np.ndarray
     probability: np.ndarray
+    jerk_step: int = 1
 
 
 @dataclass

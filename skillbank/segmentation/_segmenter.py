@@ -18,7 +18,7 @@ from ._keypoints import (
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import _jerk_profile, jerk, speed_norm
+from ._profile import _stream_jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
@@ -97,7 +97,9 @@ def to_samples(value, t: np.ndarray, *, name: str) -> int:
 class MultimodalSegmenter(Params):
     """Probabilistic multimodal segmentation of a demonstration into primitives.
 
-    Each stream is segmented on its own: jerk (third time derivative) → norm
+    Each stream is segmented on its own: jerk (third time derivative, over a
+    stride of samples where the values' round-off would swamp it; see
+    :func:`~skillbank.segmentation.jerk_profile`) → norm
     over the dimensions → sliding-window mean → normalisation → changepoints
     at the onset of every jerk event whose prominence reaches ``threshold`` →
     the stop-or-turn gate, which keeps the events where the motion stops or
@@ -257,12 +259,10 @@ class MultimodalSegmenter(Params):
                     f"{name!r} with min_size={p['min_size']}, got {n}")
             Y = demo[name]
             # the jerk norm serves the profile and the refinement, the speed
-            # the relative scale and the gate: each is computed once
-            absj = np.linalg.norm(jerk(t, Y), axis=1)
-            needs_speed = p["scale"] == "relative" or p["stop_ratio"] is not None
-            speed = speed_norm(t, Y) if needs_speed else None
-            j, prof = _jerk_profile(t, Y, absj, speed, window=p["window"], scale=p["scale"],
-                                    normalize=p["normalize"], grace=p["grace"])
+            # the relative scale, the time stamps' round-off and the gate: each is computed once
+            speed = speed_norm(t, Y)
+            absj, j, prof, step = _stream_jerk(t, Y, speed, window=p["window"], scale=p["scale"],
+                                               normalize=p["normalize"], grace=p["grace"])
             cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
                                                 grace=p["grace"], window=p["window"])
             # the profile places an event to a sample or two; the raw jerk's centre pins it
@@ -273,7 +273,7 @@ class MultimodalSegmenter(Params):
                     cps, strength, Y, speed, window=p["window"], min_size=p["min_size"], grace=p["grace"],
                     stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
             curve = changepoint_probability(cps, n, sigma=SIGMA_PER_WINDOW * p["window"], floor=floor)
-            per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve)
+            per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve, jerk_step=step)
         prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
                                               floor=floor)
         min_size = min(s.params["min_size"] for s in per_stream.values())

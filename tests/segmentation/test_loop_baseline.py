@@ -88,6 +88,31 @@ def test_synthetic_explicit_params_match_loop(loop):
     _assert_same(fast, slow, ["position", "force"])
 
 
+def test_copy_with_few_digits_matches_loop(loop):
+    # 8 significant digits on a 1 ms grid: both differentiate over the same stride of samples
+    rng = np.random.default_rng(0)
+    t = np.arange(3000) * 1e-3
+    position = _min_jerk_path(t, rng.normal(size=(6, 3))) + 0.01 * np.sin(2 * np.pi * 0.3 * t)[:, None]
+    demo = Demonstration(t, {"position": np.array([[float(f"{v:.8g}") for v in row] for row in position])})
+    fast = segment(demo)
+    slow = loop.loop_segment(demo)
+    assert fast.streams["position"].jerk_step == slow.steps["position"] > 1
+    np.testing.assert_allclose(fast.streams["position"].jerk, slow.raw["position"], rtol=RTOL)
+    assert len(slow.keypoints) >= 3
+    _assert_same(fast, slow, ["position"])
+
+
+def test_loop_strided_gradient_matches_numpy_on_the_subsampled_grid(loop):
+    # where the stride fits, a stride-h difference is np.gradient on every h-th sample
+    rng = np.random.default_rng(2)
+    t = np.cumsum(rng.uniform(0.5, 1.5, 60))
+    f = np.sin(t)
+    got = loop.loop_strided_gradient(list(t), list(f), 3)
+    np.testing.assert_allclose(got[3:-3:3], np.gradient(f[::3], t[::3])[1:-1], rtol=1e-12)
+    np.testing.assert_allclose(loop.loop_strided_gradient(list(t), list(f), 1)[1:-1],
+                               np.gradient(f, t)[1:-1], rtol=1e-12)
+
+
 def test_r_demo_3_matches_loop(loop, data_dir):
     demo = read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized")[3]
     fast = segment(demo)

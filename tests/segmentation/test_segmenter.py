@@ -255,8 +255,9 @@ def test_public_building_blocks_match_the_segmenter(params):
         np.testing.assert_array_equal(profile, stream.profile)
         cps, strength = detect_changepoints(profile, threshold=p["threshold"], min_size=p["min_size"],
                                             grace=p["grace"], window=p["window"])
-        cps = refine_to_jerk_centre(cps, np.linalg.norm(jerk(demo.t, demo[name]), axis=1),
-                                    half_width=max(2, p["window"] // 4))
+        assert stream.jerk_step == 1  # full precision: the jerk over single samples
+        absj = np.linalg.norm(jerk(demo.t, demo[name], step=stream.jerk_step), axis=1)
+        cps = refine_to_jerk_centre(cps, absj, half_width=max(2, p["window"] // 4))
         cps, strength = gate_changepoints(cps, strength, demo.t, demo[name], window=p["window"],
                                           min_size=p["min_size"], grace=p["grace"],
                                           stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])

@@ -1,0 +1,135 @@
+"""The values' round-off, the strided jerk, and which streams the segmenter differentiates over a stride."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import skillbank.io as sio
+from skillbank import Demonstration
+from skillbank.experiments import synthetic_multistream
+from skillbank.segmentation import jerk, jerk_profile, segment
+from skillbank.segmentation._profile import normalize_profile
+from skillbank.segmentation._roundoff import empirical_level, roundoff_level, value_resolution
+
+
+def _digits(x, p):
+    return np.array([float(f"{v:.{p}g}") for v in np.ravel(x)]).reshape(np.shape(x))
+
+
+# ------------------------------------------------------------------ the values' grid
+
+
+@pytest.mark.parametrize("p", [6, 8, 10, 12, 15])
+def test_resolution_of_decimal_digits(p):
+    x = _digits(1.0 + np.sqrt(np.linspace(0.0, 8.0, 500)), p)  # largest value 3.83
+    assert value_resolution(x) == pytest.approx(0.5 * 10.0 ** (1 - p))
+
+
+def test_resolution_of_float32_integers_and_full_precision():
+    x = np.sqrt(np.linspace(1.0, 3.9, 500))  # largest 1.97, in [1, 2)
+    assert value_resolution(x.astype(np.float32).astype(float)) == 2.0**-24  # 24 bits: step 2^-23
+    assert value_resolution(x) == np.spacing(x.max()) / 2  # every one of the 53 bits is used
+    assert value_resolution(np.arange(0.0, 4096.0)) == 0.5  # 12 bits below 4096
+    assert value_resolution(-np.arange(0.0, 4096.0)) == 0.5
+    assert value_resolution(np.zeros(10)) == 0.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(1e-6, 1e6) | st.floats(-1e6, -1e-6), min_size=1, max_size=200),
+       st.integers(3, 15))
+def test_property_resolution_bounds_the_rounding(values, p):
+    # whatever was written with p digits is within the resolution of what was written (a tie
+    # rounds by exactly half a step, give or take the double nearest the decimal)
+    x = np.array(values)
+    written = _digits(x, p)
+    assert np.abs(written - x).max() <= value_resolution(written) * (1 + 1e-9)
+
+
+def test_empirical_level_sees_rounding_and_ignores_held_values():
+    # a fine line on a grid of 1e-6: uniform errors, half a step is 5e-7
+    t = np.linspace(0.0, 1.0, 20_000)
+    x = np.round(np.sin(3 * t) / 1e-6) * 1e-6
+    assert empirical_level(x[:, None])[0] == pytest.approx(5e-7, rel=0.15)
+    held = np.repeat([0.0, 1.0, 0.0], 100)
+    assert empirical_level(held).tolist() == [0.0]
+    assert roundoff_level(held).tolist() == [0.5]  # on a grid of step 1 ...
+    assert roundoff_level(held, empirical=True).tolist() == [0.0]  # ... but exact
+
+
+# ------------------------------------------------------------------ strided jerk
+
+
+def test_strided_jerk_is_exact_for_cubics():
+    t = np.linspace(0.0, 2.0, 400)
+    for step in (1, 4, 16):
+        inner = slice(3 * step, -3 * step)
+        np.testing.assert_allclose(jerk(t, t[:, None] ** 3, step=step)[inner], 6.0, rtol=1e-6)
+
+
+def test_stride_divides_round_off_by_its_cube():
+    # 10 digits leave ~5e-11 on each value: ~0.05 of jerk at 1 ms, 1/64 of that over 4 samples
+    t = np.arange(20_000) * 1e-3
+    Y = np.sin(t)[:, None]
+    written = _digits(Y, 10)
+    err1 = np.median(np.abs(jerk(t, written) - jerk(t, Y))[20:-20])
+    err4 = np.median(np.abs(jerk(t, written, step=4) - jerk(t, Y, step=4))[20:-20])
+    assert err1 > 0.005 and 30 < err1 / err4 < 130
+
+
+def test_strided_jerk_on_an_uneven_clock():
+    rng = np.random.default_rng(1)
+    t = np.cumsum(rng.uniform(0.8, 1.2, 2000)) * 0.01
+    err = np.abs(jerk(t, np.sin(t)[:, None], step=3)[20:-20, 0] + np.cos(t)[20:-20])
+    assert err.max() < 0.05
+
+
+@pytest.mark.parametrize("step", [0, -2, 1.5, "2"])
+def test_bad_step(step):
+    with pytest.raises(ValueError, match=r"step: expected an integer > 0, got"):
+        jerk(np.arange(10.0), np.zeros(10), step=step)
+
+
+def test_ripple_leaves_out_twins_but_not_plateau_pieces():
+    twin = np.array([0.0, 5.0, 4.998, 4.999, 0.0, 2.0, 0.0, 1.0, 0.0])
+    assert normalize_profile(twin).max() == pytest.approx(5.0 / 3.4995)  # the twin counts
+    assert normalize_profile(twin, ripple=0.01).max() == pytest.approx(2.5)  # it does not
+    level = np.array([0.0, 5.0, 4.0, 4.0, 0.0, 2.0, 0.0, 1.0, 0.0])  # a shoulder: prominence 0
+    assert normalize_profile(level, ripple=0.01).max() == normalize_profile(level).max()
+
+
+# ------------------------------------------------------------------ which streams are strided
+
+
+def test_noisy_copy_is_strided_and_public_building_blocks_agree():
+    n = 100_000
+    t = np.arange(n) * 1e-3
+    s = np.clip(np.abs(((t / 25.0) % 2.0) - 1.0) * 1.6 - 0.3, 0.0, 1.0)
+    Y = np.column_stack([10 * s**3 - 15 * s**4 + 6 * s**5, np.sin(t / 9.0)])
+    full = segment(Demonstration(t, {"position": Y}))
+    copy = segment(Demonstration(t, {"position": _digits(Y, 10)}))
+    assert full.streams["position"].jerk_step == 1
+    stream = copy.streams["position"]
+    assert stream.jerk_step > 1
+    p = stream.params
+    raw, profile = jerk_profile(t, _digits(Y, 10), window=p["window"], grace=p["grace"])
+    np.testing.assert_array_equal(raw, stream.jerk)
+    np.testing.assert_array_equal(profile, stream.profile)
+
+
+def test_held_exact_streams_stay_at_single_samples():
+    # the gripper (0/1) and force (0/-5) lie on coarse grids but are exact
+    result = segment(synthetic_multistream())
+    assert {k: s.jerk_step for k, s in result.streams.items()} == {"position": 1, "gripper": 1, "force": 1}
+
+
+def test_real_data_stay_at_single_samples(data_dir):
+    demos = sio.read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized")
+    for demo in demos:
+        assert segment(demo).streams["position"].jerk_step == 1
+    buttons = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
+    # two joints are stored as float32: their round-off reaches 0.4 % of the profile, under the 1 % share
+    levels = roundoff_level(buttons["joints"])
+    assert levels[0] == 2.0**-24 and levels[5] == 2.0**-23
+    result = segment(buttons, ["joints", "position", "force", "gripper"])
+    assert all(s.jerk_step == 1 for s in result.streams.values())
