@@ -105,10 +105,6 @@ def _outcome(call, results):
     assert not leaked
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "skillbank.segmentation leaks RuntimeWarnings (divide by zero, overflow in np.gradient) on time steps "
-    "near 1e-300 or paths near the bound: MultimodalSegmenter.fit needs core._validation.numerical_errors "
-    "(segmentation is another engineer's; issue 12). Drop this mark once it has it."))
 @FUZZ
 @given(st.data())
 def test_segment(data):

@@ -118,4 +118,6 @@ class SegmentationResult:
             "keypoint_times": [float(x) for x in self.keypoint_times],
             "changepoints": {k: [int(c) for c in v] for k, v in self.changepoints.items()},
             "n_segments": self.n_segments,
+            # > 1 where the stream's round-off made the jerk be taken over a stride of samples
+            "jerk_step": {k: int(v.jerk_step) for k, v in self.streams.items()},
         }

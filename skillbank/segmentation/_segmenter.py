@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._params import Params
-from ..core._validation import check_fraction, check_positive
+from ..core._validation import check_fraction, check_positive, numerical_errors
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._gate import _gate_changepoints
 from ._keypoints import (
@@ -218,6 +218,7 @@ class MultimodalSegmenter(Params):
                 "scale": raw["scale"], "normalize": raw["normalize"], "stop_ratio": stop_ratio,
                 "min_turn": min_turn}
 
+    @numerical_errors("MultimodalSegmenter.fit")
     def fit(self, demo: Demonstration, streams=None) -> MultimodalSegmenter:
         """Segment ``demo`` using ``streams`` (default: all of its streams).
 

@@ -83,3 +83,24 @@ def test_float32_copy_gives_the_same_cuts():
     demo = _motion(100_000, 0)
     copy = Demonstration(demo.t, {"position": demo["position"].astype(np.float32).astype(float)})
     _assert_same_cuts(segment(demo), segment(copy))
+
+
+def test_segment_json_reports_the_stride(tmp_path, capsys):
+    """``skillbank segment --json`` says per stream whether the jerk was taken over a stride."""
+    import json
+
+    from skillbank.cli import main
+
+    demo = _motion(100_000, 1)
+    copy = _written(demo, tmp_path, digits=8)
+    path = tmp_path / "copy.csv"
+    np.savetxt(path, np.column_stack([copy.t, copy["position"]]), fmt="%.17g", delimiter=",",
+               header="t,x,y,z", comments="")
+    assert main(["segment", str(path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["jerk_step"]["position"] > 1
+    exact = tmp_path / "exact.csv"
+    np.savetxt(exact, np.column_stack([demo.t[:2000], demo["position"][:2000]]), fmt="%.17g", delimiter=",",
+               header="t,x,y,z", comments="")
+    assert main(["segment", str(exact), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["jerk_step"] == {"position": 1}
