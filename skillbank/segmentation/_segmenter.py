@@ -71,11 +71,13 @@ DEFAULT_SUPPORT_FRACTION = 0.5
 SUPPORT_SLACK = 0.25
 
 
-def to_samples(value, t: np.ndarray, *, name: str) -> int:
+def to_samples(value, t: np.ndarray, *, name: str, allow_zero: bool = False) -> int:
     """Convert a size given in samples (int) or seconds (``"0.1s"``) to samples.
 
     Seconds are converted with the median sample period, so uneven sampling
-    does not bias the conversion.
+    does not bias the conversion. A size must be positive (``"0s"`` is refused
+    like ``0``) unless ``allow_zero``; a positive number of seconds is at
+    least one sample.
 
     Examples
     --------
@@ -89,9 +91,14 @@ def to_samples(value, t: np.ndarray, *, name: str) -> int:
         if not match:
             raise ValueError(f"{name}: expected an integer number of samples or seconds like '0.1s', "
                              f"got {value!r}")
+        seconds = float(match.group(1))
+        if seconds == 0.0:
+            if allow_zero:
+                return 0
+            raise ValueError(f"{name}: expected seconds > 0 like '0.1s', got {value!r}")
         dt = float(np.median(np.diff(t))) if t.shape[0] > 1 else 1.0
-        return max(1, int(round(float(match.group(1)) / dt)))
-    return check_positive(value, name=name, integer=True)
+        return max(1, int(round(seconds / dt)))
+    return check_positive(value, name=name, integer=True, allow_zero=allow_zero)
 
 
 class MultimodalSegmenter(Params):
@@ -207,7 +214,7 @@ class MultimodalSegmenter(Params):
         min_size = MIN_SIZE_WINDOWS * window if raw["min_size"] == "auto" else to_samples(
             raw["min_size"], t, name="min_size")
         grace = window if raw["grace"] == "auto" else (
-            0 if raw["grace"] == 0 else to_samples(raw["grace"], t, name="grace"))
+            to_samples(raw["grace"], t, name="grace", allow_zero=True))
         threshold = check_fraction(raw["threshold"], name="threshold")
         if threshold == 0:
             raise ValueError("threshold: expected a number in (0, 1], got 0")

@@ -378,3 +378,21 @@ def test_three_button_keypoints_against_the_authors(data_dir):
     assert speed[at_11 - 20 : at_11 + 20].min() > 0.5 * typical
     for k in result.keypoints:
         assert speed[max(0, k - 40) : k + 40].min() < 0.05 * typical
+
+
+def test_zero_sizes_in_seconds_are_refused_like_zero_samples():
+    from skillbank.segmentation._segmenter import to_samples
+
+    t = np.linspace(0.0, 1.0, 101)
+    for value in (0, "0s", "0.0s"):
+        with pytest.raises(ValueError, match=r"^window: expected"):
+            to_samples(value, t, name="window")
+    assert to_samples("0s", t, name="grace", allow_zero=True) == 0 == to_samples(0, t, name="grace",
+                                                                              allow_zero=True)
+    assert to_samples("0.001s", t, name="window") == 1
+    demo = Demonstration.from_array(np.column_stack([t, t**2]), t)
+    with pytest.raises(ValueError, match=r"window: expected seconds > 0 like '0.1s', got '0s'"):
+        MultimodalSegmenter(window="0s").fit(demo)
+    a = MultimodalSegmenter(window=8, grace="0s").fit(demo).result_
+    b = MultimodalSegmenter(window=8, grace=0).fit(demo).result_
+    assert a.keypoints.tolist() == b.keypoints.tolist() and a.params["position"]["grace"] == 0
