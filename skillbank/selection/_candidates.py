@@ -135,7 +135,8 @@ def _arrays(primitives, ids, t, min_samples):
 
 @numerical_errors("select_candidates")
 def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = "shortlist",
-                      shortlist: int = SHORTLIST, min_samples: int = 2, **lte_params) -> Selection:
+                      shortlist: int = SHORTLIST, min_samples: int = 2, progress=None,
+                      **lte_params) -> Selection:
     """Adapt every candidate to ``constraints`` with LTE, drop the failures, rank the rest.
 
     Parameters
@@ -166,6 +167,8 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
     min_samples : int, default=2
         Shorter candidates are rejected; :func:`reuse` passes what its
         representation needs (``Representation.min_samples``).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each candidate is adapted.
     **lte_params
         Passed to :func:`skillbank.editing.lte` (e.g. ``margin``, ``max_iter``).
 
@@ -196,20 +199,14 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
     if n_dims is None and items:
         n_dims = items[0][2].shape[1]
     usable = []
-    for pid, tk, Y in items:
-        if Y.shape[1] != n_dims:
-            rejected[pid] = f"has {Y.shape[1]} dimensions, the task has {n_dims}"
-            continue
-        try:
-            res = lte(Y, constraints, t=tk, **lte_params)
-        except ValueError as exc:  # e.g. two constraints on one sample of a short candidate
-            rejected[pid] = f"cannot be edited: {exc}"
-            continue
-        if not res.success:
-            what = "still collides" if res.collision else "misses a constraint"
-            rejected[pid] = f"{what} after editing: {res.message}"
-            continue
-        usable.append((pid, tk, Y, res))
+    for done, (pid, tk, Y) in enumerate(items, 1):
+        res = _adapt(Y, tk, constraints, n_dims, lte_params)
+        if isinstance(res, str):
+            rejected[pid] = res
+        else:
+            usable.append((pid, tk, Y, res))
+        if progress is not None:
+            progress(done, len(items))
     candidates = [_candidate(pid, tk, Y, res, constraints) for pid, tk, Y, res in usable]
     key = {
         "length": lambda c: (c.length,),
@@ -222,6 +219,20 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
         candidates[:shortlist] = sorted(candidates[:shortlist], key=lambda c: c.length)
     rejected = {pid: rejected[pid] for pid in ids if pid in rejected}  # input order
     return Selection(candidates=candidates, rejected=rejected, rank=rank)
+
+
+def _adapt(Y, t, constraints, n_dims, lte_params):
+    """The LTE edit of one candidate, or the reason (str) it is rejected."""
+    if Y.shape[1] != n_dims:
+        return f"has {Y.shape[1]} dimensions, the task has {n_dims}"
+    try:
+        res = lte(Y, constraints, t=t, **lte_params)
+    except ValueError as exc:  # e.g. two constraints on one sample of a short candidate
+        return f"cannot be edited: {exc}"
+    if not res.success:
+        what = "still collides" if res.collision else "misses a constraint"
+        return f"{what} after editing: {res.message}"
+    return res
 
 
 def _candidate(pid, t, Y, res, constraints) -> Candidate:

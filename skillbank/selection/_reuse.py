@@ -7,26 +7,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Constraints, Demonstration
+from ..core import Demonstration
 from ..core._validation import check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, representation
-from ._candidates import SHORTLIST, Selection, _check_ids, select_candidates
+from ._candidates import SHORTLIST, Selection, select_candidates
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
 
 #: The method names, in the registry's order (``skillbank.representations.REPRESENTATIONS``).
 METHODS = tuple(REPRESENTATIONS)
 _WORDS = {"via": "via-points", "start_velocity": "start velocity", "end_velocity": "end velocity"}
-#: Candidates adapted between two calls of :func:`reuse`'s ``progress``.
-_CHUNK = 256
-# select_candidates' ranking, to merge the selections of chunks into the one of a single pass
-# (a stable sort of the chunks' candidates, in input order, by the same key gives the same order).
-_KEYS = {
-    "length": lambda c: (c.length,),
-    "endpoints": lambda c: (c.endpoint_distance, c.length),
-    "deformation": lambda c: (c.deformation, c.length),
-    "shortlist": lambda c: (c.deformation, c.length),
-}
 
 
 @dataclass
@@ -188,35 +178,6 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     )
 
 
-def _select_in_chunks(primitives, constraints, progress, *, ids, rank, shortlist, **options) -> Selection:
-    """:func:`select_candidates`, calling ``progress(done, total)`` after every chunk; the same selection."""
-    n = len(primitives) if isinstance(primitives, (list, tuple)) else 0
-    # Chunks of Demonstrations only (messages about arrays name their index in the whole list), and
-    # only when the task fixes the dimension (otherwise the first candidate does, for all).
-    one_pass = n <= _CHUNK or rank not in _KEYS or not isinstance(constraints, Constraints) or \
-        constraints.n_dims is None or not all(isinstance(p, Demonstration) for p in primitives)
-    if one_pass:
-        selection = select_candidates(primitives, constraints, ids=ids, rank=rank, shortlist=shortlist,
-                                      **options)
-        progress(n, n)
-        return selection
-    ids = _check_ids(ids, n)
-    shortlist = check_positive(shortlist, name="shortlist", integer=True)
-    candidates, rejected = [], {}
-    for start in range(0, n, _CHUNK):
-        part = select_candidates(primitives[start:start + _CHUNK], constraints, ids=ids[start:start + _CHUNK],
-                                 rank="deformation" if rank == "shortlist" else rank, shortlist=shortlist,
-                                 **options)
-        candidates += part.candidates
-        rejected.update(part.rejected)
-        progress(min(start + _CHUNK, n), n)
-    candidates.sort(key=_KEYS[rank])
-    if rank == "shortlist":
-        candidates[:shortlist] = sorted(candidates[:shortlist], key=lambda c: c.length)
-    rejected = {i: rejected[i] for i in ids if i in rejected}  # input order, as in one pass
-    return Selection(candidates=candidates, rejected=rejected, rank=rank)
-
-
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
           rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
@@ -266,7 +227,7 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         Size of the shortlist for ``rank="shortlist"``.
     progress : callable, optional
         Called as ``progress(done, total)`` while the candidates are adapted
-        (they are then adapted in chunks; the result is the same).
+        (see :func:`select_candidates`).
 
     Returns
     -------
@@ -294,10 +255,6 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     cls = representation(method)
     if k is not None and cls.single_demo:
         _check_k(k, method, 1)
-    if progress is None:
-        selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
-                                      min_samples=cls.min_samples)
-    else:
-        selection = _select_in_chunks(primitives, constraints, progress, ids=ids, t=t, rank=rank,
-                                      shortlist=shortlist, min_samples=cls.min_samples)
+    selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
+                                  min_samples=cls.min_samples, progress=progress)
     return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t)

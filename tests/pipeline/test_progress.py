@@ -8,11 +8,8 @@ from skillbank import Constraints, Demonstration
 from skillbank.pipeline import Library
 
 
-def test_reuse_progress_does_not_change_the_result(tmp_path, make_skills, monkeypatch, capsys):
-    """reuse with progress adapts the candidates in chunks; the ranking is the one of a single pass."""
-    from skillbank.selection import _reuse
-
-    monkeypatch.setattr(_reuse, "_CHUNK", 4)  # 12 candidates: three chunks
+def test_reuse_progress_does_not_change_the_result(tmp_path, make_skills, capsys):
+    """reuse with progress reports each adapted candidate; the ranking and result are unchanged."""
     with Library(tmp_path / "p.db") as lib:
         demos = make_skills()
         # ties in every criterion: two copies of each of the first three demonstrations
