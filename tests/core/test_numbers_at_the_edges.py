@@ -15,7 +15,6 @@ import re
 import numpy as np
 import pytest
 
-from skillbank.cli import _main
 from skillbank.clustering import ElasticClustering
 from skillbank.core import Constraints, Demonstration, Sphere
 from skillbank.core._validation import MAX_MAGNITUDE
@@ -24,19 +23,6 @@ from skillbank.metrics import frechet_distance, jerk_cost
 from skillbank.representations import DMP
 
 _BOUND = r"expected (values|numbers) of magnitude at most 1e\+100"
-
-
-@pytest.fixture
-def cli(capsys):
-    """``cli(*argv) -> (exit status, stdout, stderr)`` of ``skillbank argv...``."""
-
-    def call(*argv):
-        capsys.readouterr()
-        code = _main.main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        return code, out, err
-
-    return call
 
 
 def _csv(path, t, Y):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import sqlite3
 
 import numpy as np
 import pytest
@@ -12,17 +11,6 @@ import pytest
 from skillbank import Demonstration
 from skillbank.cli import _main
 from skillbank.pipeline import Library
-
-
-def _rows(path):
-    """Every row of every table: equal means nothing changed."""
-    conn = sqlite3.connect(path)
-    try:
-        tables = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table' "
-                                             "ORDER BY name")]
-        return {t: conn.execute(f'SELECT * FROM "{t}" ORDER BY rowid').fetchall() for t in tables}  # noqa: S608
-    finally:
-        conn.close()
 
 
 @pytest.fixture
@@ -53,15 +41,15 @@ def target(tmp_path, make_skills):
     return path
 
 
-def test_into_an_empty_library_a_copy_then_a_second_import_changes_nothing(source, tmp_path):
+def test_into_an_empty_library_a_copy_then_a_second_import_changes_nothing(source, tmp_path, table_rows):
     with Library(tmp_path / "a.db") as a:
-        original = _rows(a.path)
+        original = table_rows(a.path)
         n_prims = len(a.primitives(load=False))
     with Library(tmp_path / "c.db") as c:
         first = c.import_folder(source)
         assert first["mode"] == "copy" and first["skipped"] == {} and first["assigned"] == {}
         assert first["demonstrations"] == {i: i for i in range(1, 9)} and first["versions"] == {1: 1}
-    copied = _rows(tmp_path / "c.db")
+    copied = table_rows(tmp_path / "c.db")
     for table in ("demonstrations", "streams", "primitives", "cluster_versions", "cluster_members",
                   "cluster_labels"):
         assert copied[table] == original[table], table
@@ -70,11 +58,11 @@ def test_into_an_empty_library_a_copy_then_a_second_import_changes_nothing(sourc
         assert again["mode"] == "merge" and again["skipped"] == {i: i for i in range(1, 9)}
         assert again["demonstrations"] == again["primitives"] == again["versions"] == again["assigned"] == {}
         assert len(c.primitives(load=False)) == n_prims and [v["version"] for v in c.versions()] == [1]
-    assert _rows(tmp_path / "c.db") == copied
+    assert table_rows(tmp_path / "c.db") == copied
 
 
 def test_into_a_non_empty_library_a_merge_that_keeps_its_clusters_and_labels(source, target, tmp_path,
-                                                                              make_skills):
+                                                                              make_skills, table_rows):
     # What Library.add would do with A's demonstrations 3-8: the known answer for their clusters.
     shutil.copy(target, tmp_path / "added.db")
     with Library(tmp_path / "added.db") as added:
@@ -109,11 +97,11 @@ def test_into_a_non_empty_library_a_merge_that_keeps_its_clusters_and_labels(sou
         # reuse --skill finds the old primitives and the new ones of that skill.
         assert [p.id for p in b.skill("straight")] == sorted(
             [i for i, lab in old.items() if lab == "straight"] + [new[3].id, new[4].id])
-    rows = _rows(target)
+    rows = table_rows(target)
     with Library(target) as b:
         again = b.import_folder(source)
         assert again["demonstrations"] == {} and len(again["skipped"]) == 8
-    assert _rows(target) == rows
+    assert table_rows(target) == rows
 
 
 def test_merge_into_an_unclustered_library_leaves_new_primitives_unclustered(source, tmp_path, make_reach):

@@ -64,19 +64,6 @@ def outside(tmp_path):
     return where
 
 
-def _rows(path):
-    """Every row of every table, by table: equal means the library's content is byte-for-byte unchanged."""
-    import sqlite3
-
-    conn = sqlite3.connect(path)
-    try:
-        tables = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table' "
-                                             "ORDER BY name")]
-        return {t: conn.execute(f'SELECT * FROM "{t}" ORDER BY rowid').fetchall() for t in tables}  # noqa: S608
-    finally:
-        conn.close()
-
-
 def _target(tmp_path, kind):
     path = tmp_path / f"{kind}.db"
     with SQLiteStore(path) as store:
@@ -381,18 +368,18 @@ def _prepare(exported, tmp_path, outside, mutate):
 @pytest.mark.parametrize("kind", ["empty", "filled"])
 @pytest.mark.parametrize(("mutate", "match"), list(CASES.values()), ids=list(CASES))
 def test_hostile_folder_is_refused_and_changes_nothing(exported, outside, tmp_path, monkeypatch, kind, mutate,
-                                                       match):
+                                                       match, table_rows):
     monkeypatch.setattr(manifest_module, "MAX_MANIFEST_BYTES", 300 if mutate is _too_large else
                         manifest_module.MAX_MANIFEST_BYTES)
     db = _target(tmp_path, kind)
-    before = _rows(db)
+    before = table_rows(db)
     folder = _prepare(exported, tmp_path, outside, mutate)
     with pytest.raises(ValueError, match=match) as info:
         _import(db, folder)
     message = str(info.value)
     assert "\n" not in message and SECRET not in message and "TOPSECRET" not in message
     assert len(message) < 400, message
-    assert _rows(db) == before
+    assert table_rows(db) == before
     with SQLiteStore(db, create=False) as store:
         assert store.check() == "ok"
 
@@ -435,17 +422,17 @@ def test_a_fifo_is_refused_without_being_opened(exported, tmp_path, outside, mon
     ("dotdot npz", "leads outside it"), ("fifo", "got a FIFO"), ("text inside", "that is not one"),
     ("start is a string", "start: expected an integer"), ("nested 10,000 deep", "nested at most 64 deep"),
 ])
-def test_cli_exits_2_with_one_line(exported, outside, tmp_path, capsys, case, match):
+def test_cli_exits_2_with_one_line(exported, outside, tmp_path, capsys, case, match, table_rows):
     mutate = CASES[case][0]
     db = _target(tmp_path, "filled")
-    before = _rows(db)
+    before = table_rows(db)
     folder = _prepare(exported, tmp_path, outside, mutate)
     capsys.readouterr()
     code = _guarded(lambda: _main.main(["library", "import", str(db), str(folder)]), folder)
     out, err = capsys.readouterr()
     assert code == 2 and out == "" and err.count("\n") == 1 and match in err, err
     assert re.match(r"skillbank library( import)?: error: manifest\.json", err) and SECRET not in err
-    assert _rows(db) == before
+    assert table_rows(db) == before
 
 
 # -- the validators on their own -------------------------------------------------------------------
