@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
+
+from ._options import show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -24,9 +25,7 @@ def run(args) -> int:
     """Run the main job; returns the exit status."""
     from ..experiments import run_library_demo  # the whole stack, imported when the job runs
 
-    # A progress bar for a person watching, not for a program reading the JSON or a log file.
-    progress = not args.json and sys.stderr.isatty()
-    summary = run_library_demo(args.out, data=args.data, progress=progress)
+    summary = run_library_demo(args.out, data=args.data, progress=show_progress(args))
     if args.json:
         print(json.dumps(summary))
     else:

@@ -14,6 +14,7 @@ from ._options import (
     add_segmentation_options,
     constraints_from_args,
     segmentation_params,
+    show_progress,
 )
 
 __all__ = ["add_parser"]
@@ -138,11 +139,6 @@ def _open(args, *, create=False, readonly=False):
     return _library(args.db, create=create)
 
 
-def _progress(args) -> bool:
-    """Progress bars for a person watching: on a terminal, and not under --json."""
-    return not getattr(args, "json", False) and sys.stderr.isatty()
-
-
 def _init(args) -> int:
     created = not args.db.exists()
     # an existing library is validated (and migrated) and otherwise left as it is
@@ -163,7 +159,7 @@ def _add(args) -> int:
         report = lib.add_files(args.files, index=args.demo, group=args.group, segment=not args.whole,
                                repair_time=args.repair_time,
                                segmentation=segmentation, label=args.label, assign=args.assign,
-                               keep_going=args.keep_going, progress=_progress(args))
+                               keep_going=args.keep_going, progress=show_progress(args))
     command = getattr(args, "command_name", "skillbank library add")
     for path, reason in report["failed"].items():
         print(f"{command}: skipped {path}: {reason}", file=sys.stderr)
@@ -193,7 +189,7 @@ def _cluster(args) -> int:
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     with _open(args) as lib:
         version = lib.cluster(stretch=args.stretch, features=args.features, random_state=args.seed,
-                              progress=_progress(args))
+                              progress=show_progress(args))
         skills = lib.summary()["skills"]
         if args.plot is not None:
             from ..plotting import plot_cluster_comparison  # matplotlib, as above
@@ -269,7 +265,7 @@ def _reuse(args) -> int:
     with _open(args, readonly=True) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           random_state=args.seed, progress=_progress(args), **options)
+                           random_state=args.seed, progress=show_progress(args), **options)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
         writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz
@@ -295,7 +291,7 @@ def _reuse(args) -> int:
 
 def _export(args) -> int:
     with _open(args, readonly=True) as lib:
-        manifest = lib.export(args.folder, progress=_progress(args))
+        manifest = lib.export(args.folder, progress=show_progress(args))
         n = len(lib.demonstration_ids())
     if args.json:
         print(json.dumps({"folder": str(args.folder), "manifest": str(manifest), "demonstrations": n}))

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 
 from ..core import Constraints, ViaPoint, parse_obstacle
 
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
-    "add_repair_option",
+    "add_repair_option", "show_progress",
 ]
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
@@ -85,6 +86,11 @@ def ratio_or_none(value: str):
         return float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number in [0, 1] or 'none', got {value!r}") from None
+
+
+def show_progress(args) -> bool:
+    """Progress bars for a person watching: on a terminal, and not under ``--json``."""
+    return not getattr(args, "json", False) and sys.stderr.isatty()
 
 
 def join_negative_values(argv, options=CONSTRAINT_OPTIONS) -> list:

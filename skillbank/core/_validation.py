@@ -26,7 +26,7 @@ import numpy as np
 
 __all__ = [
     "MAX_MAGNITUDE", "check_array", "check_time", "check_positive", "check_fraction",
-    "check_finite_result", "numerical_errors", "summarise",
+    "check_finite_result", "numerical_errors", "summarise", "check_id",
 ]
 
 #: Largest magnitude accepted for a coordinate, a time stamp, an obstacle's size or a scalar
@@ -230,6 +230,19 @@ def _real_scalar(value, name: str, expected: str) -> float:
     except OverflowError:  # a Python int beyond float64
         raise ValueError(f"{name}: expected {expected}, got an integer of {len(str(abs(value)))} digits") \
             from None
+
+
+def check_id(value, *, name: str) -> int:
+    """Check an integer id (a bool is not one).
+
+    Examples
+    --------
+    >>> check_id(3, name="demo_id")
+    3
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name}: expected an integer id, got {value!r}")
+    return int(value)
 
 
 def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool = False):

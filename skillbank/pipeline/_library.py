@@ -8,7 +8,7 @@ from tqdm import tqdm
 
 from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
 from ..core import Demonstration
-from ..core._validation import check_positive
+from ..core._validation import check_id, check_positive
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ._adding import Adding
@@ -18,12 +18,6 @@ __all__ = ["Library", "carry_labels"]
 
 #: The paper's stretching constant for elastic clustering (RAIL experiment).
 DEFAULT_STRETCH = 1.2
-
-
-def _check_id(value, name):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name}: expected an integer id, got {value!r}")
-    return int(value)
 
 
 def carry_labels(old_members: dict, old_labels: dict, new_members: dict) -> dict:
@@ -170,7 +164,7 @@ class Library(Adding):
         --------
         >>> lib.remove(3)  # doctest: +SKIP
         """
-        self.store.remove_demonstration(_check_id(demo_id, "demo_id"))
+        self.store.remove_demonstration(check_id(demo_id, name="demo_id"))
 
     # -- clustering and labels --------------------------------------------------------------------
     def cluster(self, *, stretch=None, features: str = "default", n_points: int = 16, n_components: int = 3,
@@ -310,7 +304,7 @@ class Library(Adding):
 
     def demonstration(self, demo_id) -> Demonstration:
         """The stored demonstration ``demo_id``, exactly as added."""
-        did = _check_id(demo_id, "demo_id")
+        did = check_id(demo_id, name="demo_id")
         return self.store.demonstrations([did])[did]
 
     def demonstration_ids(self) -> list:

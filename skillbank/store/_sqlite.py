@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._validation import check_id
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._base import Primitive, Store, check_items
 from ._records import insert_demonstration, load_demonstrations, primitive_demo
@@ -13,12 +14,6 @@ from ._schema import connect, database_errors, now, transaction
 from ._transfer import export_library, import_library
 
 __all__ = ["SQLiteStore"]
-
-
-def _check_id(value, name):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name}: expected an integer id, got {value!r}")
-    return int(value)
 
 
 class SQLiteStore(Store):
@@ -115,13 +110,13 @@ class SQLiteStore(Store):
         return out
 
     def remove_demonstration(self, demo_id) -> None:
-        demo_id = _check_id(demo_id, "demo_id")
+        demo_id = check_id(demo_id, name="demo_id")
         with self._errors(), transaction(self._writable("remove a demonstration")) as conn:
             if conn.execute("DELETE FROM demonstrations WHERE id = ?", (demo_id,)).rowcount == 0:
                 raise ValueError(f"demo_id: no demonstration with id {demo_id} in the library")
 
     def demonstrations(self, ids) -> dict:
-        ids = [_check_id(i, "demo_id") for i in ids]
+        ids = [check_id(i, name="demo_id") for i in ids]
         with self._errors():
             return load_demonstrations(self.conn, ids)
 
@@ -133,14 +128,14 @@ class SQLiteStore(Store):
         with self._errors():
             row = self.conn.execute("SELECT p.params FROM demonstrations d LEFT JOIN provenance p "
                                     "ON p.id = d.provenance_id WHERE d.id = ?",
-                                    (_check_id(demo_id, "demo_id"),)).fetchone()
+                                    (check_id(demo_id, name="demo_id"),)).fetchone()
         if row is None:
             raise ValueError(f"demo_id: no demonstration with id {demo_id} in the library")
         return from_json(row[0]) or {}
 
     def primitives(self, *, label=None, cluster=None, source=None, demonstration=None, load=True) -> list:
-        cluster = None if cluster is None else _check_id(cluster, "cluster")
-        demonstration = None if demonstration is None else _check_id(demonstration, "demonstration")
+        cluster = None if cluster is None else check_id(cluster, name="cluster")
+        demonstration = None if demonstration is None else check_id(demonstration, name="demonstration")
         source = None if source is None else str(source)
         with self._errors():
             conn = self.conn
@@ -225,11 +220,11 @@ class SQLiteStore(Store):
             raise ValueError("label: give exactly one of cluster= or primitive=")
         with self._errors(), transaction(self._writable("label")) as conn:
             if primitive is not None:
-                pid = _check_id(primitive, "primitive")
+                pid = check_id(primitive, name="primitive")
                 if conn.execute("UPDATE primitives SET label = ? WHERE id = ?", (name, pid)).rowcount == 0:
                     raise ValueError(f"primitive: no primitive with id {pid} in the library")
                 return
-            k = _check_id(cluster, "cluster")
+            k = check_id(cluster, name="cluster")
             version = self._current(conn)
             if version is None:
                 raise ValueError("cluster: the library has no clusters yet; run cluster() first")
