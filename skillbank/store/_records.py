@@ -23,28 +23,34 @@ def placeholders(n: int) -> str:
     return ", ".join("?" * n)
 
 
-def insert_demonstration(conn, demo: Demonstration, bounds, *, source, label, provenance) -> tuple:
+def insert_demonstration(conn, demo: Demonstration, bounds, *, source, labels, provenance, created=None,
+                         demo_id=None, primitive_ids=None) -> tuple:
     """Insert a demonstration, its streams and its primitives; returns ``(demo_id, primitive_ids)``.
 
-    The caller holds the transaction.
+    The one place that writes these rows, for new demonstrations and for
+    imported ones. ``labels`` holds one label (or None) per bound;
+    ``provenance`` is ``(kind, params, created)`` or None; ``created`` defaults
+    to now; ``demo_id`` and ``primitive_ids`` keep given ids (an import into an
+    empty library), else the database assigns them. The caller holds the
+    transaction.
     """
-    conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
-                 ("segmentation", to_json(provenance), now()))
-    pid = conn.execute("SELECT last_insert_rowid()").fetchone()[0]
-    cur = conn.execute(
-        "INSERT INTO demonstrations (source, n_steps, t, metadata, created, provenance_id) "
-        "VALUES (?, ?, ?, ?, ?, ?)",
-        (source, demo.n_steps, to_npy(demo.t), to_json(demo.metadata), now(), pid))
-    demo_id = cur.lastrowid
+    prov_id = None
+    if provenance is not None:
+        kind, params, prov_created = provenance
+        prov_id = conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
+                               (kind, to_json(params), prov_created or now())).lastrowid
+    demo_id = conn.execute(
+        "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, provenance_id) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?)",
+        (demo_id, source, demo.n_steps, to_npy(demo.t), to_json(demo.metadata), created or now(),
+         prov_id)).lastrowid
     conn.executemany(
         "INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
         [(demo_id, name, k, to_npy(arr)) for k, (name, arr) in enumerate(demo.streams.items())])
-    prim_ids = []
-    for a, b in bounds:
-        cur = conn.execute("INSERT INTO primitives (demonstration_id, start, stop, label) "
-                           "VALUES (?, ?, ?, ?)",
-                           (demo_id, int(a), int(b), label))
-        prim_ids.append(cur.lastrowid)
+    ids = [None] * len(bounds) if primitive_ids is None else primitive_ids
+    prim_ids = [conn.execute("INSERT INTO primitives (id, demonstration_id, start, stop, label) "
+                             "VALUES (?, ?, ?, ?, ?)", (i, demo_id, int(a), int(b), lab)).lastrowid
+                for i, (a, b), lab in zip(ids, bounds, labels, strict=True)]
     return demo_id, prim_ids
 
 

@@ -97,8 +97,10 @@ class SQLiteStore(Store):
         out = []
         with self._errors(), transaction(self._writable("add demonstrations")) as conn:
             for item in items:
-                did, pids = insert_demonstration(conn, item["demo"], item["bounds"], source=item["source"],
-                                                 label=item["label"], provenance=item["provenance"] or {})
+                did, pids = insert_demonstration(
+                    conn, item["demo"], item["bounds"], source=item["source"],
+                    labels=[item["label"]] * len(item["bounds"]),
+                    provenance=("segmentation", item["provenance"] or {}, None))
                 members = item["members"]
                 if members is not None:
                     conn.executemany(

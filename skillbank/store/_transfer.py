@@ -12,7 +12,7 @@ from ..core import Demonstration
 from ..io import write_npz
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._manifest import FORMAT, MANIFEST, read_export
-from ._records import chunks, load_demonstrations, placeholders
+from ._records import chunks, insert_demonstration, load_demonstrations, placeholders
 from ._schema import SCHEMA_VERSION, now, transaction
 
 __all__ = ["export_library", "import_library", "content_hash", "MANIFEST", "FORMAT"]
@@ -133,23 +133,15 @@ def _existing_hashes(conn, n_steps) -> dict:
 
 
 def _insert_demonstration(conn, d, *, keep_id: bool) -> tuple:
-    demo, prov, pid = d["demo"], d["provenance"], None
-    if prov is not None:
-        pid = conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
-                           (prov["kind"], to_json(prov["params"]), prov["created"])).lastrowid
-    did = conn.execute(
-        "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, provenance_id) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?)",
-        (d["id"] if keep_id else None, d["source"], demo.n_steps, to_npy(demo.t), to_json(demo.metadata),
-         d["created"] or now(), pid)).lastrowid
-    conn.executemany("INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
-                     [(did, n, k, to_npy(a)) for k, (n, a) in enumerate(demo.streams.items())])
-    prims = {}
-    for p in d["primitives"]:
-        prims[p["id"]] = conn.execute(
-            "INSERT INTO primitives (id, demonstration_id, start, stop, label) VALUES (?, ?, ?, ?, ?)",
-            (p["id"] if keep_id else None, did, p["start"], p["stop"], p["label"])).lastrowid
-    return did, prims
+    prov = d["provenance"]
+    prims = d["primitives"]
+    did, pids = insert_demonstration(
+        conn, d["demo"], [(p["start"], p["stop"]) for p in prims], source=d["source"],
+        labels=[p["label"] for p in prims],
+        provenance=None if prov is None else (prov["kind"], prov["params"], prov["created"]),
+        created=d["created"], demo_id=d["id"] if keep_id else None,
+        primitive_ids=[p["id"] for p in prims] if keep_id else None)
+    return did, {p["id"]: new for p, new in zip(prims, pids, strict=True)}
 
 
 def _insert_version(conn, v, primitives: dict) -> int:
