@@ -42,7 +42,7 @@ def representation(method: str) -> type[Representation]:
         raise ValueError(f"method: expected one of {list(REPRESENTATIONS)}, got {method!r}") from None
 
 
-def fit_reproduce(method: str, demos, constraints=None, *, random_state=None):
+def fit_reproduce(method: str, demos, constraints=None, *, random_state=None, n_steps=None):
     """Learn ``method`` from ``demos`` and reproduce ``constraints``: ``(trajectory, collision, notes)``.
 
     Parameters
@@ -54,6 +54,8 @@ def fit_reproduce(method: str, demos, constraints=None, *, random_state=None):
     constraints : Constraints, optional
     random_state : int, optional
         For the methods that sample.
+    n_steps : int, optional
+        Samples of the reproduction; default the representation's own.
 
     Returns
     -------
@@ -84,7 +86,7 @@ def fit_reproduce(method: str, demos, constraints=None, *, random_state=None):
         model.set_params(random_state=random_state)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        out = model.fit(demos).reproduce(constraints)
+        out = model.fit(demos).reproduce(constraints, n_steps=n_steps)
     notes = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     edit = out.metadata.get("edit") or {}
     if cls.avoids_obstacles and not edit.get("success", True) and edit.get("message"):

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_positive, check_time, numerical_errors, summarise
-from ..representations import REPRESENTATIONS, representation
+from ..representations import REPRESENTATIONS, fit_reproduce, representation
 from ._candidates import SHORTLIST, Selection, select_candidates
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
@@ -149,20 +148,15 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
         task = constraints.replace(**{name: () if name == "via" else None for name in missing})
         what = " and ".join(_WORDS[name] for name in missing)
         notes.append(f"{method}: {what} followed only through the adapted demonstration")
-    model = cls()
-    if "random_state" in model.get_params():
-        model.set_params(random_state=random_state)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", UserWarning)
-        model.fit([c.demo() for c in chosen])
-        out = model.reproduce(task, n_steps=None if t is None else len(t))
-    notes += [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    # task keeps every obstacle of constraints, so its collision verdict is the task's
+    out, collision, more = fit_reproduce(method, [c.demo() for c in chosen], task, random_state=random_state,
+                                         n_steps=None if t is None else len(t))
+    notes += more
     time = out.t if t is None else t
     Y = out["position"]
     with numerical_errors(f"reuse ({method} result check)"):
         error = constraints.position_error(Y)
         vel_error = constraints.velocity_error(Y, time)
-        collision = constraints.collides(Y) if constraints.obstacles else False
     used = [c.id for c in chosen]
     message = (f"{method} from {k} of {len(selection.candidates)} usable candidate(s) "
                f"({len(selection.rejected)} rejected, ranked by {selection.rank}); constraint error "
