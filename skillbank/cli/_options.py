@@ -24,7 +24,8 @@ __all__ = [
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
 CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity")
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
-_SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "mode")
+_SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "combine",
+                  "stream_kinds", "mode")
 
 
 def _size(value: str, *, zero: bool):
@@ -146,15 +147,34 @@ def add_segmentation_options(p) -> None:
                         "peak speed ('none': keep every jerk event, as in the paper)")
     p.add_argument("--min-turn", type=float, default=keep,
                    help="or where the direction turns by at least this many degrees")
+    p.add_argument("--combine", choices=["product", "evidence"], default=keep,
+                   help="product (default): the paper's product of every stream's jerk changepoints; "
+                        "evidence: rests, contact steps and gripper switches, each kind of stream a "
+                        "witness (one confident kind carries a keypoint)")
+    p.add_argument("--stream-kind", action="append", default=keep, metavar="NAME=KIND", type=_stream_kind,
+                   dest="stream_kinds",
+                   help="with --combine evidence, treat stream NAME as KIND: motion, contact or discrete "
+                        "(default by name: force, torque, wrench are contact, gripper discrete; repeatable)")
     p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep,
                    help="deterministic (default): keypoints where the streams agree; sampling: the paper's "
                         "random draws, reproducible with --seed")
     p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
 
 
+def _stream_kind(text: str) -> tuple[str, str]:
+    """``NAME=KIND`` of ``--stream-kind``."""
+    name, sep, kind = text.partition("=")
+    if not sep or not name.strip() or kind.strip() not in ("motion", "contact", "discrete"):
+        raise argparse.ArgumentTypeError(
+            f"expected NAME=KIND with KIND one of motion, contact, discrete, got {text!r}")
+    return name.strip(), kind.strip()
+
+
 def segmentation_params(args) -> dict:
     """The segmenter keyword arguments given on the command line (and the seed)."""
     params = {k: getattr(args, k) for k in _SEGMENTER_KEYS if hasattr(args, k)}
+    if "stream_kinds" in params:
+        params["stream_kinds"] = dict(params["stream_kinds"])
     params["random_state"] = args.seed
     return params
 

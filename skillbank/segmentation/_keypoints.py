@@ -123,3 +123,61 @@ def keypoints_sampling(
             break
         previous = keypoints.size
     return keypoints
+
+
+def evidence_curve(events, confidence, n_steps: int, sigma: float) -> np.ndarray:
+    """One stream's evidence of a boundary at each sample, in [0, 1].
+
+    Each event contributes a Gaussian of height its confidence; where two
+    overlap the larger counts (evidence of one boundary does not add up
+    because a stream saw it twice).
+
+    Examples
+    --------
+    >>> c = evidence_curve([50], [0.8], 100, sigma=4.0)
+    >>> int(np.argmax(c)), round(float(c.max()), 2), round(float(c[0]), 2)
+    (50, 0.8, 0.0)
+    """
+    idx = np.arange(n_steps, dtype=float)
+    at = np.asarray(events, dtype=float)
+    if at.size == 0:
+        return np.zeros(n_steps)
+    z = (idx[None, :] - at[:, None]) / sigma
+    return (np.asarray(confidence, dtype=float)[:, None] * np.exp(-0.5 * z**2)).max(axis=0)
+
+
+def combine_evidence(curves: dict, kinds: dict) -> tuple[np.ndarray, dict]:
+    """Probability of a boundary at each sample, from the streams' evidence curves.
+
+    Streams of one kind (``"motion"``, ``"contact"``, ``"discrete"``) see the
+    same physical events (the joints, the flange position and its orientation
+    all stop together), so their curves are averaged: one noisy stream's
+    false event is diluted by the others that saw nothing. The kinds are
+    independent witnesses, so they combine by the noisy-OR rule,
+    ``1 - prod(1 - p_kind)``: one confident kind (a gripper that closed, a
+    contact that began) carries a keypoint on its own, and two weak ones
+    reinforce each other.
+
+    Returns
+    -------
+    probability : ndarray of shape (n_steps,)
+        In [0, 1].
+    per_kind : dict of str to ndarray
+        Each kind's averaged curve.
+
+    Examples
+    --------
+    >>> a = evidence_curve([30], [0.9], 60, 3.0)
+    >>> b = evidence_curve([], [], 60, 3.0)
+    >>> p, _ = combine_evidence({"gripper": a, "position": b}, {"gripper": "discrete", "position": "motion"})
+    >>> round(float(p[30]), 2)  # the gripper alone carries it
+    0.9
+    """
+    groups: dict = {}
+    for name, curve in curves.items():
+        groups.setdefault(kinds[name], []).append(curve)
+    per_kind = {k: np.mean(v, axis=0) for k, v in groups.items()}
+    miss = np.ones_like(next(iter(per_kind.values())))
+    for curve in per_kind.values():
+        miss = miss * (1.0 - curve)
+    return 1.0 - miss, per_kind

@@ -10,6 +10,9 @@ from ..core import Demonstration
 
 __all__ = ["StreamSegmentation", "SegmentationResult"]
 
+#: A stream whose evidence at a keypoint is below this did not support it.
+REPORTED_EVIDENCE = 0.05
+
 
 @dataclass
 class StreamSegmentation:
@@ -34,6 +37,11 @@ class StreamSegmentation:
         Stride, in samples, of the differences the jerk was taken over: 1,
         unless the values' round-off (few significant digits on a fine grid)
         would have swamped the jerk (see :func:`~skillbank.segmentation.jerk_profile`).
+    kind : str
+        ``"motion"``, ``"contact"`` or ``"discrete"``: what the stream's
+        changepoints are (stops and turns, contact steps, switches).
+    floor : float
+        The floor under :attr:`probability` (the product rule's; 0 for evidence).
     """
 
     name: str
@@ -44,6 +52,12 @@ class StreamSegmentation:
     strength: np.ndarray
     probability: np.ndarray
     jerk_step: int = 1
+    kind: str = "motion"
+    floor: float = 0.0
+
+    def evidence(self, index) -> np.ndarray:
+        """Evidence of a boundary at sample(s) ``index``: the curve above its floor, in [0, 1]."""
+        return np.clip(self.probability[index] - self.floor, 0.0, 1.0)
 
 
 @dataclass
@@ -63,6 +77,10 @@ class SegmentationResult:
         Interior cut indices; there are ``n_segments - 1`` of them.
     mode : str
         ``"deterministic"`` or ``"sampling"``.
+    params : dict
+        Each stream's settings, by stream name.
+    combine : str
+        ``"product"`` (the paper's rule) or ``"evidence"``.
     """
 
     demonstration: Demonstration
@@ -72,6 +90,7 @@ class SegmentationResult:
     keypoints: np.ndarray
     mode: str
     params: dict = field(default_factory=dict)
+    combine: str = "product"
 
     @property
     def changepoints(self) -> dict:
@@ -111,9 +130,23 @@ class SegmentationResult:
             out.append(seg)
         return out
 
+    @property
+    def keypoint_support(self) -> list[dict]:
+        """Per keypoint, each stream that supported it and its evidence there (at least 0.05)."""
+        out = []
+        for k in self.keypoints:
+            ev = {name: float(s.evidence(int(k))) for name, s in self.streams.items()}
+            out.append({name: round(e, 3) for name, e in ev.items() if e >= REPORTED_EVIDENCE})
+        return out
+
     def to_dict(self) -> dict:
         """The JSON form printed by ``skillbank segment --json``."""
         return {
+            # the combined probability at each keypoint: the product's share (product), or the
+            # chance of a boundary (evidence); and which streams saw it, how strongly
+            "keypoint_probability": [round(float(self.probability[k]), 6) for k in self.keypoints],
+            "keypoint_support": self.keypoint_support,
+            "combine": self.combine,
             "keypoints": [int(k) for k in self.keypoints],
             "keypoint_times": [float(x) for x in self.keypoint_times],
             "changepoints": {k: [int(c) for c in v] for k, v in self.changepoints.items()},

@@ -11,10 +11,13 @@ from ..core import Demonstration
 from ..core._params import Params
 from ..core._validation import check_fraction, check_positive, numerical_errors
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
+from ._events import contact_events, discrete_events, rest_events, rest_speed, stream_kind
 from ._gate import _gate_changepoints
 from ._keypoints import (
     changepoint_probability,
+    combine_evidence,
     combine_probabilities,
+    evidence_curve,
     keypoints_deterministic,
     keypoints_sampling,
 )
@@ -69,6 +72,22 @@ DEFAULT_SUPPORT_FRACTION = 0.5
 #: A keypoint at a single stream's Gaussian peak scores 1 on the support
 #: scale; allow for the small loss where two streams' peaks are a little apart.
 SUPPORT_SLACK = 0.25
+
+#: With ``combine="evidence"``, a keypoint is a mode of the combined
+#: probability where a boundary is more likely than not.
+KEYPOINT_PROBABILITY = 0.5
+
+#: A segment whose motion streams travel less than this fraction of the median
+#: segment's path holds no movement of its own (the rest before the first
+#: movement, cut off by the operator's hand on the force sensor): it is merged
+#: into its neighbour.
+MIN_MOTION_SHARE = 0.05
+
+COMBINES = ("evidence", "product")
+
+#: With ``combine="evidence"``, events of lower confidence are left out: a
+#: tenth is a pen slowing to a sixth of its speed, or sensor noise at rest.
+MIN_CONFIDENCE = 0.1
 
 
 def to_samples(value, t: np.ndarray, *, name: str, allow_zero: bool = False) -> int:
@@ -181,8 +200,9 @@ class MultimodalSegmenter(Params):
 
     def __init__(
         self, *, window="auto", min_size="auto", threshold=0.4, grace="auto", scale="relative",
-        normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, mode="deterministic",
-        min_support=None, n_samples=20, min_hits=3, floor=0.05, random_state=None,
+        normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, combine="product",
+        stream_kinds=None, mode="deterministic", min_support=None, n_samples=20, min_hits=3, floor=0.05,
+        random_state=None,
     ):
         self.window = window
         self.min_size = min_size
@@ -193,6 +213,8 @@ class MultimodalSegmenter(Params):
         self.stop_ratio = stop_ratio
         self.min_turn = min_turn
         self.stream_params = stream_params
+        self.combine = combine
+        self.stream_kinds = stream_kinds
         self.mode = mode
         self.min_support = min_support
         self.n_samples = n_samples
@@ -211,7 +233,9 @@ class MultimodalSegmenter(Params):
         n = t.shape[0]
         window = max(MIN_AUTO_WINDOW, int(round(AUTO_WINDOW_FRACTION * n))) if raw["window"] == "auto" \
             else to_samples(raw["window"], t, name="window")
-        min_size = MIN_SIZE_WINDOWS * window if raw["min_size"] == "auto" else to_samples(
+        # evidence needs no second window between keypoints: two rests always have a movement between
+        windows = 1 if self.combine == "evidence" else MIN_SIZE_WINDOWS
+        min_size = windows * window if raw["min_size"] == "auto" else to_samples(
             raw["min_size"], t, name="min_size")
         grace = window if raw["grace"] == "auto" else (
             to_samples(raw["grace"], t, name="grace", allow_zero=True))
@@ -256,8 +280,15 @@ class MultimodalSegmenter(Params):
         floor = check_fraction(self.floor, name="floor")
         if floor == 0:
             raise ValueError("floor: expected a number in (0, 1], got 0")
+        if self.combine not in COMBINES:
+            raise ValueError(f"combine: expected one of {list(COMBINES)}, got {self.combine!r}")
+        if self.stream_kinds is not None and not isinstance(self.stream_kinds, Mapping):
+            raise ValueError(f"stream_kinds: expected a mapping, got {type(self.stream_kinds).__name__}")
+        evidence = self.combine == "evidence"
+        # the paper's product rule treats every stream as motion, as the paper does
+        kinds = {name: stream_kind(name, self.stream_kinds) if evidence else "motion" for name in names}
         t, n = demo.t, demo.n_steps
-        per_stream = {}
+        per_stream, speeds = {}, {}
         for name in names:
             p = self._stream_settings(name, t)
             needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
@@ -271,34 +302,99 @@ class MultimodalSegmenter(Params):
             speed = speed_norm(t, Y)
             absj, j, prof, step = _stream_jerk(t, Y, speed, window=p["window"], scale=p["scale"],
                                                normalize=p["normalize"], grace=p["grace"])
-            cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
-                                                grace=p["grace"], window=p["window"])
-            # the profile places an event to a sample or two; the raw jerk's centre pins it
-            cps = refine_to_jerk_centre(
-                cps, absj, half_width=max(MIN_REFINE_HALF_WIDTH, p["window"] // REFINE_DIVISOR))
-            if p["stop_ratio"] is not None:
-                cps, strength = _gate_changepoints(
-                    cps, strength, Y, speed, window=p["window"], min_size=p["min_size"], grace=p["grace"],
-                    stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
-            curve = changepoint_probability(cps, n, sigma=SIGMA_PER_WINDOW * p["window"], floor=floor)
-            per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve, jerk_step=step)
-        prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
-                                              floor=floor)
+            sigma = SIGMA_PER_WINDOW * p["window"]
+            if kinds[name] == "motion":
+                speeds[name] = speed
+                cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
+                                                    grace=p["grace"], window=p["window"])
+                # the profile places an event to a sample or two; the raw jerk's centre pins it
+                cps = refine_to_jerk_centre(
+                    cps, absj, half_width=max(MIN_REFINE_HALF_WIDTH, p["window"] // REFINE_DIVISOR))
+                if p["stop_ratio"] is not None:
+                    cps, strength = _gate_changepoints(
+                        cps, strength, Y, speed, window=p["window"], min_size=p["min_size"],
+                        grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+                confidence = np.ones(cps.size)
+                if evidence:
+                    v = rest_speed(t, Y, max_sigma=p["window"] / 4)
+                    speeds[name] = v
+                    cps, confidence, _ = rest_events(v, typical=float(np.percentile(v, 95.0)))
+                    strength = confidence
+            elif kinds[name] == "contact":
+                cps, confidence = contact_events(Y, window=p["window"])
+                strength = confidence
+            else:
+                cps, confidence = discrete_events(Y)
+                strength = confidence
+            if evidence:
+                # events too weak to matter are not reported (a held arm's sensor noise makes many)
+                strong = confidence >= MIN_CONFIDENCE
+                cps, strength, confidence = cps[strong], strength[strong], confidence[strong]
+            curve = evidence_curve(cps, confidence, n, sigma) if evidence else \
+                changepoint_probability(cps, n, sigma=sigma, floor=floor)
+            per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve, jerk_step=step,
+                                                  kind=kinds[name], floor=0.0 if evidence else floor)
         min_size = min(s.params["min_size"] for s in per_stream.values())
         window = min(s.params["window"] for s in per_stream.values())
+        if evidence:
+            prob, _ = combine_evidence({k: v.probability for k, v in per_stream.items()}, kinds)
+            support = prob
+        else:
+            prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
+                                                  floor=floor)
         if self.mode == "deterministic":
-            need = max(1.0, DEFAULT_SUPPORT_FRACTION * len(names)) if self.min_support is None else \
-                check_positive(self.min_support, name="min_support")
-            keypoints = keypoints_deterministic(support, min_support=need - SUPPORT_SLACK, min_size=min_size)
+            if evidence:
+                keypoints = keypoints_deterministic(prob, min_support=KEYPOINT_PROBABILITY, min_size=min_size)
+            else:
+                need = max(1.0, DEFAULT_SUPPORT_FRACTION * len(names)) if self.min_support is None else \
+                    check_positive(self.min_support, name="min_support")
+                keypoints = keypoints_deterministic(support, min_support=need - SUPPORT_SLACK,
+                                                    min_size=min_size)
         else:
             n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
             min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
             rng = np.random.default_rng(self.random_state)
-            keypoints = keypoints_sampling(prob, n_samples=n_samples, min_hits=min_hits, window=window,
+            draw = prob / prob.sum() if evidence and prob.sum() > 0 else prob
+            if evidence and prob.sum() <= 0:
+                draw = np.full(n, 1.0 / n)
+            keypoints = keypoints_sampling(draw, n_samples=n_samples, min_hits=min_hits, window=window,
                                            min_size=min_size, rng=rng)
+        if evidence and speeds:
+            keypoints = _merge_motionless(keypoints, prob, demo, speeds)
         self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
-                                          {k: v.params for k, v in per_stream.items()})
+                                          {k: v.params for k, v in per_stream.items()}, self.combine)
         return self
+
+
+def _merge_motionless(keypoints, prob, demo: Demonstration, speeds: dict) -> np.ndarray:
+    """Drop keypoints that leave a segment without a movement of its own.
+
+    A segment's motion is the path its motion streams travel, each stream
+    measured against its own median segment; a segment below
+    ``MIN_MOTION_SHARE`` of that in every motion stream is merged into a
+    neighbour, by dropping its less probable bounding keypoint (its only one
+    at either end of the demonstration).
+    """
+    keypoints = np.asarray(keypoints, dtype=int)
+    dt = np.gradient(demo.t)
+    # cumulative path length of each motion stream, so a segment's path is a difference
+    paths = [np.concatenate(([0.0], np.cumsum(v * dt))) for v in speeds.values()]
+    while keypoints.size:
+        edges = np.concatenate(([0], keypoints, [demo.n_steps]))
+        shares = []
+        for c in paths:
+            travel = c[edges[1:]] - c[edges[:-1]]
+            typical = float(np.median(travel))
+            shares.append(travel / typical if typical > 0 else np.full(travel.size, np.inf))
+        share = np.max(shares, axis=0)
+        k = int(np.argmin(share))
+        if share[k] >= MIN_MOTION_SHARE:
+            break
+        # segment k lies between keypoints k - 1 and k
+        candidates = [i for i in (k - 1, k) if 0 <= i < keypoints.size]
+        drop = min(candidates, key=lambda i: prob[keypoints[i]])
+        keypoints = np.delete(keypoints, drop)
+    return keypoints
 
 
 def segment(demo: Demonstration, streams=None, **params) -> SegmentationResult:

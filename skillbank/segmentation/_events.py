@@ -1,0 +1,307 @@
+"""Boundary evidence from contact and discrete streams, and the kind of each stream.
+
+A kinematic stream (positions, joint angles, orientations) shows a boundary
+where the motion stops or turns; the jerk profile and the stop-or-turn gate
+find those. A **contact** stream (force, torque) shows one where its level
+steps: a contact begins or ends, whatever the arm's speed. A **discrete**
+stream (a gripper) shows one where it switches between its held levels. Each
+kind here returns its events with a confidence in (0, 1], which
+:func:`~skillbank.segmentation._keypoints.combine_evidence` turns into the
+keypoint probability.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import find_peaks
+
+__all__ = ["KINDS", "stream_kind", "discrete_events", "contact_events", "rest_events", "rest_speed"]
+
+#: No single stream is certain of a boundary (a sensor glitches, an operator
+#: pauses): its confidence is at most this, so that where two streams disagree
+#: on where a boundary lies, the place that more kinds of evidence support wins.
+MAX_CONFIDENCE = 0.9
+
+#: The kinds of stream and what their evidence is. A stream's kind comes from
+#: its name (``DEFAULT_KINDS``) unless ``stream_kinds`` names it.
+KINDS = ("motion", "contact", "discrete")
+
+#: Names that skillbank's readers give contact and discrete streams; any other
+#: stream is motion (positions, joints, orientations, or a user's own name).
+DEFAULT_KINDS = {"force": "contact", "torque": "contact", "wrench": "contact", "gripper": "discrete"}
+
+#: A discrete stream switches state when it crosses from one quarter of its
+#: range to the other (hysteresis), so that noise about one level, or a slow
+#: drift within it, is never a switch.
+SWITCH_LOW, SWITCH_HIGH = 0.25, 0.75
+
+#: A discrete stream whose range is below this fraction of its magnitude
+#: (``1 + max|y|``) never switches: it is held.
+HELD_RANGE = 1e-9
+
+#: A contact step's effect size (the change of level over the pooled spread
+#: within the windows either side) at which it is as likely a contact as not:
+#: the level moves by six times its own jitter.
+HALF_EFFECT = 6.0
+
+#: An impact's distance from the running median, in robust standard
+#: deviations, counts as a step's effect size of one ``IMPULSE_SCALE``-th of
+#: it: a step's effect compares two means of a window, an impact is one sample.
+IMPULSE_SCALE = 2.0
+
+#: Steps of smaller effect are not reported (their confidence is below 0.16).
+MIN_EFFECT = 3.0
+
+
+def stream_kind(name: str, kinds=None) -> str:
+    """The kind of the stream ``name``: ``kinds[name]`` if given, else by its name.
+
+    Examples
+    --------
+    >>> stream_kind("gripper"), stream_kind("force"), stream_kind("joints")
+    ('discrete', 'contact', 'motion')
+    >>> stream_kind("suction", {"suction": "discrete"})
+    'discrete'
+    """
+    kind = (kinds or {}).get(name, DEFAULT_KINDS.get(name, "motion"))
+    if kind not in KINDS:
+        raise ValueError(f"stream_kinds[{name!r}]: expected one of {list(KINDS)}, got {kind!r}")
+    return kind
+
+
+def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
+    """Where a discrete stream switches between its levels, each with confidence 1.
+
+    Each dimension is scaled to [0, 1] over its own range; it switches when
+    it crosses from below ``SWITCH_LOW`` to above ``SWITCH_HIGH`` or back, and
+    the switch is placed half-way through the crossing (the middle of a
+    gripper's closing). A switch is a definite event, hence confidence 1.
+
+    Examples
+    --------
+    >>> y = np.r_[np.zeros(50), np.linspace(0, 1, 11), np.ones(50), np.zeros(40)]
+    >>> discrete_events(y[:, None])[0].tolist()
+    [55, 110]
+    """
+    Y = np.asarray(Y, dtype=float)
+    Y = Y.reshape(Y.shape[0], -1)
+    events = []
+    for y in Y.T:
+        lo, hi = float(y.min()), float(y.max())
+        if hi - lo <= HELD_RANGE * (1.0 + max(abs(lo), abs(hi))):
+            continue
+        u = (y - lo) / (hi - lo)
+        # state: +1 above the high mark, -1 below the low mark, 0 in between (kept from before)
+        mark = np.where(u >= SWITCH_HIGH, 1, np.where(u <= SWITCH_LOW, -1, 0))
+        at = np.flatnonzero(mark)
+        if at.size < 2:
+            continue
+        switch = np.flatnonzero(np.diff(mark[at]) != 0)
+        for k in switch:
+            # the crossing runs from the last sample in the old state to the first in the new one
+            events.append((int(at[k]) + int(at[k + 1])) // 2)
+    events = np.unique(np.asarray(events, dtype=int))
+    return events, np.full(events.size, MAX_CONFIDENCE)
+
+
+def _noise_sigma(Y: np.ndarray) -> np.ndarray:
+    """Per-dimension noise standard deviation, from the median absolute first difference.
+
+    The first difference of white noise has a standard deviation of
+    ``sqrt(2) * sigma``; the median ignores the few large differences that
+    steps and impacts make.
+    """
+    d = np.abs(np.diff(Y, axis=0))
+    return 1.4826 * np.median(d, axis=0) / np.sqrt(2.0)
+
+
+def _step_effect(Y: np.ndarray, w: int) -> np.ndarray:
+    """Effect size of a level step at each sample: the change of the window means over their spread."""
+    n = Y.shape[0]
+    zero = np.zeros((1, Y.shape[1]))
+    c1 = np.vstack([zero, np.cumsum(Y, axis=0)])
+    c2 = np.vstack([zero, np.cumsum(Y * Y, axis=0)])
+    i = np.arange(w, n - w + 1)
+    m_b, m_a = (c1[i] - c1[i - w]) / w, (c1[i + w] - c1[i]) / w
+    # variances summed over the dimensions: the spread of the vector about its mean
+    v_b = np.maximum(((c2[i] - c2[i - w]) / w - m_b**2).sum(axis=1), 0.0)
+    v_a = np.maximum(((c2[i + w] - c2[i]) / w - m_a**2).sum(axis=1), 0.0)
+    # a floor at the sensor's noise, so two noiseless plateaus do not divide by zero
+    floor = float(np.sum(_noise_sigma(Y) ** 2)) + np.finfo(float).tiny
+    d = np.zeros(n)
+    d[i] = np.linalg.norm(m_a - m_b, axis=1) / np.sqrt(0.5 * (v_a + v_b) + floor)
+    return d
+
+
+def _impulse_effect(Y: np.ndarray, w: int) -> np.ndarray:
+    """Effect size of an impulse at each sample: its distance from the running median over the running MAD."""
+    from scipy.ndimage import median_filter  # only contact streams need running medians
+
+    size = 2 * w + 1
+    dev = np.abs(Y - median_filter(Y, size=(size, 1), mode="nearest"))
+    spread = 1.4826 * median_filter(dev, size=(size, 1), mode="nearest")
+    floor = _noise_sigma(Y) + np.finfo(float).tiny
+    return np.linalg.norm(dev / np.maximum(spread, floor), axis=1) / np.sqrt(Y.shape[1])
+
+
+def contact_events(Y, *, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """Where a contact begins or ends: a step of the level, or an impact.
+
+    **Steps.** At each sample the means of the ``window`` samples before and
+    after are compared with how much the stream varies within them: the
+    effect size ``d = |mean_after - mean_before| / pooled_std``. A contact
+    that begins or ends moves the level by many times its jitter; the force
+    of a hand guiding the arm wanders about as much within a window as
+    between two (``d`` near 1). **Impacts** (a button hit, a tool touching
+    down) are brief: their effect size is the distance from the running
+    median over the running median absolute deviation, in robust standard
+    deviations, halved (``IMPULSE_SCALE``). An event is a peak of either of at least ``MIN_EFFECT``; its
+    confidence is ``1 - 2**(-(d / HALF_EFFECT)**2)``, one half at
+    ``HALF_EFFECT``, capped (see :data:`MAX_CONFIDENCE`).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> f = np.r_[np.zeros(200), np.full(200, 10.0), np.zeros(200)] + rng.normal(0, 0.5, 600)
+    >>> at, conf = contact_events(f[:, None], window=20)
+    >>> [abs(int(a) - b) <= 2 for a, b in zip(at, (200, 400))], bool(conf.min() > 0.8)
+    ([True, True], True)
+    """
+    Y = np.asarray(Y, dtype=float)
+    Y = Y.reshape(Y.shape[0], -1)
+    n = Y.shape[0]
+    w = int(window)
+    if n < 2 * w + 1 or w < 2:
+        return np.array([], dtype=int), np.array([], dtype=float)
+    # a single sample of white noise is 3 robust deviations out once in a few hundred,
+    # 6 once in 10^9: an impact counts on the steps' scale at half its size
+    d = np.maximum(_step_effect(Y, w), _impulse_effect(Y, w) / IMPULSE_SCALE)
+    peaks, props = find_peaks(d, height=MIN_EFFECT, distance=w)
+    conf = MAX_CONFIDENCE * (1.0 - 2.0 ** (-((props["peak_heights"] / HALF_EFFECT) ** 2)))
+    return peaks.astype(int), conf
+
+
+#: A rest is as likely a boundary as not where the speed at the bottom of its
+#: valley is this fraction of the slower of the two movements either side
+#: (their peak speeds): a twentieth is a stop (the arm waits, a button is
+#: pressed); a pen slowing for a corner keeps a tenth or more of its speed.
+HALF_REST_RATIO = 0.05
+
+#: Valleys shallower than this fraction of the typical speed are ripples of
+#: one movement, not candidates.
+VALLEY_PROMINENCE = 0.02
+
+#: The bottom of a valley is where the speed is within this fraction of the
+#: way from the valley's lowest speed to the slower side's peak: a dwell's
+#: whole flat stretch, whose middle is the boundary.
+REST_BAND = 0.02
+
+#: A movement either side of a rest must reach this fraction of the typical
+#: speed: slower wanderings are the sensor drifting while the arm is held.
+MOVEMENT_FRACTION = 0.2
+
+
+def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the motion comes to rest between two movements.
+
+    Every valley of ``speed`` is compared with the movements either side of
+    it: each side's peak speed, up to the next valley that is at least as
+    deep. Its stop ratio is the valley's lowest speed over the slower side's
+    peak, and its confidence ``1 / (1 + (ratio / HALF_REST_RATIO)**2)``: one
+    for a full stop, one half at a twentieth of the speed, a tenth of that
+    for a pen slowing to a third of its speed at a corner. The event sits in
+    the middle of the valley's bottom (``REST_BAND``), i.e. the middle of a
+    dwell, or the slowest sample of a brief stop. Valleys at either end have
+    a movement on one side only and are no boundary.
+
+    Returns
+    -------
+    events : ndarray of int
+    confidence : ndarray of float
+    ratio : ndarray of float
+        Each event's stop ratio.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 2.0, 401)
+    >>> v = np.abs(np.sin(np.pi * t))  # two movements, a full stop between them at t = 1
+    >>> at, conf, ratio = rest_events(v, typical=1.0)
+    >>> at.tolist(), round(float(conf[0]), 3)  # a full stop, as confident as one stream gets
+    ([200], 0.9)
+    """
+    v = np.asarray(speed, dtype=float)
+    n = v.shape[0]
+    valleys, _ = find_peaks(-v, prominence=VALLEY_PROMINENCE * typical)
+    if valleys.size == 0:
+        return np.array([], dtype=int), np.array([], dtype=float), np.array([], dtype=float)
+    order = np.argsort(v[valleys], kind="stable")
+    events, conf, ratios = [], [], []
+    for rank, k in enumerate(order):
+        c = int(valleys[k])
+        deeper = valleys[order[:rank]]
+        left = deeper[deeper < c]
+        right = deeper[deeper > c]
+        lo = int(left.max()) if left.size else 0
+        hi = int(right.min()) if right.size else n - 1
+        peak_l, peak_r = float(v[lo:c + 1].max()), float(v[c:hi + 1].max())
+        side = min(peak_l, peak_r)
+        if side < MOVEMENT_FRACTION * typical:
+            # no movement on one side: the valley is the rest before the first or after the last
+            continue
+        ratio = float(v[c]) / side
+        band = v[c] + REST_BAND * (side - v[c])
+        a = c
+        while a > lo and v[a - 1] <= band:
+            a -= 1
+        b = c
+        while b < hi and v[b + 1] <= band:
+            b += 1
+        events.append((a + b) // 2)
+        ratios.append(ratio)
+        conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** 2))
+    order = np.argsort(events)
+    return (np.asarray(events, dtype=int)[order], np.asarray(conf)[order], np.asarray(ratios)[order])
+
+
+#: The speed that rests are found on is smoothed until the sensor's noise adds
+#: at most this fraction of the typical speed: a hundredth, well below the
+#: twentieth that makes a stop.
+SPEED_NOISE_SHARE = 0.01
+
+
+def rest_speed(t, Y, *, max_sigma: float) -> np.ndarray:
+    """Speed of ``Y`` smoothed just enough for its noise to hide no stop.
+
+    The noise of each dimension is estimated from its third differences
+    (``sigma = 1.4826 * median|diff3| / sqrt(20)``: white noise has a
+    variance of ``20 sigma**2`` there, smooth motion sampled finely almost
+    none). ``Y`` is smoothed by a Gaussian of the fewest samples that bring
+    the noise of the differentiated speed under ``SPEED_NOISE_SHARE`` of the
+    typical speed (at most ``max_sigma``), then differentiated on the real
+    time stamps.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 201)
+    >>> v = rest_speed(t, np.column_stack([t, 2 * t]), max_sigma=8)
+    >>> bool(np.allclose(v[10:-10], np.sqrt(5.0)))
+    True
+    """
+    from scipy.ndimage import gaussian_filter1d  # only the segmenter's rest finder needs it
+
+    t = np.asarray(t, dtype=float)
+    Y = np.asarray(Y, dtype=float).reshape(t.shape[0], -1)
+    v = np.linalg.norm(np.gradient(Y, t, axis=0), axis=1)
+    if Y.shape[0] < 8:
+        return v
+    mad3 = np.median(np.abs(np.diff(Y, n=3, axis=0)), axis=0)
+    sigma_n = float(np.linalg.norm(1.4826 * mad3 / np.sqrt(20.0)))
+    typical = float(np.percentile(v, 95.0))
+    dt = float(np.median(np.diff(t)))
+    if sigma_n <= 0.0 or typical <= 0.0 or dt <= 0.0:
+        return v
+    # noise of the derivative of a Gaussian-smoothed white noise: sigma_n / dt / sqrt(4 sqrt(pi) s**3)
+    s = ((sigma_n / (dt * SPEED_NOISE_SHARE * typical)) ** 2 / (4.0 * np.sqrt(np.pi))) ** (1.0 / 3.0)
+    s = float(np.clip(s, 1.0, max(1.0, max_sigma)))
+    smooth = gaussian_filter1d(Y, s, axis=0, mode="nearest")
+    return np.linalg.norm(np.gradient(smooth, t, axis=0), axis=1)

@@ -1,0 +1,209 @@
+"""``combine="evidence"``: rests, contact steps and impacts, gripper switches, and their combination."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from skillbank import Demonstration
+from skillbank.segmentation import MultimodalSegmenter, segment
+from skillbank.segmentation._events import (
+    contact_events,
+    discrete_events,
+    rest_events,
+    rest_speed,
+    stream_kind,
+)
+from skillbank.segmentation._keypoints import combine_evidence, evidence_curve
+
+PRESSES = (9.2, 14.1, 18.7)  # the lowest flange points of the three-button demonstration
+GRIPPER = (7.7, 22.8)  # its gripper closing and opening (half-way crossings)
+
+
+def _bells(n_moves, samples=200, dwell=0, rng=None):
+    """Rest-to-rest moves (each a sin^2 speed bell) in random directions, ``dwell`` samples apart."""
+    rng = np.random.default_rng(0) if rng is None else rng
+    pieces, joints, last = [np.zeros((1, 3))], [], np.zeros(3)
+    for _ in range(n_moves):
+        u = np.linspace(0.0, 1.0, samples)
+        s = u - np.sin(2 * np.pi * u) / (2 * np.pi)  # zero speed at both ends
+        d = rng.normal(size=3)
+        pieces.append(last + s[1:, None] * d * 0.2 / np.linalg.norm(d))
+        last = pieces[-1][-1]
+        joints.append(sum(p.shape[0] for p in pieces) - 1 + dwell // 2)
+        pieces.append(np.repeat(last[None], dwell, axis=0))
+    Y = np.vstack(pieces)
+    return Y, joints[:-1]
+
+
+def test_three_button_cuts_each_press_and_nothing_else(data_dir):
+    import skillbank.io as sio
+
+    demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
+    result = segment(demo, combine="evidence")
+    t = result.keypoint_times - demo.t[0]
+    for press in PRESSES:
+        assert np.min(np.abs(t - press)) <= 0.5, (press, t)
+    allowed = np.array(PRESSES + GRIPPER)
+    tolerance = np.array([0.5] * 3 + [1.0] * 2)
+    for cut in t:
+        assert np.any(np.abs(cut - allowed) <= tolerance), (cut, t)
+    # the presses are supported by the motion streams, the last two also by the force sensor's impacts
+    support = result.keypoint_support
+    press_3 = int(np.argmin(np.abs(t - PRESSES[2])))
+    assert {"position", "joints", "force"} <= set(support[press_3])
+
+
+def test_product_rule_is_the_default_and_unchanged(data_dir):
+    import skillbank.io as sio
+
+    demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
+    assert MultimodalSegmenter().combine == "product"
+    assert segment(demo).keypoints.tolist() == segment(demo, combine="product").keypoints.tolist()
+
+
+def test_stream_kinds_by_name_and_override():
+    assert [stream_kind(s) for s in ("position", "joints", "force", "torque", "gripper")] == [
+        "motion", "motion", "contact", "contact", "discrete"]
+    assert stream_kind("vacuum", {"vacuum": "discrete"}) == "discrete"
+    with pytest.raises(ValueError, match=r"stream_kinds\['vacuum'\]: expected one of"):
+        stream_kind("vacuum", {"vacuum": "binary"})
+
+
+def test_discrete_switches_sit_half_way_and_noise_is_no_switch():
+    rng = np.random.default_rng(1)
+    y = np.r_[np.zeros(100), np.linspace(0, 85, 21), np.full(150, 85.0), np.linspace(85, 0, 11), np.zeros(80)]
+    at, conf = discrete_events((y + rng.normal(0, 2.0, y.size))[:, None])
+    assert at.tolist() == [110, 276] and np.all(conf == conf.max())
+    # a held gripper never switches, nor one that only twitches within a quarter of a switch
+    assert discrete_events(np.zeros((50, 1)))[0].size == 0
+    assert discrete_events(np.full((50, 1), 3.0))[0].size == 0
+    once = np.r_[np.zeros(100), np.ones(100)]
+    assert discrete_events(once[:, None])[0].tolist() == [99]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.integers(30, 120), min_size=1, max_size=6), st.floats(0.5, 100.0))
+def test_property_each_switch_of_a_step_signal_is_found(runs, level):
+    y = np.concatenate([np.full(r, level * (i % 2)) for i, r in enumerate([40, *runs])])
+    at, _ = discrete_events(y[:, None])
+    assert at.tolist() == list(np.cumsum([40, *runs])[:-1] - 1)
+
+
+def test_contact_step_and_impact_are_found_but_a_wandering_hand_is_not():
+    rng = np.random.default_rng(2)
+    f = np.r_[np.zeros(300), np.full(300, 8.0), np.zeros(300)] + rng.normal(0, 0.3, 900)
+    f[750] += 15.0  # an impact
+    at, conf = contact_events(f[:, None], window=30)
+    assert [min(abs(at - k)) <= 3 for k in (300, 600, 750)] == [True] * 3
+    assert conf.min() > 0.5 and conf.max() <= 0.9
+    # a hand guiding the arm: a slow random walk, as much within a window as between two
+    walk = np.cumsum(rng.normal(0, 0.3, (900, 3)), axis=0)
+    walk_at, walk_conf = contact_events(walk, window=30)
+    assert walk_conf.size == 0 or walk_conf.max() < 0.5
+
+
+def test_rests_between_moves_are_found_at_the_dwells_middle_and_end_rests_are_not():
+    Y, truth = _bells(4, dwell=30)
+    Y = np.vstack([np.repeat(Y[:1], 50, axis=0), Y, np.repeat(Y[-1:], 50, axis=0)])
+    truth = [k + 50 for k in truth]
+    t = np.arange(Y.shape[0]) / 300.0
+    v = rest_speed(t, Y, max_sigma=4)
+    at, conf, ratio = rest_events(v, typical=float(np.percentile(v, 95)))
+    assert np.abs(at - truth).max() <= 2 and conf.min() > 0.85 and ratio.max() < 0.01
+
+
+def test_a_slowing_corner_is_weak_evidence():
+    t = np.linspace(0.0, 2.0, 401)
+    v = 1.0 - 0.7 * np.exp(-0.5 * ((t - 1.0) / 0.1) ** 2)  # slows to 30 % at t = 1, never stops
+    v[:20] = np.linspace(0, 1, 20)
+    v[-20:] = np.linspace(1, 0, 20)
+    at, conf, ratio = rest_events(v, typical=1.0)
+    assert at.tolist() == [200] and conf[0] < 0.05 and ratio[0] == pytest.approx(0.3, abs=0.01)
+
+
+def test_noisy_rests_are_found_on_a_speed_smoothed_just_enough():
+    rng = np.random.default_rng(3)
+    Y, truth = _bells(3, samples=300, dwell=10, rng=rng)
+    t = np.arange(Y.shape[0]) / 300.0
+    noisy = Y + rng.normal(0, 20e-6, Y.shape)  # 20 µm of sensor noise
+    result = segment(Demonstration.from_array(noisy, t), combine="evidence")
+    assert np.abs(result.keypoints - truth).max() <= 6 and result.n_segments == len(truth) + 1
+
+
+def test_one_confident_kind_carries_a_keypoint_and_one_noisy_stream_is_diluted():
+    n = 100
+    gripper = evidence_curve([50], [0.9], n, 3.0)
+    quiet = evidence_curve([], [], n, 3.0)
+    noisy = evidence_curve([20], [0.9], n, 3.0)
+    kinds = {"gripper": "discrete", "position": "motion", "joints": "motion", "orientation": "motion"}
+    p, per_kind = combine_evidence({"gripper": gripper, "position": quiet, "joints": quiet,
+                                    "orientation": noisy}, kinds)
+    assert p[50] == pytest.approx(0.9) and p[20] == pytest.approx(0.3)
+    assert set(per_kind) == {"discrete", "motion"}
+    # two weak kinds together make a boundary more likely than either
+    weak = evidence_curve([50], [0.4], n, 3.0)
+    p2, _ = combine_evidence({"force": weak, "position": weak}, {"force": "contact", "position": "motion"})
+    assert p2[50] == pytest.approx(1 - 0.6 * 0.6)
+
+
+def test_gripper_alone_carries_a_keypoint_where_the_arm_never_stops():
+    t = np.linspace(0.0, 4.0, 800)
+    Y = np.column_stack([t, np.sin(t), 0.1 * t])  # one smooth movement, never at rest
+    g = (t > 2.0).astype(float)[:, None]
+    demo = Demonstration(t, {"position": Y, "gripper": g})
+    result = segment(demo, combine="evidence")
+    assert result.keypoints.tolist() == [399] or abs(int(result.keypoints[0]) - 400) <= 1
+    assert result.keypoint_support[0] == {"gripper": pytest.approx(0.9, abs=1e-3)}
+
+
+def test_a_cut_that_leaves_a_segment_without_movement_is_merged():
+    # the operator's hand steps the force sensor just after the first movement starts
+    Y, truth = _bells(2, samples=300)
+    Y = np.vstack([np.repeat(Y[:1], 300, axis=0), Y])
+    truth = [k + 300 for k in truth]
+    t = np.arange(Y.shape[0]) / 300.0
+    f = np.zeros((Y.shape[0], 3))
+    f[310:, 0] = 10.0
+    demo = Demonstration(t, {"position": Y, "force": f + np.random.default_rng(4).normal(0, 0.05, f.shape)})
+    result = segment(demo, combine="evidence")
+    assert np.abs(result.keypoints - truth).max() <= 3, result.keypoints
+
+
+def test_json_reports_each_keypoints_probability_and_support():
+    Y, truth = _bells(3, dwell=20)
+    t = np.arange(Y.shape[0]) / 300.0
+    out = segment(Demonstration.from_array(Y, t), combine="evidence").to_dict()
+    assert out["combine"] == "evidence" and len(out["keypoint_probability"]) == len(truth)
+    assert all(0.5 <= p <= 1.0 for p in out["keypoint_probability"])
+    assert all(set(s) == {"position"} for s in out["keypoint_support"])
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"combine": "sum"}, r"combine: expected one of \['evidence', 'product'\], got 'sum'"),
+    ({"combine": "evidence", "stream_kinds": ["force"]}, r"stream_kinds: expected a mapping, got list"),
+    ({"combine": "evidence", "stream_kinds": {"position": "rigid"}}, r"stream_kinds\['position'\]"),
+])
+def test_bad_combination_parameters(kwargs, match):
+    Y, _ = _bells(2)
+    with pytest.raises(ValueError, match=match):
+        segment(Demonstration.from_array(Y, np.arange(Y.shape[0]) / 300.0), **kwargs)
+
+
+def test_cli_combine_evidence_and_stream_kind(cli, capsys, tmp_path):
+    import json
+
+    Y, truth = _bells(3, dwell=20)
+    t = np.arange(Y.shape[0]) / 300.0
+    path = tmp_path / "moves.npz"
+    np.savez(path, t=t, position=Y, suction=(t > t[truth[0]]).astype(float)[:, None])
+    code, out, err = cli("segment", str(path), "--combine", "evidence", "--stream-kind", "suction=discrete",
+                         "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["combine"] == "evidence" and len(report["keypoints"]) == len(truth)
+    assert "suction" in report["keypoint_support"][0]
+    with pytest.raises(SystemExit) as info:
+        cli("segment", str(path), "--stream-kind", "suction=binary")
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "argument --stream-kind" in err and "motion, contact, discrete" in err
