@@ -85,6 +85,16 @@ MIN_MOTION_SHARE = 0.05
 
 COMBINES = ("evidence", "product")
 
+#: ``min_turn=None``: no change of direction makes a boundary without a stop
+#: (a turn is at most 180 degrees).
+NO_TURN = 181.0
+
+#: With ``combine="evidence"``, a turn of the stop-or-turn gate (a corner
+#: where the motion does not stop) is a boundary on its own, but a weaker
+#: witness than a stop: more likely than not, and outweighed where a stop or
+#: another kind of stream places the boundary elsewhere.
+TURN_CONFIDENCE = 0.6
+
 #: With ``combine="evidence"``, events of lower confidence are left out: a
 #: tenth is a pen slowing to a sixth of its speed, or sensor noise at rest.
 MIN_CONFIDENCE = 0.1
@@ -162,9 +172,23 @@ class MultimodalSegmenter(Params):
         sample of a brief stop), or where the motion turns by ``min_turn``.
         This removes the events that jerk alone finds in the middle of a
         smooth movement. ``None`` keeps every event, as the paper does.
-    min_turn : float in [0, 180], default=45.0
+    min_turn : float in [0, 180] or None, default=45.0
         Change of direction, in degrees, over one window either side of an
-        event, that makes it a boundary without a stop.
+        event, that makes it a boundary without a stop; ``None``: only stops do.
+    combine : {"product", "evidence"}, default="product"
+        ``"product"`` is the paper's rule: every stream's jerk changepoints
+        become Gaussians over a floor, multiplied, and keypoints are where
+        enough streams agree. ``"evidence"`` reads each stream by its kind
+        (``stream_kinds``): motion streams give rests between movements
+        (confidence from how fully the motion stops) and the gate's turns,
+        contact streams (force, torque) steps and impacts, discrete streams
+        (a gripper) switches; streams of one kind are averaged and the kinds
+        combined by noisy-OR, so one confident kind carries a keypoint; a
+        keypoint is a mode of that probability above one half.
+    stream_kinds : mapping, optional
+        Kind (``"motion"``, ``"contact"``, ``"discrete"``) per stream name,
+        for ``combine="evidence"``; by default force, torque and wrench are
+        contact, gripper is discrete, anything else motion.
     stream_params : mapping, optional
         Per-stream overrides, e.g. ``{"force": {"threshold": 0.3}}``.
     mode : {"deterministic", "sampling"}, default="deterministic"
@@ -244,7 +268,8 @@ class MultimodalSegmenter(Params):
             raise ValueError("threshold: expected a number in (0, 1], got 0")
         stop_ratio = None if raw["stop_ratio"] is None else check_fraction(raw["stop_ratio"],
                                                                           name="stop_ratio")
-        min_turn = check_fraction(raw["min_turn"], name="min_turn", low=0.0, high=180.0)
+        min_turn = None if raw["min_turn"] is None else check_fraction(raw["min_turn"], name="min_turn",
+                                                                      low=0.0, high=180.0)
         return {"window": window, "min_size": min_size, "threshold": threshold, "grace": grace,
                 "scale": raw["scale"], "normalize": raw["normalize"], "stop_ratio": stop_ratio,
                 "min_turn": min_turn}
@@ -313,12 +338,28 @@ class MultimodalSegmenter(Params):
                 if p["stop_ratio"] is not None:
                     cps, strength = _gate_changepoints(
                         cps, strength, Y, speed, window=p["window"], min_size=p["min_size"],
-                        grace=p["grace"], stop_ratio=p["stop_ratio"], min_turn=p["min_turn"])
+                        grace=p["grace"], stop_ratio=p["stop_ratio"],
+                        min_turn=NO_TURN if p["min_turn"] is None else p["min_turn"])
                 confidence = np.ones(cps.size)
                 if evidence:
                     v = rest_speed(t, Y, max_sigma=p["window"] / 4)
                     speeds[name] = v
-                    cps, confidence, _ = rest_events(v, typical=float(np.percentile(v, 95.0)))
+                    rests, rest_conf, _ = rest_events(v, typical=float(np.percentile(v, 95.0)))
+                    # the stop-or-turn gate's events are the turns of a stroke that never rests
+                    # (a letter's corners); near a rest they confirm it, elsewhere they are weaker
+                    # witnesses than a stop, and none at all with min_turn=None
+                    cps_out, conf_out = list(rests), list(rest_conf)
+                    for c in (cps if p["min_turn"] is not None else ()):
+                        near = np.flatnonzero(np.abs(rests - c) <= p["window"])
+                        if near.size:
+                            for k in near:
+                                conf_out[k] = max(conf_out[k], TURN_CONFIDENCE)
+                        else:
+                            cps_out.append(int(c))
+                            conf_out.append(TURN_CONFIDENCE)
+                    order = np.argsort(cps_out)
+                    cps = np.asarray(cps_out, dtype=int)[order]
+                    confidence = np.asarray(conf_out, dtype=float)[order]
                     strength = confidence
             elif kinds[name] == "contact":
                 cps, confidence = contact_events(Y, window=p["window"])

@@ -207,3 +207,17 @@ def test_cli_combine_evidence_and_stream_kind(cli, capsys, tmp_path):
         cli("segment", str(path), "--stream-kind", "suction=binary")
     err = capsys.readouterr().err
     assert info.value.code == 2 and "argument --stream-kind" in err and "motion, contact, discrete" in err
+
+
+R_CORNERS = {0: (237, 680), 1: (298, 764), 2: (273, 708), 3: (211, 629), 4: (207, 684)}
+
+
+@pytest.mark.parametrize("index", range(5))
+def test_r_demos_are_cut_at_their_two_corners_with_evidence(data_dir, index):
+    import skillbank.io as sio
+
+    demo = sio.read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized", index=index)
+    result = segment(demo, combine="evidence")
+    assert result.n_segments == 3 and np.abs(result.keypoints - R_CORNERS[index]).max() <= 30
+    # with min_turn=None only stops count: the top of the stem, where the pen turns, is no longer cut
+    assert segment(demo, combine="evidence", min_turn=None).n_segments < 3
