@@ -28,8 +28,13 @@ def add_parser(sub):
                    help="feature matrix (.csv with or without header, .npy) or a folder of trajectory "
                         "files (.csv/.npz, one trajectory each, taken in sorted name order)")
     p.add_argument("--stretch", type=float, default=1.2, help="stretching constant lambda >= 0")
+    p.add_argument("--criterion", default="hierarchy", choices=("hierarchy", "auto", "paper"),
+                   help="how the number of clusters is chosen: hierarchy (the most detailed cut of a Ward "
+                        "tree whose clusters are all well separated; default), auto (split one cluster at a "
+                        "time while the split is well separated), paper (the authors' energy)")
     p.add_argument("--features", default="default",
-                   help="featuriser for a folder of trajectories: default (direction over time in each "
+                   help="featuriser for a folder of trajectories: default (shape and direction: unit step "
+                        "directions over time and along the path), heading (direction over time in each "
                         "trajectory's heading frame), angular (similarity to --representatives), dtw, "
                         "none (flattened positions); a feature matrix is used as it is")
     p.add_argument("--representatives", default=None,
@@ -82,7 +87,10 @@ def run(args) -> int:
             raise ValueError(f"features: {args.features!r} needs a folder of trajectories, "
                              f"got the feature matrix {str(path)!r}")
         X = read_feature_matrix(path)
-    model = ElasticClustering(stretch=args.stretch, random_state=args.seed).fit(X)
+    model = ElasticClustering(stretch=args.stretch, criterion=args.criterion, random_state=args.seed).fit(X)
+    sizes = model.cluster_sizes_.tolist()
+    # each cluster's separation from its nearest other cluster: why it is a cluster of its own
+    separation = [None if not np.isfinite(v) else round(float(v), 3) for v in model.separation_]
     labels = model.labels_.tolist()
     plot = None
     if args.plot is not None:
@@ -91,10 +99,14 @@ def run(args) -> int:
         plot = plot_cluster_comparison(
             X, {"elastic": model.labels_}, args.plot,
             trajectories=None if demos is None else [d["position"] for d in demos],
-            title=f"{path.name}: {model.n_clusters_} cluster(s)",
+            title=f"{path.name}: {model.n_clusters_} cluster(s), separation >= "
+                  f"{model.min_separation:g} ({model.criterion})",
+            separation=model.separation_,
         )
     if args.json:
-        doc = {"labels": labels, "n_clusters": int(model.n_clusters_), "energy": float(model.energy_)}
+        doc = {"labels": labels, "n_clusters": int(model.n_clusters_), "energy": float(model.energy_),
+               "criterion": model.criterion, "min_separation": float(model.min_separation),
+               "sizes": sizes, "separation": separation}
         if names is not None:
             doc = {"files": names, **doc}
         if plot is not None:
@@ -108,7 +120,8 @@ def run(args) -> int:
         shown = [names[i] for i in members[:8]] if names is not None else members[:12].tolist()
         more = " ..." if members.size > len(shown) else ""
         # ids as in --json, the figure and 'skillbank library': 0..k-1
-        print(f"  cluster {k}: {members.size} member(s): {', '.join(map(str, shown))}{more}")
+        why = "" if separation[k] is None else f", separation {separation[k]:.2f}"
+        print(f"  cluster {k}: {members.size} member(s){why}: {', '.join(map(str, shown))}{more}")
     if plot is not None:
         print(f"  wrote {plot}")
     return 0

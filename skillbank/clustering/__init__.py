@@ -15,6 +15,7 @@ from ._dtw import DTWFeatures
 from ._elastic import ElasticClustering
 from ._features import AngularSimilarityFeatures, TrajectoryFeatures
 from ._heading import HeadingFeatures, heading_directions
+from ._motion import MotionFeatures
 from ._primitive import (
     FEATURE_KINDS,
     TRAJECTORY_FEATURES,
@@ -24,7 +25,8 @@ from ._primitive import (
 )
 
 __all__ = [
-    "ElasticClustering", "AngularSimilarityFeatures", "HeadingFeatures", "TrajectoryFeatures", "DTWFeatures",
+    "ElasticClustering", "AngularSimilarityFeatures", "HeadingFeatures", "MotionFeatures",
+    "TrajectoryFeatures", "DTWFeatures",
     "heading_directions", "primitive_features", "trajectory_features", "nearest_centre", "FEATURE_KINDS",
     "TRAJECTORY_FEATURES",
 ]

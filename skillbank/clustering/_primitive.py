@@ -11,6 +11,7 @@ from ._dtw import DTWFeatures
 from ._em import assign
 from ._features import AngularSimilarityFeatures
 from ._heading import HeadingFeatures
+from ._motion import MotionFeatures
 
 __all__ = [
     "primitive_features", "nearest_centre", "trajectory_features", "FEATURE_KINDS", "TRAJECTORY_FEATURES",
@@ -83,7 +84,7 @@ def nearest_centre(X, centers) -> np.ndarray:
 
 
 #: Featurisers of a folder of trajectories, by name (``skillbank cluster --features``).
-TRAJECTORY_FEATURES = ("default", "angular", "dtw", "none")
+TRAJECTORY_FEATURES = ("default", "heading", "angular", "dtw", "none")
 
 
 def trajectory_features(demos, kind: str = "default", *, representatives=None, random_state=None):
@@ -93,9 +94,12 @@ def trajectory_features(demos, kind: str = "default", *, representatives=None, r
     ----------
     demos : list of Demonstration
         Each with a ``"position"`` stream.
-    kind : {"default", "angular", "dtw", "none"}
-        ``"default"``: :class:`HeadingFeatures` (direction over time in each
-        trajectory's heading frame). ``"angular"``: angular similarity to the
+    kind : {"default", "heading", "angular", "dtw", "none"}
+        ``"default"``: :class:`MotionFeatures` (unit step directions over
+        time in the heading and the recording frame, and along the path in
+        the heading frame: shape and direction). ``"heading"``:
+        :class:`HeadingFeatures` (direction over time in each trajectory's
+        heading frame, 3 PCA components; the default before). ``"angular"``: angular similarity to the
         ``representatives`` (indices into ``demos``), min-max normalised per
         column as in the paper. ``"dtw"``: :class:`DTWFeatures`. ``"none"``:
         the positions flattened (equal lengths only).
@@ -114,6 +118,8 @@ def trajectory_features(demos, kind: str = "default", *, representatives=None, r
     if kind not in TRAJECTORY_FEATURES:
         raise ValueError(f"features: expected one of {list(TRAJECTORY_FEATURES)}, got {kind!r}")
     if kind == "default":
+        return MotionFeatures(random_state=random_state).fit_transform(demos)
+    if kind == "heading":
         return HeadingFeatures(random_state=random_state).fit_transform(demos)
     if kind == "dtw":
         return DTWFeatures().fit_transform(demos)

@@ -99,7 +99,7 @@ def _trajectory_panel(fig, spec, trajs, colours, limits, title):
 
 
 def plot_cluster_comparison(features, labelings, path, *, trajectories=None, classes=None,
-                            class_names=None, max_clusters_shown=6, title=None) -> Path:
+                            class_names=None, max_clusters_shown=6, title=None, separation=None) -> Path:
     """Draw one row per clustering: the features coloured by cluster, then each cluster's trajectories.
 
     Parameters
@@ -123,6 +123,11 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
     max_clusters_shown : int, default=6
         Trajectory panels per row; clusters beyond are listed in the title.
     title : str, optional
+    separation : array-like of shape (n_clusters,), or dict of str to such, optional
+        Each cluster's separation from its nearest other cluster
+        (:attr:`ElasticClustering.separation_`), indexed like the cluster
+        labels 0..k-1; written in the panel titles next to the size. An array
+        is for a single clustering; a dict gives it by clustering name.
 
     Returns
     -------
@@ -157,6 +162,21 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
             class_names = [str(c) for c in np.unique(raw_classes)]
         rows = {"ground truth": cls, **rows}
         ids = {"ground truth": np.unique(raw_classes), **ids}
+    seps = {}
+    if separation is not None:
+        if not isinstance(separation, dict):
+            if len(labelings) != 1:
+                raise ValueError("separation: expected a dict by clustering name when there are "
+                                 f"{len(labelings)} clusterings, got one array")
+            separation = {next(iter(rows)) if cls is None else list(rows)[1]: separation}
+        for key, value in separation.items():
+            if str(key) not in rows:
+                raise ValueError(f"separation: expected clustering names {list(labelings)}, got {key!r}")
+            arr = np.asarray(value, dtype=float).ravel()
+            if arr.shape[0] != ids[str(key)].size:
+                raise ValueError(f"separation[{key!r}]: expected {ids[str(key)].size} values, one per "
+                                 f"cluster, got {arr.shape[0]}")
+            seps[str(key)] = arr
     trajs = None
     if trajectories is not None:
         trajs = [check_array(Y, name=f"trajectories[{i}]", ndim=(1, 2), as_2d=True)
@@ -186,8 +206,11 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
         for j, cid in enumerate(order[:n_cols - 1]):
             members = np.flatnonzero(labels == cid)
             label = class_names[cid] if truth and class_names else f"cluster {ids[name][cid]}"
+            count = f"{members.size}"
+            if name in seps and np.isfinite(seps[name][cid]):
+                count += f", separation {seps[name][cid]:.1f}"
             _trajectory_panel(fig, grid[r, j + 1], [trajs[i] for i in members],
-                              [line_colours[i] for i in members], limits, f"{label} ({members.size})")
+                              [line_colours[i] for i in members], limits, f"{label} ({count})")
         if order.size > n_cols - 1:
             ax.set_title(ax.get_title() + f" ({order.size - n_cols + 1} not drawn)", fontsize=9)
     if cls is not None and class_names:

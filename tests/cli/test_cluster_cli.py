@@ -24,13 +24,16 @@ def _blobs(n=20, seed=0):
 
 @pytest.fixture(scope="module")
 def trajectory_folder(tmp_path_factory):
-    """Two kinds of motion, six of each, from different starts, goals and sizes; mixed CSV/NPZ."""
+    """Two kinds of motion, six of each, from different starts, goals, sizes and facings; mixed CSV/NPZ.
+
+    The facings vary by up to +-30 degrees, as one lab's recordings in one robot frame do: the default
+    features keep the direction of motion in the recording frame (``--features heading`` drops it)."""
     folder = tmp_path_factory.mktemp("trajs")
     rng = np.random.default_rng(1)
     t = np.linspace(0.0, 2.0, 120)
     s = t / t[-1]
     for i in range(12):
-        start, size, yaw = rng.uniform(-1, 1, 3), rng.uniform(0.5, 2.0), rng.uniform(-np.pi, np.pi)
+        start, size, yaw = rng.uniform(-1, 1, 3), rng.uniform(0.5, 2.0), rng.uniform(-0.5, 0.5)
         if i % 2 == 0:  # reach down onto a point
             base = np.column_stack([s, 0.3 * s ** 2, -0.8 * s])
         else:  # slide along the table in an arc
@@ -50,8 +53,12 @@ def test_feature_matrix_npy_json(cli, tmp_path):
     code, out, _ = cli("cluster", path, "--json", "--seed", "0")
     assert code == 0
     doc = json.loads(out)
-    assert set(doc) == {"labels", "n_clusters", "energy"}
+    assert set(doc) == {"labels", "n_clusters", "energy", "criterion", "min_separation", "sizes",
+                        "separation"}
     assert doc["n_clusters"] == 3 and isinstance(doc["energy"], float)
+    # the choice explained: each cluster's size and its separation from the nearest other one
+    assert doc["sizes"] == [20, 20, 20] and doc["criterion"] == "hierarchy"
+    assert all(s >= doc["min_separation"] for s in doc["separation"])
     labels = np.array(doc["labels"])
     assert labels.shape == (60,)
     assert all(len(set(labels[k * 20:(k + 1) * 20])) == 1 for k in range(3))
@@ -186,11 +193,13 @@ def test_progress_bar_for_many_files(tmp_path, capsys):
 
 
 def test_cluster_ids_are_the_same_in_text_json_and_figure(cli, trajectory_folder, tmp_path, monkeypatch):
-    import skillbank.plotting._clustering as plots
+    from skillbank.plotting import plot_cluster_comparison
 
+    # the globals the command's function really uses (doctest collection may import a second copy)
+    scope = plot_cluster_comparison.__globals__
     titles = []
-    draw = plots._trajectory_panel
-    monkeypatch.setattr(plots, "_trajectory_panel", lambda *a: titles.append(a[-1]) or draw(*a))
+    draw = scope["_trajectory_panel"]
+    monkeypatch.setitem(scope, "_trajectory_panel", lambda *a: titles.append(a[-1]) or draw(*a))
     code, out, _ = cli("cluster", trajectory_folder, "--json", "--seed", "0")
     doc = json.loads(out)
     members = {k: [f for f, label in zip(doc["files"], doc["labels"], strict=True) if label == k]
@@ -201,5 +210,6 @@ def test_cluster_ids_are_the_same_in_text_json_and_figure(cli, trajectory_folder
     text = {int(line.split()[1].rstrip(":")): line.split(": ", 2)[2].split(", ")
             for line in out.splitlines() if line.startswith("  cluster ")}
     assert text == members  # 0..k-1 with the same members as --json
-    assert sorted(titles) == [f"cluster {k} ({len(members[k])})" for k in range(2)]
+    assert sorted(titles) == [f"cluster {k} ({len(members[k])}, separation {doc['separation'][k]:.1f})"
+                              for k in range(2)]
     assert out.splitlines()[-1] == f"  wrote {tmp_path / 'c.png'}"

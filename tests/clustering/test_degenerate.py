@@ -165,7 +165,7 @@ def test_pairwise_separation_is_symmetric_and_non_negative(X, k):
 # -- bad parameters and inputs --------------------------------------------------------------------
 
 @pytest.mark.parametrize(("params", "match"), [
-    ({"criterion": "fast"}, r"criterion: expected 'auto' or 'paper', got 'fast'"),
+    ({"criterion": "fast"}, r"criterion: expected 'auto', 'hierarchy' or 'paper', got 'fast'"),
     ({"n_clusters": "many"}, r"n_clusters: expected 'auto' or an integer >= 1, got 'many'"),
     ({"n_clusters": 0}, r"n_clusters: expected an integer > 0, got 0"),
     ({"n_clusters": 2.5}, r"n_clusters: expected an integer > 0, got 2.5"),
