@@ -27,7 +27,9 @@ bench: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
 	$(PY) benchmarks/bench_segmentation.py
 	$(PY) benchmarks/bench_ruptures.py
+	$(PY) benchmarks/bench_segmentation_quality.py
 	$(PY) benchmarks/bench_clustering.py
+	$(PY) benchmarks/bench_clustering_quality.py --seeds 10
 	$(PY) benchmarks/bench_editing.py
 
 clean:
