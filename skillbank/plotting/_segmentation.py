@@ -192,8 +192,11 @@ def _draw_probability(ax, result: SegmentationResult, *, legend: bool = True) ->
     for i, seg in enumerate(result.streams.values()):
         ax.plot(t, _scaled(seg.probability), lw=1.0, alpha=0.8, color=_colour(i + 1), label=seg.name)
     ax.plot(t, _scaled(result.probability), lw=2.6, color="k", label="combined")
-    for k in result.keypoints:
+    # each keypoint says which streams supported it, so a cut can be traced to its evidence
+    for k, support in zip(result.keypoints, result.keypoint_support, strict=True):
         ax.axvline(t[int(k)], color="crimson", ls=":", lw=1.2)
+        ax.text(t[int(k)], 1.06, ", ".join(support), rotation=90, va="top", ha="right", fontsize="x-small",
+                color="crimson")
     ax.set_xlim(t[0], t[-1])
     ax.set_ylim(-0.03, 1.08)
     if legend:

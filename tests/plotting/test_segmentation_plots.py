@@ -146,3 +146,20 @@ def test_plot_segment_grid_rejects(result, tmp_path, kwargs, match):
     args = {"results": [result], **kwargs}
     with pytest.raises(ValueError, match=match):
         plot_segment_grid(args.pop("results"), tmp_path / "g.png", **args)
+
+
+def test_probability_panel_names_each_keypoints_supporting_streams(result, tmp_path, monkeypatch):
+    import matplotlib.axes
+
+    texts = []
+    real = matplotlib.axes.Axes.text
+
+    def spy(self, x, y, s, *args, **kwargs):
+        texts.append(s)
+        return real(self, x, y, s, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.axes.Axes, "text", spy)
+    plot_keypoint_probability(result, tmp_path / "prob.png")
+    assert len(texts) == result.keypoints.size > 0
+    assert texts == [", ".join(s) for s in result.keypoint_support]
+    assert all(texts)  # every keypoint was supported by at least one stream
