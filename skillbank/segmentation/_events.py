@@ -15,6 +15,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import find_peaks
 
+from ._gate import _nearest_run
+from ._profile import TYPICAL_PERCENTILE, speed_norm
+
 __all__ = ["KINDS", "stream_kind", "discrete_events", "contact_events", "rest_events", "rest_speed"]
 
 #: No single stream is certain of a boundary (a sensor glitches, an operator
@@ -269,14 +272,9 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
             # no movement on one side: the valley is the rest before the first or after the last
             continue
         ratio = float(v[c]) / side
-        band = v[c] + REST_BAND * (side - v[c])
-        a = c
-        while a > lo and v[a - 1] <= band:
-            a -= 1
-        b = c
-        while b < hi and v[b + 1] <= band:
-            b += 1
-        events.append((a + b) // 2)
+        # the run of the valley's bottom that holds c, within the valley
+        a, b = _nearest_run(v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c]), c - lo)
+        events.append(lo + (a + b) // 2)
         ratios.append(ratio)
         conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** 2))
     order = np.argsort(events)
@@ -289,7 +287,7 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
 SPEED_NOISE_SHARE = 0.01
 
 
-def rest_speed(t, Y, *, max_sigma: float) -> np.ndarray:
+def rest_speed(t, Y, speed=None, *, max_sigma: float) -> np.ndarray:
     """Speed of ``Y`` smoothed just enough for its noise to hide no stop.
 
     The noise of each dimension is estimated from its third differences
@@ -298,7 +296,8 @@ def rest_speed(t, Y, *, max_sigma: float) -> np.ndarray:
     none). ``Y`` is smoothed by a Gaussian of the fewest samples that bring
     the noise of the differentiated speed under ``SPEED_NOISE_SHARE`` of the
     typical speed (at most ``max_sigma``), then differentiated on the real
-    time stamps.
+    time stamps. ``speed`` is ``Y``'s unsmoothed :func:`speed_norm`, when
+    the caller has it already.
 
     Examples
     --------
@@ -311,17 +310,16 @@ def rest_speed(t, Y, *, max_sigma: float) -> np.ndarray:
 
     t = np.asarray(t, dtype=float)
     Y = np.asarray(Y, dtype=float).reshape(t.shape[0], -1)
-    v = np.linalg.norm(np.gradient(Y, t, axis=0), axis=1)
+    v = speed_norm(t, Y) if speed is None else np.asarray(speed, dtype=float)
     if Y.shape[0] < 8:
         return v
     mad3 = np.median(np.abs(np.diff(Y, n=3, axis=0)), axis=0)
     sigma_n = float(np.linalg.norm(1.4826 * mad3 / np.sqrt(20.0)))
-    typical = float(np.percentile(v, 95.0))
+    typical = float(np.percentile(v, TYPICAL_PERCENTILE))
     dt = float(np.median(np.diff(t)))
     if sigma_n <= 0.0 or typical <= 0.0 or dt <= 0.0:
         return v
     # noise of the derivative of a Gaussian-smoothed white noise: sigma_n / dt / sqrt(4 sqrt(pi) s**3)
     s = ((sigma_n / (dt * SPEED_NOISE_SHARE * typical)) ** 2 / (4.0 * np.sqrt(np.pi))) ** (1.0 / 3.0)
     s = float(np.clip(s, 1.0, max(1.0, max_sigma)))
-    smooth = gaussian_filter1d(Y, s, axis=0, mode="nearest")
-    return np.linalg.norm(np.gradient(smooth, t, axis=0), axis=1)
+    return speed_norm(t, gaussian_filter1d(Y, s, axis=0, mode="nearest"))

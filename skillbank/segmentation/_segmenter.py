@@ -21,7 +21,7 @@ from ._keypoints import (
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import _stream_jerk, speed_norm
+from ._profile import TYPICAL_PERCENTILE, _stream_jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
@@ -329,37 +329,25 @@ class MultimodalSegmenter(Params):
                                                normalize=p["normalize"], grace=p["grace"])
             sigma = SIGMA_PER_WINDOW * p["window"]
             if kinds[name] == "motion":
-                speeds[name] = speed
-                cps, strength = detect_changepoints(prof, threshold=p["threshold"], min_size=p["min_size"],
-                                                    grace=p["grace"], window=p["window"])
-                # the profile places an event to a sample or two; the raw jerk's centre pins it
-                cps = refine_to_jerk_centre(
-                    cps, absj, half_width=max(MIN_REFINE_HALF_WIDTH, p["window"] // REFINE_DIVISOR))
-                if p["stop_ratio"] is not None:
-                    cps, strength = _gate_changepoints(
-                        cps, strength, Y, speed, window=p["window"], min_size=p["min_size"],
-                        grace=p["grace"], stop_ratio=p["stop_ratio"],
-                        min_turn=NO_TURN if p["min_turn"] is None else p["min_turn"])
+                cps, strength = np.array([], dtype=int), np.array([], dtype=float)
+                # with evidence and min_turn=None the gate's events are not used: they are not made
+                if not evidence or p["min_turn"] is not None:
+                    cps, strength = detect_changepoints(prof, threshold=p["threshold"],
+                                                        min_size=p["min_size"], grace=p["grace"],
+                                                        window=p["window"])
+                    # the profile places an event to a sample or two; the raw jerk's centre pins it
+                    cps = refine_to_jerk_centre(
+                        cps, absj, half_width=max(MIN_REFINE_HALF_WIDTH, p["window"] // REFINE_DIVISOR))
+                    if p["stop_ratio"] is not None:
+                        cps, strength = _gate_changepoints(
+                            cps, strength, Y, speed, window=p["window"], min_size=p["min_size"],
+                            grace=p["grace"], stop_ratio=p["stop_ratio"],
+                            min_turn=NO_TURN if p["min_turn"] is None else p["min_turn"])
                 confidence = np.ones(cps.size)
                 if evidence:
-                    v = rest_speed(t, Y, max_sigma=p["window"] / 4)
+                    v = rest_speed(t, Y, speed, max_sigma=p["window"] / 4)
                     speeds[name] = v
-                    rests, rest_conf, _ = rest_events(v, typical=float(np.percentile(v, 95.0)))
-                    # the stop-or-turn gate's events are the turns of a stroke that never rests
-                    # (a letter's corners); near a rest they confirm it, elsewhere they are weaker
-                    # witnesses than a stop, and none at all with min_turn=None
-                    cps_out, conf_out = list(rests), list(rest_conf)
-                    for c in (cps if p["min_turn"] is not None else ()):
-                        near = np.flatnonzero(np.abs(rests - c) <= p["window"])
-                        if near.size:
-                            for k in near:
-                                conf_out[k] = max(conf_out[k], TURN_CONFIDENCE)
-                        else:
-                            cps_out.append(int(c))
-                            conf_out.append(TURN_CONFIDENCE)
-                    order = np.argsort(cps_out)
-                    cps = np.asarray(cps_out, dtype=int)[order]
-                    confidence = np.asarray(conf_out, dtype=float)[order]
+                    cps, confidence = _motion_evidence(v, cps, window=p["window"])
                     strength = confidence
             elif kinds[name] == "contact":
                 cps, confidence = contact_events(Y, window=p["window"])
@@ -395,9 +383,10 @@ class MultimodalSegmenter(Params):
             n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
             min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
             rng = np.random.default_rng(self.random_state)
-            draw = prob / prob.sum() if evidence and prob.sum() > 0 else prob
-            if evidence and prob.sum() <= 0:
-                draw = np.full(n, 1.0 / n)
+            draw = prob
+            if evidence:
+                # the evidence is a per-sample probability, not a distribution: normalise it to draw
+                draw = prob / prob.sum() if prob.sum() > 0 else np.full(n, 1.0 / n)
             keypoints = keypoints_sampling(draw, n_samples=n_samples, min_hits=min_hits, window=window,
                                            min_size=min_size, rng=rng)
         if evidence and speeds:
@@ -405,6 +394,25 @@ class MultimodalSegmenter(Params):
         self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
                                           {k: v.params for k, v in per_stream.items()}, self.combine)
         return self
+
+
+def _motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """A motion stream's events and confidences: its rests, and the stop-or-turn gate's ``turns``.
+
+    The gate's events are the turns of a stroke that never rests (a letter's
+    corners). A rest within ``window`` of one is confirmed by it (confidence
+    at least ``TURN_CONFIDENCE``); a turn far from every rest is an event of
+    its own, a weaker witness than a stop.
+    """
+    rests, confidence, _ = rest_events(speed, typical=float(np.percentile(speed, TYPICAL_PERCENTILE)))
+    turns = np.asarray(turns, dtype=int)
+    near = np.abs(rests[:, None] - turns[None, :]) <= window
+    confidence = np.where(near.any(axis=1), np.maximum(confidence, TURN_CONFIDENCE), confidence)
+    alone = turns[~near.any(axis=0)]
+    events = np.concatenate([rests, alone])
+    confidence = np.concatenate([confidence, np.full(alone.size, TURN_CONFIDENCE)])
+    order = np.argsort(events, kind="stable")
+    return events[order], confidence[order]
 
 
 def _merge_motionless(keypoints, prob, demo: Demonstration, speeds: dict) -> np.ndarray:
