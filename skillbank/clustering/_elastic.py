@@ -11,6 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors
 from ._em import (
     assign,
+    closest_separation,
     cluster_sums,
     local_splits,
     pairwise_separation,
@@ -252,12 +253,12 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             raise ValueError(f"n_clusters: expected at most n_samples={m} clusters, got {target}")
         stop = min(m if p["cap"] is None else p["cap"], m) if target is None else target
         nodes, labels, energy, ok, n_iter = self._em(X, nodes, p, tol_abs, x_sq)
-        path = [(nodes.shape[0], energy, self._min_separation(X, labels, nodes.shape[0]))]
+        path = [(nodes.shape[0], energy, closest_separation(X, labels, nodes.shape[0]))]
         if self.criterion == "paper":
             while nodes.shape[0] < stop:
                 cand = np.vstack([nodes, X[-1:]])
                 c_nodes, c_labels, c_energy, _, c_iter = self._em(X, cand, p, tol_abs, x_sq)
-                path.append((cand.shape[0], c_energy, self._min_separation(X, c_labels, cand.shape[0])))
+                path.append((cand.shape[0], c_energy, closest_separation(X, c_labels, cand.shape[0])))
                 if target is None and not c_energy < energy:
                     break
                 nodes, labels, energy, n_iter = c_nodes, c_labels, c_energy, c_iter
@@ -270,7 +271,7 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             path += [(n_real, np.nan, sep) for _, n_real, sep in cuts]
             if seeds.shape[0] > 1:
                 nodes, labels, energy, ok, n_iter = self._em(X, seeds, p, tol_abs, x_sq)
-                path.append((nodes.shape[0], energy, self._min_separation(X, labels, nodes.shape[0])))
+                path.append((nodes.shape[0], energy, closest_separation(X, labels, nodes.shape[0])))
             return nodes, labels, energy, n_iter, path
         best, failures = (nodes, labels, energy, n_iter), 0
         while nodes.shape[0] < stop:
@@ -284,7 +285,7 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
                 break
             cand = np.vstack([nodes[:c], seeds[c, :1], nodes[c + 1:], seeds[c, 1:]])
             nodes, labels, energy, ok, n_iter = self._em(X, cand, p, tol_abs, x_sq)
-            min_sep = self._min_separation(X, labels, n + 1)
+            min_sep = closest_separation(X, labels, n + 1)
             path.append((n + 1, energy, min_sep))
             if not ok:
                 if target is not None:
@@ -299,12 +300,6 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
                 if failures >= _LOOKAHEAD:
                     break
         return (*best, path)
-
-    def _min_separation(self, X, labels, n):
-        if n == 1:
-            return np.inf
-        delta = pairwise_separation(X, labels, n)
-        return float(np.min(delta[~np.eye(n, dtype=bool)]))
 
     def _store(self, X, nodes, labels, energy, n_iter, path):
         check_finite_result(nodes, name="ElasticClustering (cluster centres)")

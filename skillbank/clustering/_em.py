@@ -16,7 +16,7 @@ PRIOR_COUNT = 5.0
 
 __all__ = [
     "assign", "cluster_sums", "solve_paper", "solve_capped", "stretch_energy", "selection_energy",
-    "pairwise_separation", "local_splits",
+    "pairwise_separation", "closest_separation", "local_splits",
 ]
 
 
@@ -112,6 +112,23 @@ def _sorted_slices(labels: np.ndarray, counts: np.ndarray):
     order = np.argsort(labels, kind="stable")
     stops = np.cumsum(counts.astype(np.intp))
     return order, stops - counts.astype(np.intp), stops
+
+
+def closest_separation(X: np.ndarray, labels: np.ndarray, n_clusters: int) -> float:
+    """The smallest :func:`pairwise_separation` between two different clusters; ``inf`` for one cluster.
+
+    Examples
+    --------
+    >>> X = np.array([[0.0], [1.0], [10.0], [11.0]])
+    >>> round(closest_separation(X, np.array([0, 0, 1, 1]), 2), 4)
+    9.02
+    >>> closest_separation(X, np.zeros(4, int), 1)
+    inf
+    """
+    if n_clusters == 1:
+        return np.inf
+    delta = pairwise_separation(X, labels, n_clusters)
+    return float(np.min(delta[~np.eye(n_clusters, dtype=bool)]))
 
 
 def pairwise_separation(X: np.ndarray, labels: np.ndarray, n_clusters: int) -> np.ndarray:

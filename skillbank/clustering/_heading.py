@@ -7,7 +7,20 @@ from sklearn.base import BaseEstimator, TransformerMixin
 
 from ._features import FlatPCAMixin, resampled_input
 
-__all__ = ["HeadingFeatures", "heading_directions"]
+__all__ = ["HeadingFeatures", "heading_directions", "unit_steps"]
+
+
+def unit_steps(R: np.ndarray) -> np.ndarray:
+    """Each step of trajectories ``R`` (n, n_steps, n_dims) divided by its length; a zero step stays zero.
+
+    Examples
+    --------
+    >>> unit_steps(np.array([[[0.0, 0.0], [3.0, 4.0], [3.0, 4.0]]]))[0].tolist()
+    [[0.6, 0.8], [0.0, 0.0]]
+    """
+    D = np.diff(R, axis=1)
+    norm = np.linalg.norm(D, axis=2, keepdims=True)
+    return D / np.where(norm > 0.0, norm, 1.0)
 
 
 def heading_directions(R: np.ndarray, *, mirror: bool = True) -> np.ndarray:
@@ -47,9 +60,7 @@ def heading_directions(R: np.ndarray, *, mirror: bool = True) -> np.ndarray:
         Q[:, :, 1] = -s * x + c * y
         if mirror:
             Q[:, :, 1] *= np.where(Q[:, :, 1].sum(axis=1) < 0.0, -1.0, 1.0)[:, None]
-    D = np.diff(Q, axis=1)
-    norm = np.linalg.norm(D, axis=2, keepdims=True)
-    return D / np.where(norm > 0.0, norm, 1.0)
+    return unit_steps(Q)
 
 
 class HeadingFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._em import pairwise_separation
+from ._em import closest_separation
 
 __all__ = ["hierarchy_seeds", "MIN_MEMBERS"]
 
@@ -21,7 +21,7 @@ def hierarchy_seeds(X, *, min_separation: float, max_clusters: int, rng) -> tupl
     groups is *valid* when every pair of its clusters (groups of at least
     ``MIN_MEMBERS`` points; smaller groups are outliers that join their
     nearest cluster) is at least ``min_separation`` apart by
-    :func:`pairwise_separation`. The cut with the most clusters is kept.
+    :func:`pairwise_separation` (in ``_em``). The cut with the most clusters is kept.
     Unlike growing one node at a time and stopping at the first refused
     split, this finds 26 separate shapes even when no split of the whole
     set into two halves is clean (each half mixes many shapes).
@@ -53,8 +53,7 @@ def hierarchy_seeds(X, *, min_separation: float, max_clusters: int, rng) -> tupl
             inside = np.isin(labels, real)
             index = np.full(k, -1)
             index[real] = np.arange(real.size)
-            delta = pairwise_separation(sample[inside], index[labels[inside]], real.size)
-            sep = float(np.min(delta[~np.eye(real.size, dtype=bool)]))
+            sep = closest_separation(sample[inside], index[labels[inside]], real.size)
             path.append((k, int(real.size), sep))
             if sep >= min_separation and real.size > best[0]:
                 means = np.stack([sample[labels == c].mean(axis=0) for c in real])

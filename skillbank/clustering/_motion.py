@@ -6,15 +6,9 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from ._features import FlatPCAMixin, resampled_input
-from ._heading import heading_directions
+from ._heading import heading_directions, unit_steps
 
 __all__ = ["MotionFeatures"]
-
-
-def _unit_steps(R: np.ndarray) -> np.ndarray:
-    D = np.diff(R, axis=1)
-    norm = np.linalg.norm(D, axis=2, keepdims=True)
-    return D / np.where(norm > 0.0, norm, 1.0)
 
 
 class MotionFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
@@ -76,7 +70,7 @@ class MotionFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
         by_time = resampled_input(self, X, reset=reset, by="time")
         by_path = resampled_input(self, X, reset=False, by="arc_length")
         mirror = by_time.shape[2] >= 3 if self.mirror == "auto" else bool(self.mirror)
-        blocks = (heading_directions(by_time, mirror=mirror), _unit_steps(by_time),
+        blocks = (heading_directions(by_time, mirror=mirror), unit_steps(by_time),
                   heading_directions(by_path, mirror=mirror))
         return np.concatenate([b.reshape(b.shape[0], -1) for b in blocks], axis=1)
 
