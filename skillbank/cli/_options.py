@@ -148,12 +148,12 @@ def add_segmentation_options(p) -> None:
     p.add_argument("--min-turn", type=float, default=keep,
                    help="or where the direction turns by at least this many degrees")
     p.add_argument("--combine", choices=["product", "evidence"], default=keep,
-                   help="product (default): the paper's product of every stream's jerk changepoints; "
-                        "evidence: rests, contact steps and gripper switches, each kind of stream a "
-                        "witness (one confident kind carries a keypoint)")
+                   help="evidence (default): rests, turns, contact steps and gripper switches, each kind "
+                        "of stream a witness (one confident kind carries a keypoint); product: the paper's "
+                        "product of every stream's jerk changepoints")
     p.add_argument("--stream-kind", action="append", default=keep, metavar="NAME=KIND", type=_stream_kind,
                    dest="stream_kinds",
-                   help="with --combine evidence, treat stream NAME as KIND: motion, contact or discrete "
+                   help="treat stream NAME as KIND: motion, contact or discrete "
                         "(default by name: force, torque, wrench are contact, gripper discrete; repeatable)")
     p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep,
                    help="deterministic (default): keypoints where the streams agree; sampling: the paper's "

@@ -65,7 +65,9 @@ def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:
         figures = {
             "summary": plot_segmentation_summary(result, out / f"{name}_profiles.png"),
             "probability": plot_keypoint_probability(result, out / f"{name}_probability.png"),
-            "segments": plot_segments(result, out / f"{name}_segments.png", dims=dims),
+            # the streams a path cannot show (contact, gripper) under it, against time
+            "segments": plot_segments(result, out / f"{name}_segments.png", dims=dims,
+                                      below=[k for k, s in result.streams.items() if s.kind != "motion"]),
         }
         items.append({
             "name": name, "n_steps": demo.n_steps, "streams": demo.stream_names,

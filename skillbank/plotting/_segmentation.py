@@ -235,7 +235,33 @@ def plot_keypoint_probability(result, path) -> Path:
     return _save(fig, path)
 
 
-def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y: bool = False) -> Path:
+def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
+    """One stream against time, each column coloured by segment, with the keypoints as lines.
+
+    A contact stream is shown as its magnitude (the norm over its columns):
+    a contact's onset is where the magnitude rises, whatever the direction.
+    """
+    Y = np.asarray(Y, dtype=float).reshape(t.size, -1)
+    if Y.shape[1] > 1:
+        Y = np.linalg.norm(Y, axis=1)[:, None]
+        ax.set_ylabel(f"|{name}|", fontsize="small")
+    else:
+        ax.set_ylabel(name, fontsize="small")
+    for label, a, b in _runs(result.labels):
+        stop = min(b + 1, t.size)
+        ax.plot(t[a:stop], Y[a:stop, 0], color=_colour(label), lw=1.3)
+    support = result.keypoint_support
+    for i, k in enumerate(np.asarray(result.keypoints, dtype=int)):
+        # solid where this stream is among the keypoint's main witnesses (at least half the
+        # strongest stream's evidence there), dotted where others carried it
+        here = support[i] if i < len(support) else {}
+        backed = bool(here) and here.get(name, 0.0) >= 0.5 * max(here.values())
+        ax.axvline(t[k], color="k", ls="-" if backed else ":", lw=1.0 if backed else 0.8, alpha=0.7)
+    ax.set_xlim(t[0], t[-1])
+
+
+def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y: bool = False,
+                  below=()) -> Path:
     """Plot a stream's trajectory coloured by segment, in 2-D or 3-D.
 
     Parameters
@@ -250,6 +276,12 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         least three columns, else 2.
     invert_y : bool, default=False
         Negate the second column, for data in screen coordinates (y down).
+    below : sequence of str, default=()
+        Streams drawn under the path against time (e.g. ``("force",
+        "gripper")``), coloured by segment; a multi-column stream as its
+        magnitude. Keypoints are solid lines where that stream is among their
+        main witnesses (at least half the strongest stream's evidence),
+        dotted where others carried them.
 
     Returns
     -------
@@ -259,8 +291,9 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
     Raises
     ------
     ValueError
-        If ``result`` is not a SegmentationResult, ``stream`` is unknown, or
-        ``dims`` is not 2 or 3 or exceeds the stream's columns.
+        If ``result`` is not a SegmentationResult, ``stream`` or a stream in
+        ``below`` is unknown, or ``dims`` is not 2 or 3 or exceeds the
+        stream's columns.
 
     Examples
     --------
@@ -280,12 +313,29 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         raise ValueError(f"dims: expected 2 or 3, got {dims!r}")
     if dims > n_cols:
         raise ValueError(f"dims: expected at most the {n_cols} columns of stream {stream!r}, got {dims}")
+    below = [below] if isinstance(below, str) else list(below)
+    for name in below:
+        if name not in demo.streams:
+            raise ValueError(f"below: expected streams of the demonstration {demo.stream_names}, "
+                             f"got {name!r}")
     P = Y[:, :dims].copy()
     if invert_y:
         P[:, 1] = -P[:, 1]
 
-    fig = Figure(figsize=(6.0, 6.0) if dims == 2 else (7.0, 6.5))
-    ax = fig.add_subplot(projection="3d" if dims == 3 else None)
+    size = (6.0, 6.0) if dims == 2 else (7.0, 6.5)
+    fig = Figure(figsize=(size[0], size[1] + 1.2 * len(below)))
+    grid = fig.add_gridspec(1 + len(below), 1, height_ratios=[size[1] / 1.6] + [1.0] * len(below),
+                            hspace=0.15 if dims == 2 else 0.05)
+    ax = fig.add_subplot(grid[0], projection="3d" if dims == 3 else None)
+    shared = None
+    for i, name in enumerate(below):
+        sub = fig.add_subplot(grid[1 + i], sharex=shared)
+        shared = shared or sub
+        _draw_stream_below(sub, demo.t, demo[name], result, name)
+        if i < len(below) - 1:
+            sub.tick_params(labelbottom=False)
+        else:
+            sub.set_xlabel("Time [s]")
     labels = _draw_segmented_path(ax, P, result, lw=2.5, point_size=30, start_size=7)
     handles = [Line2D([], [], color=_colour(label), lw=3, label=f"Segment {label + 1}") for label in labels]
     if result.keypoints.size:

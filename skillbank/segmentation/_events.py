@@ -122,6 +122,16 @@ def _noise_sigma(Y: np.ndarray) -> np.ndarray:
     return 1.4826 * np.median(d, axis=0) / np.sqrt(2.0)
 
 
+def _resolution(Y: np.ndarray) -> np.ndarray:
+    """Per-dimension smallest meaningful deviation, a floor for the noise estimate.
+
+    A noiseless stream (a simulated or held signal) has no noise to divide
+    by; ``sqrt(eps)`` of its range keeps effect sizes finite (at most about
+    10^8) while any real step still stands far above the event threshold.
+    """
+    return np.sqrt(np.finfo(float).eps) * np.ptp(Y, axis=0) + np.finfo(float).tiny
+
+
 def _step_effect(Y: np.ndarray, w: int) -> np.ndarray:
     """Effect size of a level step at each sample: the change of the window means over their spread."""
     n = Y.shape[0]
@@ -134,7 +144,7 @@ def _step_effect(Y: np.ndarray, w: int) -> np.ndarray:
     v_b = np.maximum(((c2[i] - c2[i - w]) / w - m_b**2).sum(axis=1), 0.0)
     v_a = np.maximum(((c2[i + w] - c2[i]) / w - m_a**2).sum(axis=1), 0.0)
     # a floor at the sensor's noise, so two noiseless plateaus do not divide by zero
-    floor = float(np.sum(_noise_sigma(Y) ** 2)) + np.finfo(float).tiny
+    floor = float(np.sum(np.maximum(_noise_sigma(Y), _resolution(Y)) ** 2))
     d = np.zeros(n)
     d[i] = np.linalg.norm(m_a - m_b, axis=1) / np.sqrt(0.5 * (v_a + v_b) + floor)
     return d
@@ -163,7 +173,7 @@ def _impulse_effect(Y: np.ndarray, w: int) -> np.ndarray:
     """Effect size of an impulse at each sample: its distance from the running median over the running MAD."""
     dev = np.abs(Y - _running_median(Y, w))
     spread = 1.4826 * _running_median(dev, w)
-    floor = _noise_sigma(Y) + np.finfo(float).tiny
+    floor = np.maximum(_noise_sigma(Y), _resolution(Y))
     return np.linalg.norm(dev / np.maximum(spread, floor), axis=1) / np.sqrt(Y.shape[1])
 
 
@@ -210,6 +220,12 @@ def contact_events(Y, *, window: int) -> tuple[np.ndarray, np.ndarray]:
 #: pressed); a pen slowing for a corner keeps a tenth or more of its speed.
 HALF_REST_RATIO = 0.05
 
+#: How sharply the confidence of a rest falls about ``HALF_REST_RATIO``: below
+#: a fiftieth every stop is as good as a full one (a press and the pause above
+#: the button differ in ratio by sensor noise, not by being more of a stop),
+#: above a tenth the pen is only slowing.
+REST_EXPONENT = 4
+
 #: Valleys shallower than this fraction of the typical speed are ripples of
 #: one movement, not candidates.
 VALLEY_PROMINENCE = 0.02
@@ -230,9 +246,10 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
     Every valley of ``speed`` is compared with the movements either side of
     it: each side's peak speed, up to the next valley that is at least as
     deep. Its stop ratio is the valley's lowest speed over the slower side's
-    peak, and its confidence ``1 / (1 + (ratio / HALF_REST_RATIO)**2)``: one
-    for a full stop, one half at a twentieth of the speed, a tenth of that
-    for a pen slowing to a third of its speed at a corner. The event sits in
+    peak, and its confidence ``1 / (1 + (ratio / HALF_REST_RATIO)**4)``: one
+    for a full stop (at least 0.97 below a fiftieth of the speed), one half
+    at a twentieth, 0.06 for a pen slowing to a tenth of its speed at a
+    corner (then scaled by :data:`MAX_CONFIDENCE`). The event sits in
     the middle of the valley's bottom (``REST_BAND``), i.e. the middle of a
     dwell, or the slowest sample of a brief stop. Valleys at either end have
     a movement on one side only and are no boundary.
@@ -276,7 +293,7 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
         a, b = _nearest_run(v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c]), c - lo)
         events.append(lo + (a + b) // 2)
         ratios.append(ratio)
-        conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** 2))
+        conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** REST_EXPONENT))
     order = np.argsort(events)
     return (np.asarray(events, dtype=int)[order], np.asarray(conf)[order], np.asarray(ratios)[order])
 

@@ -175,7 +175,7 @@ class MultimodalSegmenter(Params):
     min_turn : float in [0, 180] or None, default=45.0
         Change of direction, in degrees, over one window either side of an
         event, that makes it a boundary without a stop; ``None``: only stops do.
-    combine : {"product", "evidence"}, default="product"
+    combine : {"product", "evidence"}, default="evidence"
         ``"product"`` is the paper's rule: every stream's jerk changepoints
         become Gaussians over a floor, multiplied, and keypoints are where
         enough streams agree. ``"evidence"`` reads each stream by its kind
@@ -224,7 +224,7 @@ class MultimodalSegmenter(Params):
 
     def __init__(
         self, *, window="auto", min_size="auto", threshold=0.4, grace="auto", scale="relative",
-        normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, combine="product",
+        normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, combine="evidence",
         stream_kinds=None, mode="deterministic", min_support=None, n_samples=20, min_hits=3, floor=0.05,
         random_state=None,
     ):
@@ -347,7 +347,13 @@ class MultimodalSegmenter(Params):
                 if evidence:
                     v = rest_speed(t, Y, speed, max_sigma=p["window"] / 4)
                     speeds[name] = v
-                    cps, confidence = _motion_evidence(v, cps, window=p["window"])
+                    if p["min_turn"] is not None and cps.size:
+                        # the gate also keeps events where the speed merely dips below half its
+                        # peak; as evidence those are rests (judged by the rest finder) or nothing:
+                        # only events where the direction turns, within a window, are turns
+                        cps = cps[_turning(Y, cps, window=p["window"], min_turn=p["min_turn"])]
+                    cps, confidence = _motion_evidence(v, cps, window=p["window"]) if _moves(t, Y, v) \
+                        else (np.array([], dtype=int), np.array([], dtype=float))
                     strength = confidence
             elif kinds[name] == "contact":
                 cps, confidence = contact_events(Y, window=p["window"])
@@ -394,6 +400,40 @@ class MultimodalSegmenter(Params):
         self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
                                           {k: v.params for k, v in per_stream.items()}, self.combine)
         return self
+
+
+def _turning(Y, events, *, window: int, min_turn: float) -> np.ndarray:
+    """Which ``events`` turn by at least ``min_turn`` degrees somewhere within one window.
+
+    The turn at a sample is the angle between the chords over the ``window``
+    samples before and after it (the gate's measure); a jerk event sits up to
+    a window from the corner it marks, so the largest turn within a window of
+    the event is taken.
+    """
+    from scipy.ndimage import maximum_filter1d  # only the evidence rule needs it
+
+    Y = np.asarray(Y, dtype=float).reshape(Y.shape[0], -1)
+    n = Y.shape[0]
+    i = np.arange(n)
+    a = Y - Y[np.maximum(i - window, 0)]
+    b = Y[np.minimum(i + window, n - 1)] - Y
+    na, nb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
+    ok = (na > 0) & (nb > 0)
+    cos = np.ones(n)
+    cos[ok] = np.einsum("ij,ij->i", a[ok], b[ok]) / (na[ok] * nb[ok])
+    angle = maximum_filter1d(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))), 2 * window + 1, mode="nearest")
+    return angle[np.asarray(events, dtype=int)] >= min_turn
+
+
+def _moves(t, Y, speed) -> bool:
+    """Whether a motion stream moves at all: its path is more than round-off of its magnitude.
+
+    A held stream's speed is round-off (1e-13 of its values, from differences
+    of equal numbers on uneven time steps); its valleys and "turns" are noise.
+    """
+    path = float(np.sum(speed[:-1] * np.diff(t)))
+    scale = float(np.max(np.abs(Y))) if Y.size else 0.0
+    return path > np.sqrt(np.finfo(float).eps) * scale
 
 
 def _motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarray]:

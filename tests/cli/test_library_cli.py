@@ -167,7 +167,7 @@ def test_add_is_all_or_nothing_and_names_the_bad_file(run, tmp_path):
         code, out, err = run("library", "add", db, *files)
         assert code == 2 and out == "" and err.count("\n") == 1, err
         assert err.startswith(f"skillbank library add: error: {files[2]}: ")
-        assert "expected at least 32 samples" in err and "nothing was added" in err
+        assert "expected at least 16 samples" in err and "nothing was added" in err
         assert json.loads(run("library", "list", db, "--json")[1])["n_demonstrations"] == 0
 
 
@@ -181,7 +181,7 @@ def test_keep_going_adds_the_good_files_and_lists_the_bad_ones(run, tmp_path):
     assert code == 2
     lines = err.splitlines()
     assert lines[0].startswith(f"skillbank library add: skipped {files[2]}: ")
-    assert "expected at least 32 samples" in lines[0]
+    assert "expected at least 16 samples" in lines[0]
     assert lines[1].startswith(f"skillbank library add: skipped {junk}: ")
     assert lines[2] == "skillbank library add: error: 2 of 5 file(s) failed and were skipped; the other 3 " \
                        "were added"

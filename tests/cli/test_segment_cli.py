@@ -30,14 +30,14 @@ def test_r_demos_give_three_segments(data_dir, capsys, index):
 def test_paper_parameters_with_and_without_the_gate(data_dir, capsys):
     path = str(data_dir / "seed" / "r_shape.h5")
     paper = ["segment", path, "--demo", "3", "--window", "16", "--min-size", "64", "--threshold", "0.16",
-             "--json"]
+             "--combine", "product", "--json"]
     code, out, _ = _run(capsys, *paper)
     assert code == 0 and json.loads(out)["n_segments"] == 3
     code, out, _ = _run(capsys, *paper, "--stop-ratio", "none")
     assert code == 0 and json.loads(out)["n_segments"] > 3
 
 
-def test_three_button_gives_four_segments(data_dir, capsys, tmp_path):
+def test_three_button_cuts_at_the_presses_and_the_gripper(data_dir, capsys, tmp_path):
     code, out, _ = _run(
         capsys, "segment", str(data_dir / "seed" / "three_button_pressing_demo.h5"),
         "--stream", "joints", "--stream", "position", "--stream", "force", "--stream", "gripper",
@@ -45,10 +45,11 @@ def test_three_button_gives_four_segments(data_dir, capsys, tmp_path):
     )
     assert code == 0
     doc = json.loads(out)
-    assert doc["n_segments"] == 4
+    # gripper closing, the three presses, gripper opening (see tests/segmentation/test_evidence.py)
+    assert doc["n_segments"] == 6 and doc["combine"] == "evidence"
     assert (tmp_path / "seg.png").read_bytes()[:4] == b"\x89PNG"
     files = sorted((tmp_path / "segs").glob("*.npz"))
-    assert len(files) == 4
+    assert len(files) == 6
     assert sum(sio.read_npz(f).n_steps for f in files) == 4099
 
 

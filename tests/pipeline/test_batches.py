@@ -39,7 +39,7 @@ def test_a_bad_file_adds_nothing_and_is_named(tmp_path, files):
     with Library(tmp_path / "p.sqlite") as lib:
         before = _counts(lib)
         for _ in range(2):  # running it again neither adds nor duplicates anything
-            with pytest.raises(ValueError, match=r"four_rows\.csv: .*expected at least 32 samples.*"
+            with pytest.raises(ValueError, match=r"four_rows\.csv: .*expected at least 16 samples.*"
                                                  r"nothing was added") as info:
                 lib.add_files(files)
             assert "\n" not in str(info.value)
@@ -54,7 +54,7 @@ def test_keep_going_adds_every_good_file_and_lists_each_bad_one(tmp_path, files)
         report = lib.add_files([*files, junk, missing], keep_going=True)
         good = [files[0], files[1], files[3]]
         assert list(report["failed"]) == [str(files[2]), str(junk), str(missing)]
-        assert "expected at least 32 samples" in report["failed"][str(files[2])]
+        assert "expected at least 16 samples" in report["failed"][str(files[2])]
         assert report["failed"][str(junk)] == \
             "cannot read it: line 3, column 2: expected a number, found 'oops'"
         assert report["failed"][str(missing)] == "cannot read it: no such file"
@@ -76,7 +76,7 @@ def test_add_many_writes_the_batch_in_one_transaction(tmp_path):
             lib.add_many(batch, segment=False)
         assert _counts(lib) == before
         too_short = _wave(n=4)
-        with pytest.raises(ValueError, match=r"demos\[1\] \(source 'short'\): .*expected at least 32 "
+        with pytest.raises(ValueError, match=r"demos\[1\] \(source 'short'\): .*expected at least 16 "
                                              r"samples.*nothing was added"):
             lib.add_many([_wave(), Demonstration(too_short.t, too_short.streams, {"source": "short"})])
         assert _counts(lib) == before

@@ -163,3 +163,21 @@ def test_probability_panel_names_each_keypoints_supporting_streams(result, tmp_p
     assert len(texts) == result.keypoints.size > 0
     assert texts == [", ".join(s) for s in result.keypoint_support]
     assert all(texts)  # every keypoint was supported by at least one stream
+
+
+def test_plot_segments_draws_streams_below_the_path(result, tmp_path):
+    import matplotlib.image as mpimg
+
+    plain = plot_segments(result, tmp_path / "plain.png", dims=3)
+    out = plot_segments(result, tmp_path / "below.png", dims=3, below=("force", "gripper"))
+    assert _is_png(out)
+    # two time panels under the path make the figure taller, by about 1.2 in each
+    h_plain, h_below = mpimg.imread(plain).shape[0], mpimg.imread(out).shape[0]
+    assert 1.25 < h_below / h_plain < 1.6
+    assert _is_png(plot_segments(result, tmp_path / "one.png", dims=2, below="gripper"))
+
+
+def test_plot_segments_below_names_an_unknown_stream(result, tmp_path):
+    with pytest.raises(ValueError, match=r"below: expected streams of the demonstration .*got 'wrench'"):
+        plot_segments(result, tmp_path / "x.png", below=("force", "wrench"))
+    assert not (tmp_path / "x.png").exists()

@@ -40,7 +40,7 @@ def test_three_button_cuts_each_press_and_nothing_else(data_dir):
     import skillbank.io as sio
 
     demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
-    result = segment(demo, combine="evidence")
+    result = segment(demo)  # the defaults
     t = result.keypoint_times - demo.t[0]
     for press in PRESSES:
         assert np.min(np.abs(t - press)) <= 0.5, (press, t)
@@ -54,12 +54,15 @@ def test_three_button_cuts_each_press_and_nothing_else(data_dir):
     assert {"position", "joints", "force"} <= set(support[press_3])
 
 
-def test_product_rule_is_the_default_and_unchanged(data_dir):
+def test_evidence_is_the_default_and_the_product_rule_a_mode(data_dir):
     import skillbank.io as sio
 
     demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
-    assert MultimodalSegmenter().combine == "product"
-    assert segment(demo).keypoints.tolist() == segment(demo, combine="product").keypoints.tolist()
+    assert MultimodalSegmenter().combine == "evidence"
+    assert segment(demo).keypoints.tolist() == segment(demo, combine="evidence").keypoints.tolist()
+    # the paper's rule, kept as a mode: the gripper closing, the last press, the gripper opening
+    times = segment(demo, combine="product").keypoint_times
+    np.testing.assert_allclose(times, [7.24, 18.90, 21.90], atol=0.01)
 
 
 def test_stream_kinds_by_name_and_override():

@@ -96,8 +96,9 @@ def test_gate_turns_the_r_bowl_events_off_but_not_the_corners(data_dir):
     import skillbank.io as sio
 
     demo = sio.read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized", index=3)
-    gated = segment(demo, window=16, min_size=64, threshold=0.16)
-    raw = segment(demo, window=16, min_size=64, threshold=0.16, stop_ratio=None)
+    # the gate's own changepoints, as the paper's product rule uses them
+    gated = segment(demo, window=16, min_size=64, threshold=0.16, combine="product")
+    raw = segment(demo, window=16, min_size=64, threshold=0.16, stop_ratio=None, combine="product")
     assert gated.changepoints["position"].size == 2 < raw.changepoints["position"].size
     # both cuts sit at the letter's corners, its two deepest interior speed minima
     assert np.abs(gated.changepoints["position"] - [211, 629]).max() <= 2

@@ -72,7 +72,7 @@ def test_loop_gradient_matches_numpy(loop):
 def test_synthetic_multistream_matches_loop(loop):
     demo = _synthetic_demo()
     streams = ["position", "force", "gripper"]
-    fast = segment(demo, streams)
+    fast = segment(demo, streams, combine="product")
     slow = loop.loop_segment(demo, streams)
     assert sum(len(c) for c in slow.changepoints.values()) >= 3  # the comparison is not vacuous
     assert len(slow.keypoints) >= 1
@@ -83,7 +83,7 @@ def test_synthetic_explicit_params_match_loop(loop):
     demo = _synthetic_demo(seed=3)
     params = {"window": 16, "min_size": 30, "threshold": 0.3, "grace": 10, "scale": "absolute",
               "normalize": "max"}
-    fast = segment(demo, ["position", "force"], **params)
+    fast = segment(demo, ["position", "force"], combine="product", **params)
     slow = loop.loop_segment(demo, ["position", "force"], **params)
     _assert_same(fast, slow, ["position", "force"])
 
@@ -94,7 +94,7 @@ def test_copy_with_few_digits_matches_loop(loop):
     t = np.arange(3000) * 1e-3
     position = _min_jerk_path(t, rng.normal(size=(6, 3))) + 0.01 * np.sin(2 * np.pi * 0.3 * t)[:, None]
     demo = Demonstration(t, {"position": np.array([[float(f"{v:.8g}") for v in row] for row in position])})
-    fast = segment(demo)
+    fast = segment(demo, combine="product")
     slow = loop.loop_segment(demo)
     assert fast.streams["position"].jerk_step == slow.steps["position"] > 1
     np.testing.assert_allclose(fast.streams["position"].jerk, slow.raw["position"], rtol=RTOL)
@@ -115,7 +115,7 @@ def test_loop_strided_gradient_matches_numpy_on_the_subsampled_grid(loop):
 
 def test_r_demo_3_matches_loop(loop, data_dir):
     demo = read_handwriting_h5(data_dir / "seed" / "r_shape.h5", group="normalized")[3]
-    fast = segment(demo)
+    fast = segment(demo, combine="product")
     slow = loop.loop_segment(demo)
     assert len(slow.keypoints) >= 1
     _assert_same(fast, slow, demo.stream_names)
@@ -124,7 +124,7 @@ def test_r_demo_3_matches_loop(loop, data_dir):
 def test_three_button_matches_loop(loop, data_dir):
     demo = read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
     streams = ["joints", "position", "force", "gripper"]
-    fast = segment(demo, streams)
+    fast = segment(demo, streams, combine="product")
     slow = loop.loop_segment(demo, streams)
     for name in streams:
         np.testing.assert_array_equal(fast.streams[name].changepoints, slow.changepoints[name])

@@ -245,8 +245,9 @@ def test_public_api():
 def test_public_building_blocks_match_the_segmenter(params):
     # the segmenter computes each stream's jerk and speed once; the public
     # functions recompute them from t and Y and must give the same numbers
+    # (the product rule: every stream's changepoints are the gated jerk events)
     demo = synthetic_multistream()
-    result = segment(demo, **params)
+    result = segment(demo, combine="product", **params)
     for name, stream in result.streams.items():
         p = stream.params
         raw, profile = jerk_profile(demo.t, demo[name], window=p["window"], scale=p["scale"],
@@ -273,9 +274,13 @@ def test_property_separated_corners_are_found(corners, seed):
         return
     Y = _polyline(corners, seed=seed)
     t = np.linspace(0.0, 6.0, 600)
-    found = segment(Demonstration.from_array(Y, t), window=16, min_size=50, scale="absolute").keypoints
+    demo = Demonstration.from_array(Y, t)
+    found = segment(demo, window=16, min_size=50, scale="absolute", combine="product").keypoints
     # a corner whose turn is tiny has no jerk event; every found keypoint is a real corner
     assert set(found.tolist()) <= set(corners)
+    # the evidence rule cuts at the pen's slowest sample, within two samples of the corner
+    found = segment(demo, window=16, min_size=50, scale="absolute").keypoints
+    assert all(np.abs(np.asarray(corners) - k).min() <= 2 for k in found)
 
 
 # ---------------------------------------------------------------- real data
@@ -298,27 +303,37 @@ def test_r_default_parameters_cut_at_the_two_corners(r_demos, index):
 def test_r_corners_do_not_depend_on_the_threshold(r_demos, threshold):
     # the gate, not a tuned threshold, is what keeps the bowl's jerk events out
     for index, demo in enumerate(r_demos):
-        assert segment(demo, threshold=threshold).keypoints.tolist() == list(R_CORNERS[index])
+        assert segment(demo, threshold=threshold, combine="product").keypoints.tolist() == \
+            list(R_CORNERS[index])
+        # with the evidence rule the corners are where the pen slows most, a sample or two away
+        found = segment(demo, threshold=threshold).keypoints
+        assert found.tolist() == segment(demo).keypoints.tolist()
+        assert np.abs(found - R_CORNERS[index]).max() <= 3
 
 
-def test_r_demo_3_paper_parameters(r_demos):
-    result = segment(r_demos[3], window=16, min_size=64, threshold=0.16)
+@pytest.mark.parametrize("combine", ["product", "evidence"])
+def test_r_demo_3_paper_parameters(r_demos, combine):
+    result = segment(r_demos[3], window=16, min_size=64, threshold=0.16, combine=combine)
     assert result.changepoints["position"].size == 2
     assert result.n_segments == 3
     assert np.abs(result.keypoints - [196, 613]).max() <= 20
 
 
 def test_r_demo_3_paper_parameters_without_the_gate_over_segment(r_demos):
-    # the jerk events alone also fire in the bowl and the leg: the stop-or-turn
-    # gate is what removes them
-    result = segment(r_demos[3], window=16, min_size=64, threshold=0.16, stop_ratio=None)
+    # the paper's rule: the jerk events alone also fire in the bowl and the leg;
+    # the stop-or-turn gate is what removes them
+    result = segment(r_demos[3], window=16, min_size=64, threshold=0.16, stop_ratio=None, combine="product")
     assert result.n_segments > 3
     assert np.abs(result.keypoints - 196).min() <= 20
+    # as evidence, a jerk event that neither rests nor turns is no boundary, gate or not
+    result = segment(r_demos[3], window=16, min_size=64, threshold=0.16, stop_ratio=None)
+    assert np.abs(result.keypoints - [196, 613]).max() <= 20
 
 
-def test_three_button_gives_four_segments(data_dir):
+def test_three_button_gives_four_segments_with_the_product_rule(data_dir):
+    # the paper's rule (the evidence rule's cuts are in test_evidence.py)
     demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
-    result = segment(demo, ["joints", "position", "force", "gripper"])
+    result = segment(demo, ["joints", "position", "force", "gripper"], combine="product")
     assert result.n_segments == 4
     # the gripper closes near 7.5 s and opens near 22.5 s (data README); the
     # button presses fall between, and the last segment is the return
@@ -361,7 +376,7 @@ def _douglas_peucker_indices(P, n_keep):
 
 def test_three_button_keypoints_against_the_authors(data_dir):
     demo = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
-    result = segment(demo, ["joints", "position", "force", "gripper"])
+    result = segment(demo, ["joints", "position", "force", "gripper"], combine="product")
     # the authors' keypoints [225, 372, 716] index 1000 Douglas–Peucker points of
     # the position; mapped back they fall at about 7.17 s, 11.62 s and 18.71 s
     kept = _douglas_peucker_indices(demo["position"], 1000)
