@@ -25,7 +25,7 @@ LAYERS = (
     ("core",),
     ("io", "metrics"),
     ("segmentation", "clustering", "editing"),
-    ("representations",),
+    ("representations", "robots"),
     ("selection",),
     ("store",),
     ("pipeline",),

@@ -3,8 +3,9 @@
 Everything else in skillbank builds on these: :class:`Demonstration` (a time
 base plus named streams), :class:`Constraints` (start, goal, via-points,
 boundary velocities, obstacles), the :class:`Obstacle` shapes and their one
-collision test, and the geometry of sampled paths (the one resampler and the
-path Laplacian). Nothing here imports another skillbank package.
+collision test, the geometry of sampled paths (the one resampler and the
+path Laplacian) and of orientations (unit quaternions, SLERP, log / exp maps).
+Nothing here imports another skillbank package.
 
 Examples
 --------
@@ -19,9 +20,21 @@ from ._constraints import Constraints, ViaPoint
 from ._demonstration import Demonstration
 from ._obstacles import OBSTACLES, Box, Obstacle, Sphere, parse_obstacle
 from ._paths import laplacian_matrix, neighbour_weights, resample, resample_many
+from ._rotations import (
+    check_quaternions,
+    continuous_quaternions,
+    exp_map,
+    log_map,
+    matrix_to_quaternion,
+    quaternion_angle,
+    quaternion_to_matrix,
+    slerp,
+)
 from ._version import __version__
 
 __all__ = [
     "Demonstration", "Constraints", "ViaPoint", "Obstacle", "Sphere", "Box", "OBSTACLES", "parse_obstacle",
     "resample", "resample_many", "laplacian_matrix", "neighbour_weights", "__version__",
+    "check_quaternions", "continuous_quaternions", "slerp", "log_map", "exp_map", "quaternion_angle",
+    "quaternion_to_matrix", "matrix_to_quaternion",
 ]

@@ -17,7 +17,7 @@ from ._errors import (
     real_array,
 )
 
-__all__ = ["read_robot_h5", "ROBOT_STREAMS"]
+__all__ = ["read_robot_h5", "ROBOT_STREAMS", "UR_JOINT_NAMES", "UR_JOINT_STATES_ORDER"]
 
 # stream name -> (group, dataset, clock dataset)
 ROBOT_STREAMS = {
@@ -29,6 +29,12 @@ ROBOT_STREAMS = {
     "gripper": ("gripper_info", "gripper_position", "gripper_time"),
 }
 _REQUIRED = ("joints", "position")
+
+#: A UR arm's joints in kinematic-chain order, base to flange (the order of ``skillbank.robots.UR5e``).
+UR_JOINT_NAMES = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                  "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
+#: The order a UR driver publishes them on ROS ``joint_states`` (alphabetical), and the recorder stores.
+UR_JOINT_STATES_ORDER = tuple(sorted(UR_JOINT_NAMES))
 
 
 def _read_stream(path, h5, name):
@@ -61,7 +67,31 @@ def _read_stream(path, h5, name):
     return clock, data
 
 
-def read_robot_h5(path, *, repair_time=None) -> Demonstration:
+def _check_joint_names(joint_names) -> list[str] | None:
+    if joint_names is None:
+        return None
+    names = list(joint_names) if isinstance(joint_names, (list, tuple)) else None
+    if not names or not all(isinstance(n, str) and n for n in names) or len(set(names)) != len(names):
+        raise ValueError(f"joint_names: expected a list of distinct non-empty names, got {joint_names!r}")
+    return names
+
+
+def _joint_order(path, n_columns: int, names: list[str] | None) -> tuple[list[int], list[str]]:
+    """The column order that puts the stored joints in chain order, and the names in that order."""
+    if names is None:
+        if n_columns != len(UR_JOINT_STATES_ORDER):
+            return list(range(n_columns)), [f"joint_{k}" for k in range(n_columns)]
+        names = list(UR_JOINT_STATES_ORDER)
+    if len(names) != n_columns:
+        raise FormatError(path, f"expected {len(names)} joint columns to match joint_names, found "
+                          f"{n_columns} in 'joint_state_info/joint_positions'")
+    if set(names) == set(UR_JOINT_NAMES):
+        order = [names.index(n) for n in UR_JOINT_NAMES]
+        return order, list(UR_JOINT_NAMES)
+    return list(range(n_columns)), names
+
+
+def read_robot_h5(path, *, repair_time=None, joint_names=None) -> Demonstration:
     """Read a robot recording with one HDF5 group (and clock) per sensor.
 
     The groups ``joint_state_info``, ``transform_info``, ``wrench_info`` and
@@ -79,6 +109,11 @@ def read_robot_h5(path, *, repair_time=None) -> Demonstration:
         (keeping the first) and records how many of the joints' (the time
         base's) were dropped in ``metadata["dropped_samples"]``; backwards
         or frozen clocks stay errors.
+    joint_names : sequence of str, optional
+        The names of the stored joint columns, in the file's order. Default:
+        six columns are a UR driver's ``joint_states`` order
+        (:data:`UR_JOINT_STATES_ORDER`, the layout of the three-button
+        recording); any other number is named ``joint_0, joint_1, ...``.
 
     Returns
     -------
@@ -86,29 +121,43 @@ def read_robot_h5(path, *, repair_time=None) -> Demonstration:
         Streams ``joints`` (unwrapped), ``position``, ``orientation``
         (quaternions as stored), ``force``, ``torque`` and ``gripper``; the
         last four only when their group exists. ``t`` starts at 0; metadata
-        holds ``source``, ``format`` (``"robot-h5"``) and ``t0``, the absolute
-        start time in seconds.
+        holds ``source``, ``format`` (``"robot-h5"``), ``t0``, the absolute
+        start time in seconds, and ``joint_names``, the names of the
+        ``joints`` columns.
+
+        The joints come in kinematic-chain order (base to flange). A UR
+        arm's six joints (a UR driver publishes them alphabetically: elbow,
+        shoulder_lift, shoulder_pan, wrist_1, wrist_2, wrist_3) are reordered
+        to ``shoulder_pan_joint, shoulder_lift_joint, elbow_joint,
+        wrist_1_joint, wrist_2_joint, wrist_3_joint``, the order of
+        :class:`skillbank.robots.UR5e`. Other names keep the stored order.
 
     Raises
     ------
     FormatError
         If the file is not HDF5, or lacks the joints or position streams, or a
-        clock is malformed or does not increase (see ``repair_time``).
+        clock is malformed or does not increase (see ``repair_time``), or the
+        joints do not have one column per name of ``joint_names``.
 
     Examples
     --------
     >>> demo = read_robot_h5("seed/three_button_pressing_demo.h5")  # doctest: +SKIP
     >>> demo["joints"].shape  # doctest: +SKIP
     (4099, 6)
+    >>> demo.metadata["joint_names"][0]  # doctest: +SKIP
+    'shoulder_pan_joint'
     """
     import h5py  # slow to import; only when an HDF5 file is read
 
     check_repair_time(repair_time)
+    joint_names = _check_joint_names(joint_names)
     p = as_file(path)
     expect_magic(p, HDF5_MAGIC, "HDF5 content")
     with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
         raw = {name: _read_stream(p, h5, name) for name in ROBOT_STREAMS}
     raw = {name: value for name, value in raw.items() if value is not None}
+    order, names = _joint_order(p, raw["joints"][1].shape[1], joint_names)
+    raw["joints"] = (raw["joints"][0], raw["joints"][1][:, order])
 
     # Epoch seconds (~1.7e9) leave ~1e-7 s of float resolution; subtracting the
     # whole seconds first keeps the nanoseconds exact.
@@ -124,7 +173,7 @@ def read_robot_h5(path, *, repair_time=None) -> Demonstration:
         # Joint angles are stored wrapped to (-pi, pi]; a jump of 2 pi is not motion.
         clocked[name] = (t_k, np.unwrap(data, axis=0) if name == "joints" else data)
 
-    metadata = {"source": str(p), "format": "robot-h5", "t0": s0 + start}
+    metadata = {"source": str(p), "format": "robot-h5", "t0": s0 + start, "joint_names": names}
     # Only the reference clock's drops change the number of samples.
     if dropped["joints"]:
         metadata["dropped_samples"] = dropped["joints"]

@@ -1,0 +1,24 @@
+"""Robot models: forward and inverse kinematics, joint limits and singularities, behind one interface.
+
+:class:`RobotModel` is the interface (poses as position and scalar-last
+quaternion; joints in kinematic-chain order); :class:`UR5e` is built in;
+:data:`ROBOTS` names every model and :func:`robot_model` builds one by name.
+:meth:`RobotModel.ik` follows one inverse-kinematics branch along a pose path
+and raises :class:`KinematicsError` (a ``ValueError``) naming the first sample
+it cannot follow and why.
+
+Examples
+--------
+>>> import numpy as np
+>>> from skillbank.robots import robot_model
+>>> robot = robot_model("ur5e")
+>>> position, quaternion = robot.fk([0.0, -1.2, 1.0, -1.4, -1.5, 0.3])
+>>> robot.ik(position, quaternion, q_seed=[0.0, -1.2, 1.0, -1.4, -1.5, 0.3]).round(6).tolist()
+[0.0, -1.2, 1.0, -1.4, -1.5, 0.3]
+"""
+
+from ._base import KinematicsError, RobotModel, Singularity
+from ._registry import ROBOTS, robot_model
+from ._ur5e import UR5E_DH, UR5e
+
+__all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "robot_model"]

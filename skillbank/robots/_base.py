@@ -1,0 +1,407 @@
+"""The robot-model interface: forward kinematics, all inverse-kinematics branches, following one along a path.
+
+A subclass describes one arm in its own base frame and flange frame through
+three methods, :meth:`RobotModel._fk`, :meth:`RobotModel._ik` and
+:meth:`RobotModel._singularity`, and a few class attributes; this class
+does the rest: validation, the user's base and tool frames, choosing a
+branch, keeping it along a path, joint limits and the errors that name the
+sample and the reason.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+
+from ..core._rotations import check_quaternions, matrix_to_quaternion, quaternion_to_matrix
+from ..core._validation import check_array, check_positive, numerical_errors, summarise
+
+__all__ = ["RobotModel", "KinematicsError", "Singularity", "wrap_angle"]
+
+TWO_PI = 2.0 * np.pi
+
+#: Largest deviation from a rigid transform accepted in ``base`` and ``tool`` (orthonormality of the
+#: rotation, the last row): tighter than any printed matrix needs, looser than round-off.
+_RIGID_TOLERANCE = 1e-6
+
+
+class Singularity(NamedTuple):
+    """One kind of singularity: the measure :meth:`RobotModel._singularity` returns and its threshold."""
+
+    measure: str
+    threshold: float
+
+
+class KinematicsError(ValueError):
+    """A pose path the robot cannot follow.
+
+    Attributes
+    ----------
+    index : int
+        The first sample that fails.
+    reason : str
+        ``"unreachable"``, ``"singularity"``, ``"branch flip"``, ``"jump"`` or ``"joint limit"``.
+    """
+
+    def __init__(self, message: str, *, index: int, reason: str):
+        super().__init__(message)
+        self.index = index
+        self.reason = reason
+
+
+def wrap_angle(a):
+    """Angles wrapped into [-pi, pi).
+
+    Examples
+    --------
+    >>> wrap_angle(np.array([3 * np.pi / 2, -np.pi])).round(6).tolist()
+    [-1.570796, -3.141593]
+    """
+    return (np.asarray(a, dtype=float) + np.pi) % TWO_PI - np.pi
+
+
+def _check_rigid(value, name: str) -> np.ndarray:
+    if value is None:
+        return np.eye(4)
+    T = check_array(value, name=name, ndim=2)
+    if T.shape != (4, 4):
+        raise ValueError(f"{name}: expected a 4 x 4 homogeneous transform, got shape {T.shape}")
+    R = T[:3, :3]
+    if (np.abs(R.T @ R - np.eye(3)).max() > _RIGID_TOLERANCE or abs(np.linalg.det(R) - 1) > _RIGID_TOLERANCE
+            or np.abs(T[3] - [0, 0, 0, 1]).max() > _RIGID_TOLERANCE):
+        raise ValueError(f"{name}: expected a rigid transform (a rotation matrix and a translation, last row "
+                         f"0 0 0 1), got {np.array2string(T, precision=4, separator=',')}")
+    return T
+
+
+def _inverse_rigid(T: np.ndarray) -> np.ndarray:
+    inv = np.eye(4)
+    inv[:3, :3] = T[:3, :3].T
+    inv[:3, 3] = -T[:3, :3].T @ T[:3, 3]
+    return inv
+
+
+class RobotModel(ABC):
+    """A serial arm: forward kinematics, analytic inverse kinematics with all its branches, joint limits.
+
+    Poses are the tool's position (metres) and orientation (unit quaternion,
+    scalar-last) in the world frame; the world frame is the robot's base frame
+    moved by ``base``, the tool is the flange moved by ``tool``.
+
+    Parameters
+    ----------
+    base : array-like of shape (4, 4), optional
+        The robot's base frame in the world frame (default: they coincide).
+    tool : array-like of shape (4, 4), optional
+        The tool frame in the flange frame (default: the flange).
+    singularity_thresholds : mapping of str to float, optional
+        Thresholds replacing the class's (``SINGULARITIES``), by kind.
+    max_step : float, default=0.5
+        Largest change of any joint (radians) between consecutive samples of
+        a path; a bigger one is a branch flip or a jump (see :meth:`ik`).
+
+    Notes
+    -----
+    A subclass sets ``name``, ``joint_names``, ``lower`` and ``upper``
+    (limits, radians), ``branch_names``, ``home`` (the configuration whose
+    branch :meth:`ik` takes when given neither a branch nor a seed) and
+    ``SINGULARITIES``, and implements :meth:`_fk`, :meth:`_ik` and
+    :meth:`_singularity`.
+    """
+
+    name: ClassVar[str]
+    joint_names: ClassVar[tuple[str, ...]]
+    lower: ClassVar[tuple[float, ...]]
+    upper: ClassVar[tuple[float, ...]]
+    branch_names: ClassVar[tuple[str, ...]]
+    home: ClassVar[tuple[float, ...]]
+    SINGULARITIES: ClassVar[dict[str, Singularity]]
+
+    def __init__(self, *, base=None, tool=None, singularity_thresholds=None, max_step=0.5):
+        self.base = _check_rigid(base, "base")
+        self.tool = _check_rigid(tool, "tool")
+        self._base_inv, self._tool_inv = _inverse_rigid(self.base), _inverse_rigid(self.tool)
+        if singularity_thresholds is not None and not isinstance(singularity_thresholds, Mapping):
+            raise ValueError("singularity_thresholds: expected a mapping of kind to threshold, got "
+                             f"{singularity_thresholds!r}")
+        given = dict(singularity_thresholds or {})
+        unknown = sorted(set(given) - set(self.SINGULARITIES))
+        if unknown:
+            raise ValueError(f"singularity_thresholds: expected kinds among {list(self.SINGULARITIES)}, "
+                             f"got {summarise(map(repr, unknown))}")
+        self.singularity_thresholds = {
+            kind: check_positive(given.get(kind, s.threshold), name=f"singularity_thresholds[{kind!r}]",
+                                 allow_zero=True)
+            for kind, s in self.SINGULARITIES.items()}
+        self.max_step = check_positive(max_step, name="max_step")
+
+    def __repr__(self) -> str:
+        changed = [name for name, same in (
+            ("base", np.array_equal(self.base, np.eye(4))), ("tool", np.array_equal(self.tool, np.eye(4))),
+            ("singularity_thresholds", all(self.singularity_thresholds[k] == s.threshold
+                                           for k, s in self.SINGULARITIES.items())),
+            ("max_step", self.max_step == 0.5)) if not same]
+        return f"{type(self).__name__}({', '.join(f'{name}=...' for name in changed)})"
+
+    # ------------------------------------------------------------------ to implement
+
+    @abstractmethod
+    def _fk(self, q: np.ndarray) -> np.ndarray:
+        """Flange poses ``(n, 4, 4)`` in the robot's base frame for joints ``q (n, n_joints)``."""
+
+    @abstractmethod
+    def _ik(self, T: np.ndarray) -> np.ndarray:
+        """Every branch's joints ``(n, n_branches, n_joints)`` in [-pi, pi) for flange poses ``T (n, 4, 4)``.
+
+        NaN where a branch has no solution.
+        """
+
+    @abstractmethod
+    def _singularity(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Per kind of ``SINGULARITIES``, its measure ``(n,)`` at joints ``q``: 0 at the singularity."""
+
+    # ------------------------------------------------------------------ the interface
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints."""
+        return len(self.joint_names)
+
+    @property
+    def limits(self) -> np.ndarray:
+        """Joint limits ``(n_joints, 2)``: lower and upper, radians."""
+        return np.column_stack([self.lower, self.upper]).astype(float)
+
+    def check_joints(self, q, *, name: str = "q") -> np.ndarray:
+        """Joints as a float array ``(n, n_joints)`` (one configuration becomes one row), else ValueError."""
+        arr = check_array(q, name=name, ndim=(1, 2))
+        if arr.shape[-1] != self.n_joints:
+            raise ValueError(f"{name}: expected {self.n_joints} joint values per sample "
+                             f"({', '.join(self.joint_names)}), got shape {arr.shape}")
+        return np.atleast_2d(arr)
+
+    def _poses(self, position, quaternion) -> tuple[np.ndarray, bool]:
+        """Validated world poses as flange transforms in the base frame, and whether one pose was given."""
+        p = check_array(position, name="position", ndim=(1, 2))
+        q = check_quaternions(quaternion, name="quaternion")
+        if p.shape[-1] != 3:
+            raise ValueError(f"position: expected 3 coordinates per sample, got shape {p.shape}")
+        if p.ndim != q.ndim or np.atleast_2d(p).shape[0] != np.atleast_2d(q).shape[0]:
+            raise ValueError(f"quaternion: expected one per position (shape {p.shape[:-1] + (4,)}), got "
+                             f"shape {q.shape}")
+        single = p.ndim == 1
+        p, q = np.atleast_2d(p), np.atleast_2d(q)
+        T = np.zeros((p.shape[0], 4, 4))
+        T[:, :3, :3] = quaternion_to_matrix(q)
+        T[:, :3, 3] = p
+        T[:, 3, 3] = 1.0
+        return self._base_inv @ T @ self._tool_inv, single
+
+    def fk(self, q):
+        """The tool pose for joints ``q``.
+
+        Parameters
+        ----------
+        q : array-like of shape (n, n_joints) or (n_joints,)
+            Joint angles, radians, in :attr:`joint_names` order.
+
+        Returns
+        -------
+        position : ndarray of shape (n, 3) or (3,)
+        quaternion : ndarray of shape (n, 4) or (4,)
+            Scalar-last, ``w >= 0``.
+        """
+        single = np.ndim(q) == 1
+        q = self.check_joints(q)
+        with numerical_errors(f"{self.name} forward kinematics"):
+            T = self.base @ self._fk(q) @ self.tool
+            position, quaternion = T[:, :3, 3], matrix_to_quaternion(T[:, :3, :3])
+        return (position[0], quaternion[0]) if single else (position, quaternion)
+
+    def ik_all(self, position, quaternion) -> np.ndarray:
+        """Every branch's joints for each pose, NaN where a branch cannot reach it.
+
+        Parameters
+        ----------
+        position : array-like of shape (n, 3) or (3,)
+        quaternion : array-like of shape (n, 4) or (4,)
+            Scalar-last unit quaternions.
+
+        Returns
+        -------
+        ndarray of shape (n, n_branches, n_joints) or (n_branches, n_joints)
+            Angles in [-pi, pi), branches in :attr:`branch_names` order.
+        """
+        T, single = self._poses(position, quaternion)
+        with numerical_errors(f"{self.name} inverse kinematics"):
+            sols = self._ik(T)
+        return sols[0] if single else sols
+
+    def branch_index(self, branch) -> int:
+        """The index of ``branch``, given as an index or one of :attr:`branch_names`."""
+        if isinstance(branch, (int, np.integer)) and not isinstance(branch, bool) \
+                and 0 <= branch < len(self.branch_names):
+            return int(branch)
+        if isinstance(branch, str) and branch in self.branch_names:
+            return self.branch_names.index(branch)
+        raise ValueError(f"branch: expected one of {list(self.branch_names)} or an index below "
+                         f"{len(self.branch_names)}, got {branch!r}")
+
+    def branch_of(self, q) -> np.ndarray:
+        """The branch of each configuration ``q``: the branch whose solution of ``fk(q)`` is nearest ``q``.
+
+        Returns
+        -------
+        ndarray of int, shape (n,)
+        """
+        q = self.check_joints(q)
+        with numerical_errors(f"{self.name} branch"):
+            sols = self._ik(self._fk(q))
+            return _nearest_branch(sols, q)
+
+    def singularity(self, q) -> dict[str, np.ndarray]:
+        """Each kind of singularity's measure at joints ``q`` (``(n,)``; it is 0 at the singularity)."""
+        q = self.check_joints(q)
+        with numerical_errors(f"{self.name} singularity"):
+            return self._singularity(q)
+
+    def ik(self, position, quaternion, *, branch=None, q_seed=None) -> np.ndarray:
+        """Joints along a pose path, on one branch, continuous and within the limits.
+
+        The branch is ``branch`` if given; else the one whose solution at the
+        first pose is nearest ``q_seed`` (default :attr:`home`). It is kept
+        along the whole path. Each joint is continuous: the solutions are
+        unwrapped (each sample moved by a multiple of 2 pi to be nearest the
+        previous one), and the whole joint path is then moved by the multiple
+        of 2 pi that starts it nearest the seed while staying within the
+        limits.
+
+        Parameters
+        ----------
+        position : array-like of shape (n, 3) or (3,)
+        quaternion : array-like of shape (n, 4) or (4,)
+            Scalar-last unit quaternions.
+        branch : int or str, optional
+            An index or a name in :attr:`branch_names`.
+        q_seed : array-like of shape (n_joints,), optional
+            A configuration to start near (e.g. the robot's current one).
+
+        Returns
+        -------
+        ndarray of shape (n, n_joints) or (n_joints,)
+
+        Raises
+        ------
+        KinematicsError
+            A ``ValueError`` naming the first sample that fails and why: the
+            pose is out of the branch's reach, the path comes within a
+            singularity's threshold, a joint would move by more than
+            ``max_step`` in one sample (onto another branch: a branch flip;
+            onto none: a jump in the path), or a joint would leave its limits.
+        """
+        T, single = self._poses(position, quaternion)
+        seed = self.check_joints(self.home if q_seed is None else q_seed, name="q_seed")
+        if seed.shape[0] != 1:
+            raise ValueError(f"q_seed: expected one configuration of {self.n_joints} joints, got shape "
+                             f"{np.shape(q_seed)}")
+        seed = seed[0]
+        with numerical_errors(f"{self.name} inverse kinematics"):
+            sols = self._ik(T)
+            b = self._choose_branch(sols, seed, branch)
+            path = self._follow(sols, b, seed)
+        return path[0] if single else path
+
+    # ------------------------------------------------------------------ following a path
+
+    def _choose_branch(self, sols: np.ndarray, seed: np.ndarray, branch) -> int:
+        if branch is not None:
+            return self.branch_index(branch)
+        first = sols[0]
+        if np.isnan(first).all():
+            raise KinematicsError("position: sample 0 is out of the arm's reach (no inverse-kinematics "
+                                  "solution on any branch)", index=0, reason="unreachable")
+        return int(_nearest_branch(first[None], seed[None])[0])
+
+    def _follow(self, sols: np.ndarray, b: int, seed: np.ndarray) -> np.ndarray:
+        name = self.branch_names[b]
+        path = sols[:, b]
+        missing = np.flatnonzero(np.isnan(path).any(axis=1))
+        m = int(missing[0]) if missing.size else path.shape[0]
+        path = np.unwrap(path[:m], axis=0)
+        failures = []  # (index, priority, message, reason): the earliest sample wins, ties by priority
+        if m < sols.shape[0]:
+            others = [self.branch_names[k] for k in np.flatnonzero(~np.isnan(sols[m]).any(axis=1))]
+            where = f"on branch {name!r} (reachable on {summarise(map(repr, others))})" if others \
+                else "of the arm's reach (no solution on any branch)"
+            failures.append((m, 0, f"position: sample {m} is out {where}", "unreachable"))
+        for kind, measure in self._singularity(path).items():
+            threshold = self.singularity_thresholds[kind]
+            near = np.flatnonzero(measure < threshold)
+            if near.size:
+                k = int(near[0])
+                failures.append((k, 1, f"position: sample {k} is near the {kind} singularity "
+                                 f"({self.SINGULARITIES[kind].measure} = {float(measure[k]):.3g} < "
+                                 f"{threshold:g}; {near.size} such samples)", "singularity"))
+        failures.extend(self._jumps(sols, path, b))
+        path, outside = self._fit_limits(path, seed, name)
+        failures.extend(outside)
+        if failures:
+            k, _, message, reason = min(failures, key=lambda f: (f[0], f[1]))
+            raise KinematicsError(message, index=k, reason=reason)
+        return path
+
+    def _jumps(self, sols: np.ndarray, path: np.ndarray, b: int) -> list:
+        steps = np.abs(np.diff(path, axis=0)).max(axis=1)
+        big = np.flatnonzero(steps > self.max_step)
+        if not big.size:
+            return []
+        k = int(big[0]) + 1
+        j = int(np.argmax(np.abs(path[k] - path[k - 1])))
+        moved = f"joint {self.joint_names[j]!r} would move by {float(steps[k - 1]):.3g} rad in one sample"
+        near = np.abs(wrap_angle(sols[k] - path[k - 1])).max(axis=1)
+        near[b] = np.inf
+        near = np.where(np.isnan(near), np.inf, near)
+        if near.min() <= self.max_step:
+            other = self.branch_names[int(np.argmin(near))]
+            message = (f"position: sample {k} would flip the branch from {self.branch_names[b]!r} to "
+                       f"{other!r} ({moved}, more than max_step={self.max_step:g}; the path crosses a "
+                       "singularity between samples)")
+            return [(k, 2, message, "branch flip")]
+        message = (f"position: sample {k}: {moved} on every branch (more than max_step={self.max_step:g}; "
+                   "the pose path jumps)")
+        return [(k, 2, message, "jump")]
+
+    def _fit_limits(self, path: np.ndarray, seed: np.ndarray, name: str):
+        """``path`` moved by the multiple of 2 pi per joint that starts nearest ``seed`` within the limits.
+
+        Returns the moved path and the failure (a list of at most one) when no multiple keeps a joint
+        within its limits along the whole path.
+        """
+        if not path.shape[0]:
+            return path, []
+        lo, hi = self.limits.T
+        first = np.ceil((lo - path.min(axis=0)) / TWO_PI - 1e-12)  # fewest turns keeping the minimum in
+        last = np.floor((hi - path.max(axis=0)) / TWO_PI + 1e-12)  # most turns keeping the maximum in
+        preferred = np.round((seed - path[0]) / TWO_PI)
+        bad = np.flatnonzero(first > last)
+        if not bad.size:
+            return path + TWO_PI * np.clip(preferred, first, last), []
+        # No multiple fits: start within the limits nearest the seed and report where the joint leaves them.
+        j = int(bad[0])
+        turns = np.clip(preferred[j], np.ceil((lo[j] - path[0, j]) / TWO_PI - 1e-12),
+                        np.floor((hi[j] - path[0, j]) / TWO_PI + 1e-12))
+        shifted = path[:, j] + TWO_PI * turns
+        k = int(np.flatnonzero((shifted < lo[j]) | (shifted > hi[j]))[0])
+        message = (f"position: sample {k}: joint {self.joint_names[j]!r} would leave its limits "
+                   f"[{lo[j]:.4g}, {hi[j]:.4g}] on branch {name!r} (the path turns it through "
+                   f"{float(np.ptp(path[:, j])):.4g} rad)")
+        return path, [(k, 3, message, "joint limit")]
+
+
+def _nearest_branch(sols: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Per sample, the branch whose solution (equal angles modulo 2 pi) is nearest ``q``."""
+    distance = np.linalg.norm(wrap_angle(sols - q[:, None, :]), axis=2)
+    return np.argmin(np.where(np.isnan(distance), np.inf, distance), axis=1)

@@ -1,0 +1,173 @@
+"""The Universal Robots UR5e: Denavit-Hartenberg forward kinematics and the analytic inverse, 8 branches.
+
+Frames follow the manufacturer's published DH table (standard DH,
+``T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``): frame 0 is UR's ``base``
+frame (the one the controller and the ``base`` frame of the ROS driver
+report poses in; ROS's ``base_link`` is it turned by pi about z) and frame 6
+is the flange (ROS's ``tool0``).
+
+Inverse kinematics, per pose (all poses at once, all branches by
+broadcasting):
+
+1. The wrist centre (frame 5's origin) is ``p5 = p - d6 z6``. It lies ``d4``
+   off the plane of the base axis and the arm, which fixes the base angle
+   up to the side: ``theta1 = atan2(p5y, p5x) +- acos(d4 / r) + pi / 2``
+   with ``r`` the wrist centre's distance from the base axis (shoulder
+   left / right; unreachable when ``r < d4``).
+2. The shoulder axis ``z1 = (sin theta1, -cos theta1, 0)`` gives
+   ``cos theta5 = z6 . z1`` (wrist up / down: the sign of ``theta5``), and
+   ``z1 . x6 = sin theta5 cos theta6``, ``z1 . y6 = -sin theta5 sin theta6``
+   give ``theta6``.
+3. With those, ``theta2 + theta3 + theta4`` is the angle of
+   ``sin theta6 x6 + cos theta6 y6`` in the arm's plane, which places
+   wrist 1's centre; the planar two-link arm to it gives ``theta3`` (elbow up
+   / down: its sign) and ``theta2``, and ``theta4`` is what is left.
+
+The elbow's and the wrist's signs are taken relative to the shoulder's, so that each name keeps its
+geometric meaning on both sides of the base (docs/robots.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._base import RobotModel, Singularity, wrap_angle
+
+__all__ = ["UR5e", "UR5E_DH"]
+
+#: The manufacturer's published UR5e DH parameters: d (m), a (m), alpha (rad), joints 1 to 6.
+UR5E_DH = {
+    "d": (0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996),
+    "a": (0.0, -0.425, -0.3922, 0.0, 0.0, 0.0),
+    "alpha": (np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0),
+}
+
+_D1, _, _, _D4, _D5, _D6 = UR5E_DH["d"]
+_A2, _A3 = UR5E_DH["a"][1:3]
+
+#: Signs of the formulas per branch. Shoulder: the sign in theta1 (left -1, right +1). The elbow's and
+#: the wrist's signs are the shoulder's (up) or the other (down): sin(theta3) R < 0 is "elbow up" and
+#: sin(theta5) R < 0 "wrist up" on either side, R = -sign * sqrt(r^2 - d4^2) (see docs/robots.md).
+_SHOULDER = np.array([-1.0, 1.0])                      # left, right
+_SAME_OPPOSITE = np.array([1.0, -1.0])                 # up: the shoulder's sign, down: the other
+_BRANCHES = tuple(f"shoulder-{s}/elbow-{e}/wrist-{w}"
+                  for s in ("left", "right") for e in ("up", "down") for w in ("up", "down"))
+
+
+def _dh(theta: np.ndarray, i: int) -> np.ndarray:
+    """The DH transforms ``(n, 4, 4)`` of joint ``i`` at angles ``theta (n,)``."""
+    d, a, alpha = UR5E_DH["d"][i], UR5E_DH["a"][i], UR5E_DH["alpha"][i]
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    T = np.zeros(theta.shape + (4, 4))
+    T[..., 0, 0], T[..., 0, 1], T[..., 0, 2], T[..., 0, 3] = ct, -st * ca, st * sa, a * ct
+    T[..., 1, 0], T[..., 1, 1], T[..., 1, 2], T[..., 1, 3] = st, ct * ca, -ct * sa, a * st
+    T[..., 2, 1], T[..., 2, 2], T[..., 2, 3] = sa, ca, d
+    T[..., 3, 3] = 1.0
+    return T
+
+
+class UR5e(RobotModel):
+    """The UR5e arm: forward kinematics, 8 inverse-kinematics branches, limits and singularities.
+
+    Joints in kinematic-chain order (``joint_names``), radians; limits
+    +-2 pi, the elbow +-pi. See :class:`~skillbank.robots.RobotModel` for the
+    parameters (``base``, ``tool``, ``singularity_thresholds``,
+    ``max_step``) and the methods.
+
+    A pose has up to 8 inverse-kinematics solutions, ``branch_names``
+    ``shoulder-{left,right}/elbow-{up,down}/wrist-{up,down}`` (docs/robots.md
+    gives their geometry). Poses are of the flange in UR's ``base`` frame
+    unless ``base`` and ``tool`` say otherwise.
+
+    The three singularities are the factors of the Jacobian's determinant
+    (``a2 a3 sin(theta3) sin(theta5) R``); each measure is compared with its
+    threshold:
+
+    - ``shoulder``: ``|R|`` (m), ``R = a2 cos theta2 + a3 cos(theta2 + theta3)
+      + d5 sin(theta2 + theta3 + theta4)``, the wrist centre's distance from
+      the plane through the base axis parallel to the shoulder axis;
+      threshold 0.05 m;
+    - ``elbow``: ``|sin theta3|``, the arm stretched or folded; threshold
+      0.05 (2.9 degrees);
+    - ``wrist``: ``|sin theta5|``, the wrist 1 and wrist 3 axes parallel;
+      threshold 0.05.
+
+    Examples
+    --------
+    >>> robot = UR5e()
+    >>> position, quaternion = robot.fk(robot.home)
+    >>> position.round(4).tolist()
+    [-0.4919, -0.1333, 0.4879]
+    >>> robot.branch_names[robot.branch_of(robot.home)[0]]
+    'shoulder-right/elbow-up/wrist-down'
+    >>> bool(np.allclose(robot.ik(position, quaternion), robot.home))
+    True
+    """
+
+    name = "ur5e"
+    joint_names = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                   "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
+    lower = (-2 * np.pi, -2 * np.pi, -np.pi, -2 * np.pi, -2 * np.pi, -2 * np.pi)
+    upper = (2 * np.pi, 2 * np.pi, np.pi, 2 * np.pi, 2 * np.pi, 2 * np.pi)
+    branch_names = _BRANCHES
+    #: The usual ready pose: upper arm up, forearm level, tool pointing down.
+    home = (0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0.0)
+    SINGULARITIES = {
+        "shoulder": Singularity("|R|, the wrist centre's distance (m) from the base-shoulder plane", 0.05),
+        "elbow": Singularity("|sin(elbow)|", 0.05),
+        "wrist": Singularity("|sin(wrist_2)|", 0.05),
+    }
+
+    def _fk(self, q: np.ndarray) -> np.ndarray:
+        T = _dh(q[:, 0], 0)
+        for i in range(1, 6):
+            T = T @ _dh(q[:, i], i)
+        return T
+
+    def _singularity(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        t2, t23, t234 = q[:, 1], q[:, 1] + q[:, 2], q[:, 1] + q[:, 2] + q[:, 3]
+        reach = _A2 * np.cos(t2) + _A3 * np.cos(t23) + _D5 * np.sin(t234)
+        return {"shoulder": np.abs(reach), "elbow": np.abs(np.sin(q[:, 2])), "wrist": np.abs(np.sin(q[:, 4]))}
+
+    def _ik(self, T: np.ndarray) -> np.ndarray:
+        n = T.shape[0]
+        x, y, z, p = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3]
+        p5 = p - _D6 * z
+        # 1. base angle, (n, 2) over the shoulder branches
+        r = np.hypot(p5[:, 0], p5[:, 1])
+        reach_base = r >= _D4 * (1 - 1e-12)
+        phi = np.arccos(np.minimum(_D4 / np.where(reach_base, r, _D4), 1.0))
+        t1 = np.arctan2(p5[:, 1], p5[:, 0])[:, None] + _SHOULDER * phi[:, None] + np.pi / 2
+        s1, c1 = np.sin(t1), np.cos(t1)
+
+        def along_z1(v):  # (n, 2): v . z1 per shoulder branch
+            return v[:, 0, None] * s1 - v[:, 1, None] * c1
+
+        def along_x1(v):  # v . x1, x1 = (cos theta1, sin theta1, 0) the arm plane's horizontal
+            return v[..., 0] * c1[..., None] + v[..., 1] * s1[..., None]
+
+        # 2. wrist angles, (n, 2, 2) over shoulder x wrist
+        wrist_sign = _SHOULDER[:, None] * _SAME_OPPOSITE[None, :]
+        t5 = wrist_sign * np.arccos(np.clip(along_z1(z), -1.0, 1.0))[:, :, None]
+        sign5 = np.sign(np.sin(t5))  # 0 exactly at the singularity: theta6 is then free and taken as 0
+        t6 = np.arctan2(-sign5 * along_z1(y)[:, :, None], sign5 * along_z1(x)[:, :, None])
+        # 3. theta2 + theta3 + theta4 and the planar two-link arm to wrist 1's centre
+        u = np.sin(t6)[..., None] * x[:, None, None, :] + np.cos(t6)[..., None] * y[:, None, None, :]
+        t234 = np.arctan2(-along_x1(u), u[..., 2])
+        px = along_x1(np.broadcast_to(p5[:, None, None, :], u.shape)) - _D5 * np.sin(t234)
+        py = p5[:, 2, None, None] - _D1 + _D5 * np.cos(t234)
+        c3 = (px**2 + py**2 - _A2**2 - _A3**2) / (2 * _A2 * _A3)
+        reach_arm = np.abs(c3) <= 1 + 1e-12
+        # (n, 2, 2, 2) over shoulder x elbow x wrist
+        elbow_sign = (_SHOULDER[:, None] * _SAME_OPPOSITE[None, :])[None, :, :, None]
+        t3 = elbow_sign * np.arccos(np.clip(c3, -1.0, 1.0))[:, :, None, :]
+        px, py, t234 = px[:, :, None, :], py[:, :, None, :], t234[:, :, None, :]
+        t2 = np.arctan2(py, px) - np.arctan2(_A3 * np.sin(t3), _A2 + _A3 * np.cos(t3))
+        t4 = t234 - t2 - t3
+        shape = (n, 2, 2, 2)
+        t1, t5, t6 = t1[:, :, None, None], t5[:, :, None, :], t6[:, :, None, :]
+        sols = np.stack([np.broadcast_to(a, shape) for a in (t1, t2, t3, t4, t5, t6)], axis=-1)
+        sols = wrap_angle(sols)
+        ok = reach_base[:, None, None, None] & reach_arm[:, :, None, :]
+        return np.where(ok[..., None], sols, np.nan).reshape(n, 8, 6)
