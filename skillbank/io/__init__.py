@@ -1,9 +1,12 @@
 """Reading and writing demonstrations.
 
 Readers for the robot multi-stream HDF5 recordings, handwriting HDF5 files,
-the RAIL benchmark (MATLAB v5) and the LASA dataset; generic CSV and NPZ
-readers and writers; JSON output for results; and format detection with
-:func:`load` / :func:`load_all`. Every reading problem raises
+the RAIL benchmark (MATLAB v5) and the LASA dataset; what labs record: ROS 1
+and ROS 2 bags and MCAP files (:func:`read_rosbag`, extra ``skillbank[ros]``),
+LeRobot datasets (:func:`read_lerobot`, extra ``skillbank[lerobot]``) and
+robomimic HDF5 files (:func:`read_robomimic`); generic CSV and NPZ readers and
+writers; JSON output for results; and format detection with :func:`load` /
+:func:`load_all`. Every reading problem raises
 :class:`FormatError`, a :class:`ValueError` with a one-line message
 ``cannot read '<path>': <reason>``.
 
@@ -20,8 +23,12 @@ from ._errors import FormatError
 from ._folders import load_folder, load_positions
 from ._handwriting_h5 import read_handwriting_h5
 from ._lasa import lasa_shapes, load_lasa
+from ._lerobot import read_lerobot, select_episodes
 from ._rail import load_rail, read_rail_file
+from ._robomimic import read_robomimic
 from ._robot_h5 import read_robot_h5
+from ._ros import read_rosbag
+from ._ros_messages import parse_topics
 from ._tabular import (
     read_csv,
     read_feature_matrix,
@@ -36,6 +43,11 @@ __all__ = [
     "FormatError",
     "read_robot_h5",
     "read_handwriting_h5",
+    "read_rosbag",
+    "parse_topics",
+    "read_lerobot",
+    "read_robomimic",
+    "select_episodes",
     "read_rail_file",
     "load_rail",
     "load_lasa",

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import inspect
+from pathlib import Path
+
 import numpy as np
 
 from ..core import Demonstration
@@ -17,17 +20,24 @@ from ._errors import (
     reading,
 )
 from ._handwriting_h5 import HANDWRITING_GROUPS, read_handwriting_h5
+from ._lerobot import LEROBOT_INFO, read_lerobot
 from ._rail import read_rail_file
+from ._robomimic import ROBOMIMIC_GROUP, is_robomimic, read_robomimic
 from ._robot_h5 import ROBOT_STREAMS, read_robot_h5
+from ._ros import ROS2_METADATA, ROS_FILES, read_rosbag, ros_kind
 from ._tabular import read_csv, read_npz
 
 __all__ = ["detect_format", "load", "load_all", "FORMATS"]
 
-FORMATS = ("robot-h5", "handwriting-h5", "rail-mat", "csv", "npz")
+FORMATS = ("robot-h5", "handwriting-h5", "robomimic-h5", "rail-mat", "csv", "npz", "ros1-bag", "ros2-bag",
+           "mcap", "lerobot")
 _EXTENSIONS = {
     ".h5": "hdf5", ".hdf5": "hdf5", ".hdf": "hdf5",
     ".mat": "mat", ".npz": "npz", ".csv": "csv", ".txt": "csv",
 }
+# Recordings read by the optional readers, which take options of their own (load_all's reader_options).
+_RECORDINGS = {"ros1-bag": read_rosbag, "ros2-bag": read_rosbag, "mcap": read_rosbag, "lerobot": read_lerobot,
+               "robomimic-h5": read_robomimic}
 
 
 def _hdf5_kind(path) -> str:
@@ -35,14 +45,18 @@ def _hdf5_kind(path) -> str:
 
     with reading(path, "corrupt HDF5 file"), h5py.File(path, "r") as h5:
         groups = sorted(k for k in h5.keys() if isinstance(h5[k], h5py.Group))
+        robomimic = is_robomimic(h5)
     robot_group = ROBOT_STREAMS["joints"][0]
     if robot_group in groups:
         return "robot-h5"
     if any(g in groups for g in HANDWRITING_GROUPS):
         return "handwriting-h5"
+    if robomimic:
+        return "robomimic-h5"
     raise FormatError(
-        path, f"expected a robot recording (group '{robot_group}') or handwriting "
-        f"(groups {list(HANDWRITING_GROUPS)}), found groups {groups}"
+        path, f"expected a robot recording (group '{robot_group}'), handwriting "
+        f"(groups {list(HANDWRITING_GROUPS)}) or robomimic (group '{ROBOMIMIC_GROUP}' with demo_N groups), "
+        f"found groups {groups}"
     )
 
 
@@ -63,6 +77,22 @@ def _looks_like_csv(head: bytes) -> bool:
     return True
 
 
+def _folder_kind(path):
+    """``"ros2-bag"`` or ``"lerobot"`` for a folder of either kind; None for anything but a folder."""
+    try:
+        p = Path(path)
+    except TypeError:
+        return None  # as_file names the bad argument
+    if not p.is_dir():
+        return None
+    if (p / ROS2_METADATA).is_file():
+        return "ros2-bag"
+    if (p / LEROBOT_INFO).is_file():
+        return "lerobot"
+    raise FormatError(p, f"expected a file, found a directory that is neither a ROS 2 bag (no "
+                      f"{ROS2_METADATA}) nor a LeRobot dataset (no {LEROBOT_INFO})")
+
+
 def detect_format(path) -> str:
     """Name the format of a demonstration file, from its extension and content.
 
@@ -73,26 +103,35 @@ def detect_format(path) -> str:
     Returns
     -------
     str
-        One of ``"robot-h5"``, ``"handwriting-h5"`` (both ``.h5``/``.hdf5``,
-        told apart by their groups), ``"rail-mat"`` (``.mat``), ``"csv"``
-        (``.csv``/``.txt``) or ``"npz"``.
+        One of ``"robot-h5"``, ``"handwriting-h5"``, ``"robomimic-h5"`` (all
+        ``.h5``/``.hdf5``, told apart by their groups), ``"rail-mat"``
+        (``.mat``), ``"csv"`` (``.csv``/``.txt``), ``"npz"``, ``"ros1-bag"``
+        (``.bag``), ``"ros2-bag"`` (a folder with ``metadata.yaml``, or a
+        ``.db3`` file), ``"mcap"`` (``.mcap``) or ``"lerobot"`` (a folder with
+        ``meta/info.json``).
 
     Raises
     ------
     FormatError
-        If the file is missing or a directory, the extension is unknown, or
-        the content does not match the extension.
+        If the file is missing, a folder of neither kind, the extension is
+        unknown, or the content does not match the extension.
 
     Examples
     --------
     >>> detect_format("seed/r_shape.h5")  # doctest: +SKIP
     'handwriting-h5'
     """
+    folder = _folder_kind(path)
+    if folder is not None:
+        return folder
     p = as_file(path)
+    if p.suffix.lower() in ROS_FILES:
+        return ros_kind(p)
     kind = _EXTENSIONS.get(p.suffix.lower())
     if kind is None:
         known = ", ".join(sorted(_EXTENSIONS))
-        raise FormatError(p, f"unknown extension {p.suffix or '(none)'!r}: expected one of {known}")
+        raise FormatError(p, f"unknown extension {p.suffix or '(none)'!r}: expected one of {known}, a "
+                          f"recording ({', '.join(ROS_FILES)}) or a folder (ROS 2 bag, LeRobot dataset)")
     if kind == "hdf5":
         expect_magic(p, HDF5_MAGIC, "HDF5 content")
         return _hdf5_kind(p)
@@ -110,19 +149,38 @@ def detect_format(path) -> str:
     return "csv"
 
 
-def load_all(path, *, group: str = "normalized", repair_time=None) -> list[Demonstration]:
+def _recording_options(fmt: str, reader_options) -> dict:
+    """The keyword arguments of ``reader_options`` that the reader of ``fmt`` takes."""
+    options = dict(reader_options or {})
+    taken = {kind: set(inspect.signature(read).parameters) - {"path"} for kind, read in _RECORDINGS.items()}
+    known = set().union(*taken.values())
+    unknown = sorted(k for k in options if k not in known)
+    if unknown:
+        raise ValueError(f"reader_options: expected names among {sorted(known)}, got unknown {unknown}")
+    return {k: v for k, v in options.items() if k in taken.get(fmt, ())}
+
+
+def load_all(path, *, group: str = "normalized", repair_time=None,
+             reader_options=None) -> list[Demonstration]:
     """Read every demonstration in a file of any supported format.
 
     Parameters
     ----------
     path : str or path-like
+        A file, or a folder holding a ROS 2 bag or a LeRobot dataset.
     group : str, default="normalized"
         For handwriting HDF5 files, which group to read.
     repair_time : {None, "drop"}, default=None
         Time stamps that repeat are an error naming the stream and the sample;
         ``"drop"`` drops the repeating samples instead (keeping the first) and
         records ``metadata["dropped_samples"]``. Passed to the robot HDF5,
-        handwriting HDF5 and RAIL readers; CSV and NPZ files must be clean.
+        handwriting HDF5, RAIL and ROS bag readers; CSV and NPZ files must be clean.
+    reader_options : mapping, optional
+        Options for the recording readers (:func:`read_rosbag`,
+        :func:`read_lerobot`, :func:`read_robomimic`), for example
+        ``{"topics": ["/joint_states=joints"], "episodes": "0:10"}``. Each
+        reader takes the ones it knows, so one set serves a mixed list of
+        files; a name no reader knows is a ValueError.
 
     Returns
     -------
@@ -139,6 +197,11 @@ def load_all(path, *, group: str = "normalized", repair_time=None) -> list[Demon
     5
     """
     fmt = detect_format(path)
+    options = _recording_options(fmt, reader_options)
+    if fmt in _RECORDINGS:
+        if fmt not in ("lerobot", "robomimic-h5"):  # the bag reader checks its clocks like the others
+            options.setdefault("repair_time", repair_time)
+        return _RECORDINGS[fmt](path, **options)
     if fmt == "robot-h5":
         return [read_robot_h5(path, repair_time=repair_time)]
     if fmt == "handwriting-h5":
@@ -150,18 +213,22 @@ def load_all(path, *, group: str = "normalized", repair_time=None) -> list[Demon
     return [read_csv(path)]
 
 
-def load(path, *, index=None, group: str = "normalized", repair_time=None) -> Demonstration:
+def load(path, *, index=None, group: str = "normalized", repair_time=None,
+         reader_options=None) -> Demonstration:
     """Read one demonstration from a file of any supported format.
 
     Parameters
     ----------
     path : str or path-like
     index : int, optional
-        Which demonstration in a multi-demonstration file (RAIL, handwriting);
+        Which demonstration in a multi-demonstration file (RAIL, handwriting,
+        a split bag, a LeRobot or robomimic dataset);
         default 0. Negative values count from the end.
     group : str, default="normalized"
         For handwriting HDF5 files, which group to read.
     repair_time : {None, "drop"}, default=None
+        See :func:`load_all`.
+    reader_options : mapping, optional
         See :func:`load_all`.
 
     Returns
@@ -179,7 +246,7 @@ def load(path, *, index=None, group: str = "normalized", repair_time=None) -> De
     >>> load("rail/REACHING/1.mat", index=2).metadata["index"]  # doctest: +SKIP
     2
     """
-    demos = load_all(path, group=group, repair_time=repair_time)
+    demos = load_all(path, group=group, repair_time=repair_time, reader_options=reader_options)
     if index is None:
         return demos[0]
     n = len(demos)

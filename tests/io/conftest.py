@@ -95,3 +95,39 @@ def handwriting_h5(tmp_path):
         return path
 
     return build
+
+
+@pytest.fixture(scope="session")
+def uniform_three_button(data_dir, tmp_path_factory):
+    """The three-button demonstration resampled onto a uniform 100 Hz clock, and written as a robot HDF5 file.
+
+    Returns ``{"rate", "t", "streams", "joint_names", "h5"}``: what a LeRobot or
+    robomimic recording of the same motion holds (no clock of its own but a
+    frame rate), and the robot HDF5 file of the same samples to compare with.
+    """
+    from skillbank.core import slerp
+    from skillbank.io import read_robot_h5
+
+    demo = read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
+    rate = 100.0
+    t = np.arange(int(demo.t[-1] * rate) + 1) / rate
+    streams = {name: slerp(demo.t, Y, t) if name == "orientation" else
+               np.column_stack([np.interp(t, demo.t, col) for col in Y.T])
+               for name, Y in demo.streams.items()}
+    names = list(demo.metadata.get("joint_names", [f"joint_{k}" for k in range(streams["joints"].shape[1])]))
+    # The recorder stores a UR arm's joints alphabetically (the order read_robot_h5 expects).
+    stored = sorted(range(len(names)), key=lambda k: names[k]) if "joint_names" in demo.metadata else None
+    path = tmp_path_factory.mktemp("uniform") / "three_button_100hz.h5"
+    whole = np.floor(t)  # built from the small times: an epoch in float64 would blur the nanoseconds
+    clock = np.column_stack([1_700_000_000 + whole, np.round((t - whole) * 1e9)])
+    with h5py.File(path, "w") as h5:
+        h5["joint_state_info/joint_positions"] = streams["joints"][:, stored] if stored else streams["joints"]
+        h5["transform_info/transform_positions"] = streams["position"]
+        h5["transform_info/transform_orientations"] = streams["orientation"]
+        h5["wrench_info/wrench_force"] = streams["force"]
+        h5["wrench_info/wrench_torque"] = streams["torque"]
+        h5["gripper_info/gripper_position"] = streams["gripper"]
+        for group in ("joint_state_info/joint", "transform_info/transform", "wrench_info/wrench",
+                      "gripper_info/gripper"):
+            h5[f"{group}_time"] = clock
+    return {"rate": rate, "t": t, "streams": streams, "joint_names": names, "h5": path}

@@ -1,0 +1,151 @@
+"""Reader for robomimic HDF5 datasets: ``data/demo_N/obs/<key>`` and ``data/demo_N/actions``."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+
+from ..core import Demonstration
+from ..core._validation import check_positive, summarise
+from ._errors import HDF5_MAGIC, FormatError, as_file, expect_magic, reading, real_array
+from ._lerobot import select_episodes
+
+__all__ = ["read_robomimic", "ROBOMIMIC_GROUP", "is_robomimic", "DEFAULT_CONTROL_FREQ"]
+
+#: The group that holds the demonstrations.
+ROBOMIMIC_GROUP = "data"
+#: robosuite's default control rate, used when the file does not record one (Hz).
+DEFAULT_CONTROL_FREQ = 20.0
+_DEMO = re.compile(r"^demo_(\d+)$")
+
+
+def is_robomimic(h5) -> bool:
+    """Whether an open HDF5 file has robomimic's layout: a group ``data`` with ``demo_N`` groups."""
+    group = h5.get(ROBOMIMIC_GROUP)
+    return hasattr(group, "keys") and any(_DEMO.match(k) for k in group.keys())
+
+
+def _env_args(path, data) -> dict:
+    raw = data.attrs.get("env_args")
+    if raw is None:
+        return {}
+    with reading(path, "invalid JSON in data.attrs['env_args']"):
+        args = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
+    return args if isinstance(args, dict) else {}
+
+
+def _rate(path, control_freq, env_args) -> tuple[float, str]:
+    if control_freq is not None:
+        return check_positive(control_freq, name="control_freq"), "argument"
+    freq = (env_args.get("env_kwargs") or {}).get("control_freq")
+    if freq is None:
+        return DEFAULT_CONTROL_FREQ, "default"
+    if isinstance(freq, bool) or not isinstance(freq, (int, float)) or not 0 < freq < np.inf:
+        raise FormatError(path, f"expected a positive env_args['env_kwargs']['control_freq'], found {freq!r}")
+    return float(freq), "env_args"
+
+
+def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
+                   control_freq=None) -> list[Demonstration]:
+    """Read the demonstrations of a robomimic HDF5 dataset, one Demonstration per ``data/demo_N``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.hdf5`` file.
+    episodes : None, int, list of int, range, slice or str, optional
+        Which demonstrations, by their number ``N``: ``"0:10"``, ``"3,7"``;
+        default all. See :func:`~skillbank.io.select_episodes`.
+    filter_key : str, optional
+        Only the demonstrations listed in ``mask/<filter_key>`` (for example
+        ``"train"`` or ``"valid"``).
+    obs_keys : list of str, optional
+        Which observations become streams; default every numeric one with
+        at most one value axis (camera images are skipped and listed in
+        ``metadata["skipped_obs"]``).
+    control_freq : float, optional
+        The sample rate in Hz (robosuite's name for it). Default: the recorded
+        ``env_args["env_kwargs"]["control_freq"]``, else
+        :data:`DEFAULT_CONTROL_FREQ`; ``metadata["rate_from"]`` says which.
+
+    Returns
+    -------
+    list of Demonstration
+        Streams: each observation key (``robot0_eef_pos``, ...) and
+        ``actions``. ``t = arange(n) / rate``. Metadata: ``source``,
+        ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
+        ``episode`` (``N``), ``label`` (the environment's name, when
+        recorded), ``rate_hz``, ``rate_from`` and ``skipped_obs``.
+
+    Raises
+    ------
+    FormatError
+        A file that is not HDF5 or lacks the layout, or a demonstration
+        whose streams disagree in length.
+    ValueError
+        A bad ``episodes``, ``filter_key``, ``obs_keys`` or ``control_freq``.
+
+    Examples
+    --------
+    >>> demos = read_robomimic("lift/ph/low_dim.hdf5", episodes="0:5")  # doctest: +SKIP
+    >>> demos[0].metadata["label"], demos[0]["robot0_eef_pos"].shape[1]  # doctest: +SKIP
+    ('Lift', 3)
+    """
+    import h5py  # slow to import; only when an HDF5 file is read
+
+    p = as_file(path)
+    expect_magic(p, HDF5_MAGIC, "HDF5 content")
+    if obs_keys is not None:
+        obs_keys = [obs_keys] if isinstance(obs_keys, str) else list(obs_keys)
+        if not obs_keys or not all(isinstance(k, str) for k in obs_keys):
+            raise ValueError(f"obs_keys: expected a list of observation names, got {obs_keys!r}")
+    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+        if not is_robomimic(h5):
+            raise FormatError(p, f"expected a robomimic dataset (group '{ROBOMIMIC_GROUP}' with demo_N "
+                              f"groups), found [{summarise(map(repr, sorted(h5.keys())))}]")
+        data = h5[ROBOMIMIC_GROUP]
+        numbers = {int(m.group(1)): k for k in data.keys() if (m := _DEMO.match(k))}
+        if filter_key is not None:
+            masks = sorted(h5["mask"].keys()) if "mask" in h5 else []
+            if filter_key not in masks:
+                raise ValueError(f"filter_key: expected one of {masks}, got {filter_key!r}")
+            listed = {v.decode() if isinstance(v, bytes) else str(v) for v in h5["mask"][filter_key][()]}
+            numbers = {n: k for n, k in numbers.items() if k in listed}
+        env_args = _env_args(p, data)
+        hz, rate_from = _rate(p, control_freq, env_args)
+        chosen = select_episodes(episodes, numbers)
+        common = {"source": str(p), "format": "robomimic-h5", "rate_hz": hz, "rate_from": rate_from}
+        if env_args.get("env_name"):
+            common["label"] = str(env_args["env_name"])
+        return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common) for n in chosen]
+
+
+def _demo(p, group, name, number, obs_keys, hz, common) -> Demonstration:
+    obs = group.get("obs")
+    available = sorted(obs.keys()) if hasattr(obs, "keys") else []
+    if obs_keys is not None:
+        unknown = [k for k in obs_keys if k not in available]
+        if unknown:
+            raise ValueError(f"obs_keys: expected names among {available} (in {name}), got {unknown}")
+    raw, skipped = {}, {}
+    for key in obs_keys or available:
+        dataset = obs[key]
+        if dataset.ndim > 2 or dataset.dtype.kind not in "biuf":
+            skipped[key] = list(dataset.shape)
+            continue
+        raw[key] = real_array(p, dataset[()], f"'{name}/obs/{key}'")
+    if "actions" in group:
+        raw["actions"] = real_array(p, group["actions"][()], f"'{name}/actions'")
+    if not raw:
+        raise FormatError(p, f"expected numeric observations or actions in '{name}', found none")
+    lengths = {k: v.shape[0] for k, v in raw.items()}
+    if len(set(lengths.values())) != 1 or 0 in lengths.values():
+        raise FormatError(p, f"expected the streams of '{name}' to have one non-zero length, found {lengths}")
+    n = next(iter(lengths.values()))
+    metadata = {**common, "demo": name, "episode": number}
+    if skipped:
+        metadata["skipped_obs"] = skipped
+    with reading(p, f"invalid demonstration '{name}'"):
+        return Demonstration(np.arange(n) / hz, raw, metadata)
