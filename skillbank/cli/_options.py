@@ -18,7 +18,7 @@ from ..core import Constraints, ViaPoint, parse_obstacle
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
-    "add_repair_option", "show_progress",
+    "add_repair_option", "add_reader_options", "reader_options", "show_progress",
 ]
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
@@ -123,6 +123,34 @@ def add_repair_option(p) -> None:
     p.add_argument("--repair-time", choices=["drop"], default=None,
                    help="time stamps that repeat are an error naming the stream and sample; 'drop' drops "
                         "the repeating samples (keeping the first) and records how many in the metadata")
+
+
+def add_reader_options(p) -> None:
+    """Options of the recording readers (ROS bags, MCAP, LeRobot, robomimic); other formats ignore them."""
+    g = p.add_argument_group("recordings (ROS 1/2 bags, MCAP, LeRobot, robomimic)")
+    g.add_argument("--topic", action="append", default=None, metavar="TOPIC=STREAM", dest="topics",
+                   help="read TOPIC as STREAM (repeatable): joints, pose (position + orientation), wrench "
+                        "(force + torque), gripper, or any other name for a stream of that name; default: "
+                        "by message type")
+    g.add_argument("--reference", default=None, metavar="STREAM",
+                   help="the stream whose clock is the time base (default: joints, else the busiest topic)")
+    g.add_argument("--rate", type=float, default=None, metavar="HZ",
+                   help="resample every stream at this rate instead of the reference stream's clock")
+    g.add_argument("--max-gap", type=float, default=None, metavar="SECONDS",
+                   help="a stamped topic silent longer than this is an error (default 0.5 s)")
+    g.add_argument("--parent-frame", default=None, help="with /tf: the parent frame of the pose")
+    g.add_argument("--child-frame", default=None, help="with /tf: the child frame of the pose")
+    g.add_argument("--split", default=None, metavar="HOW",
+                   help="several demonstrations in one bag: 'gaps', a marker topic '/name', or time ranges "
+                        "'0:12.5,20:31' in seconds")
+    g.add_argument("--episodes", default=None, metavar="SELECTION",
+                   help="LeRobot / robomimic episodes to read: '0:100' or '3,7' (default: all)")
+
+
+def reader_options(args) -> dict:
+    """The reader options given on the command line, for :func:`skillbank.io.load_all`."""
+    names = ("topics", "reference", "rate", "max_gap", "parent_frame", "child_frame", "split", "episodes")
+    return {name: getattr(args, name) for name in names if getattr(args, name, None) is not None}
 
 
 def add_segmentation_options(p) -> None:

@@ -7,7 +7,7 @@ import re
 import sys
 from pathlib import Path
 
-from ._options import add_segmentation_options, segmentation_params
+from ._options import add_reader_options, add_segmentation_options, reader_options, segmentation_params
 
 __all__ = ["add_parser", "run", "segment_file_names"]
 
@@ -15,8 +15,10 @@ __all__ = ["add_parser", "run", "segment_file_names"]
 def add_parser(sub):
     """Register ``segment`` on argparse subparsers ``sub``."""
     p = sub.add_parser("segment", help="cut a demonstration into motion primitives")
-    p.add_argument("input", help="demonstration file (.h5, .mat, .csv, .npz)")
+    p.add_argument("input", help="demonstration file (.h5, .mat, .csv, .npz, a ROS 1 .bag, a ROS 2 bag folder, "
+                                 ".mcap, a LeRobot dataset folder, a robomimic .hdf5)")
     add_segmentation_options(p)
+    add_reader_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None, help="write a summary figure to this file")
     p.add_argument("--out", type=Path, default=None,
@@ -99,7 +101,8 @@ def run(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    demos = io.load_all(args.input, group=args.group, repair_time=args.repair_time)
+    demos = io.load_all(args.input, group=args.group, repair_time=args.repair_time,
+                        reader_options=reader_options(args))
     index = _pick(demos, args.demo, args.input)
     demo = demos[index]
     result = MultimodalSegmenter(**segmentation_params(args)).fit(demo, args.stream).result_

@@ -302,3 +302,18 @@ def test_three_button_reads_as_the_hdf5_file_of_the_same_samples(uniform_three_b
         np.testing.assert_allclose(as_h5[name], h5[name], atol=1e-9, err_msg=name)
     ours, theirs = MultimodalSegmenter().fit(as_h5).result_, MultimodalSegmenter().fit(h5).result_
     assert ours.n_segments == theirs.n_segments > 1 and ours.bounds == theirs.bounds
+
+
+def test_segment_command_reads_chosen_episodes(tmp_path, cli):
+    # episodes long enough to segment: a reach out and back along x, twice, at 30 fps
+    t = np.arange(180) / 30.0
+    x = np.where(t < 3.0, 0.5 - 0.5 * np.cos(np.pi * t / 3.0), 0.5 + 0.5 * np.cos(np.pi * (t - 3.0) / 3.0))
+    state = np.column_stack([x, 0.2 * x, np.zeros_like(x)])
+    episodes = [{"task": f"reach {k}", "features": {"observation.state": state + k}} for k in range(3)]
+    root = write_lerobot(tmp_path / "ds", "v3.0", episodes)
+    code, out, err = cli("segment", root, "--episodes", "1:3", "--demo", "1", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["n_demos"] == 2 and doc["demo"] == 1 and set(doc["changepoints"]) == {"observation.state"}
+    code, out, err = cli("segment", root, "--episodes", "5:9")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "episodes" in err

@@ -776,3 +776,27 @@ def test_three_button_slower_sensors_against_the_recorded_file(data_dir, tmp_pat
     ours, theirs = _segment(bag), _segment(h5)
     assert ours.n_segments == theirs.n_segments == 6
     np.testing.assert_allclose(ours.keypoints, theirs.keypoints, atol=1)
+
+
+# ---------------------------------------------------------------- the command line
+
+
+def test_segment_command_reads_a_bag_with_its_options(tmp_path, cli):
+    recording, _ = synthetic(duration=3.0)
+    path = write_bag(tmp_path, "mcap", recording)
+    code, out, err = cli("segment", path, "--json", "--topic", "/joint_states=joints", "--topic", "/ft=wrench",
+                         "--split", "0:1.5,1.5:3")
+    assert code == 0, err
+    doc = json.loads(out)
+    # two pieces of the bag by time range; the first is segmented, and the command says so
+    assert doc["n_demos"] == 2 and doc["demo"] == 0
+    assert set(doc["changepoints"]) == {"joints", "force", "torque"}
+    assert "holds 2 demonstrations" in err
+
+
+def test_segment_command_names_a_topic_that_is_not_there(tmp_path, cli):
+    recording, _ = synthetic()
+    path = write_bag(tmp_path, "ros1", recording)
+    code, out, err = cli("segment", path, "--topic", "/nope=joints")
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "/nope" in err
