@@ -15,8 +15,8 @@ __all__ = ["add_parser", "run", "segment_file_names"]
 def add_parser(sub):
     """Register ``segment`` on argparse subparsers ``sub``."""
     p = sub.add_parser("segment", help="cut a demonstration into motion primitives")
-    p.add_argument("input", help="demonstration file (.h5, .mat, .csv, .npz, a ROS 1 .bag, a ROS 2 bag folder, "
-                                 ".mcap, a LeRobot dataset folder, a robomimic .hdf5)")
+    p.add_argument("input", help="demonstration file (.h5, .mat, .csv, .npz, a ROS 1 .bag, a ROS 2 bag "
+                                 "folder, .mcap, a LeRobot dataset folder, a robomimic .hdf5)")
     add_segmentation_options(p)
     add_reader_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")

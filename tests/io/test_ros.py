@@ -784,8 +784,8 @@ def test_three_button_slower_sensors_against_the_recorded_file(data_dir, tmp_pat
 def test_segment_command_reads_a_bag_with_its_options(tmp_path, cli):
     recording, _ = synthetic(duration=3.0)
     path = write_bag(tmp_path, "mcap", recording)
-    code, out, err = cli("segment", path, "--json", "--topic", "/joint_states=joints", "--topic", "/ft=wrench",
-                         "--split", "0:1.5,1.5:3")
+    code, out, err = cli("segment", path, "--json", "--topic", "/joint_states=joints",
+                         "--topic", "/ft=wrench", "--split", "0:1.5,1.5:3")
     assert code == 0, err
     doc = json.loads(out)
     # two pieces of the bag by time range; the first is segmented, and the command says so

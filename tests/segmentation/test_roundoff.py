@@ -129,7 +129,8 @@ def test_real_data_stay_at_single_samples(data_dir):
     for demo in demos:
         assert segment(demo).streams["position"].jerk_step == 1
     buttons = sio.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
-    # two joints (the elbow, third in chain order, and wrist 3) are stored as float32: their round-off reaches 0.4 % of the profile, under the 1 % share
+    # two joints (the elbow, third in chain order, and wrist 3) are stored as float32: their
+    # round-off reaches 0.4 % of the profile, under the 1 % share
     levels = roundoff_level(buttons["joints"])
     assert levels[2] == 2.0**-24 and levels[5] == 2.0**-23
     result = segment(buttons, ["joints", "position", "force", "gripper"])
