@@ -6,7 +6,14 @@ import json
 from pathlib import Path
 
 from ..core import Demonstration
-from ._options import add_constraint_options, add_repair_option, constraints_from_args
+from ._library import check_robot, output_format, print_execution
+from ._options import (
+    add_constraint_options,
+    add_execution_options,
+    add_repair_option,
+    constraints_from_args,
+    execution_params,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -24,7 +31,8 @@ def add_parser(sub):
     p = sub.add_parser("edit", help="adapt a demonstration to a new start, goal, via-points and obstacles")
     p.add_argument("input", nargs="+", type=Path,
                    help="trajectory file(s) (.csv, .npz, .h5, .mat); several for the multi-demo methods "
-                        "(promp, elmap, dmp). The 'position' stream is used, or the only stream")
+                        "(promp, elmap, dmp). The 'position' stream is edited, or the only stream; the first "
+                        "file's orientation, gripper and other streams come along")
     p.add_argument("--method", default="lte",
                    help="a representation of skillbank.representations.REPRESENTATIONS: lte (Laplacian "
                         "trajectory editing, default), ja (jerk-accuracy), promp, elmap (elastic map), dmp")
@@ -32,9 +40,13 @@ def add_parser(sub):
     p.add_argument("--metrics", action="store_true",
                    help="also compare the result with the demonstration (Fréchet, DTW, swept area, ...); "
                         "Fréchet and DTW take time proportional to the product of the lengths")
-    p.add_argument("--out", type=Path, default=None, help="write the result here (.csv or .npz)")
+    add_execution_options(p)
+    p.add_argument("--out", type=Path, default=None,
+                   help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
     add_repair_option(p)
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--json", action="store_true",
+                   help="print the result as JSON: t, streams, joint_names, trajectory (the position path), "
+                        "used, rejected, constraint_error, orientation_error, collision, peak_joint_velocity")
     p.add_argument("--plot", type=Path, default=None,
                    help="write a figure of the edit to this file (.png, .pdf, .svg; no extension: .png)")
     p.set_defaults(func=run)
@@ -45,29 +57,40 @@ def run(args) -> int:
     """Edit ``args.input`` under the constraints given on the command line; returns the exit status."""
     # Imported here, not at the top, so that 'skillbank --help' and the other commands start
     # without scikit-learn and scipy.
-    from ..io import load_positions, write_csv, write_npz
+    from ..io import load, write_trajectory
     from ..metrics import comparison_metrics
     from ..representations import fit_reproduce, representation
+    from ..selection import executable_dict, make_executable, retime
 
     representation(args.method)  # an unknown name fails first, listing the registry's
-    constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle)
-    out_suffix = None if args.out is None else args.out.suffix.lower()
-    if out_suffix not in (None, ".csv", ".npz"):
-        raise ValueError(f"out: expected a .csv or .npz file name, got {str(args.out)!r}")
+    constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle,
+                                        start_orientation=args.start_orientation,
+                                        goal_orientation=args.goal_orientation)
+    execution = execution_params(args)
+    check_robot(args)
+    kind = output_format(args)
     if args.plot is not None:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    demos = load_positions(args.input, repair_time=args.repair_time)
+    sources = [retime(d, execution["duration"]) for d in _read(args.input, args.repair_time, load)]
+    demos = [Demonstration(d.t, {"position": d["position"]}, {"source": str(p)})
+             for d, p in zip(sources, args.input, strict=True)]
     constraints.check_dims(demos[0]["position"].shape[1])
     out, collision, notes = fit_reproduce(args.method, demos, constraints)
-    Y, t = out["position"], out.t
+    meta = {"method": args.method, "inputs": [str(p) for p in args.input]}
+    done = make_executable(Demonstration(out.t - out.t[0], {"position": out["position"]}, meta), sources,
+                           constraints, ids=[Path(p).name for p in args.input], robot=execution["robot"],
+                           limits=execution["limits"], fixed_time=execution["duration"] is not None,
+                           kind="file")
+    traj = done.trajectory
+    Y, t = traj["position"], traj.t
     error = constraints.position_error(Y)
     metrics = comparison_metrics(Y, t, demos[0]["position"], constraints) if args.metrics else None
+    traj.metadata.update(constraint_error=error, orientation_error=done.orientation_error,
+                         collision=collision)
     if args.out is not None:
-        meta = {"method": args.method, "inputs": [str(p) for p in args.input],
-                "constraint_error": error, "collision": collision}
-        (write_csv if out_suffix == ".csv" else write_npz)(Demonstration(t, {"position": Y}, meta), args.out)
+        write_trajectory(traj, args.out, format=kind)
     plot = None
     if args.plot is not None:
         from ..plotting import plot_edit  # matplotlib, as above
@@ -75,7 +98,10 @@ def run(args) -> int:
         plot = plot_edit(Y, args.plot, demo=demos[0], demos=demos[1:], constraints=constraints,
                          title=f"{args.method}: {Path(args.input[0]).name}")
     if args.json:
-        doc = {"trajectory": Y.tolist(), "constraint_error": float(error), "collision": bool(collision)}
+        doc = {**executable_dict(traj, orientation_error=done.orientation_error, peaks=done.peaks,
+                                 notes=notes + done.notes),
+               "used": [str(p) for p in args.input], "rejected": {}, "constraint_error": float(error),
+               "collision": bool(collision)}
         if metrics is not None:
             doc["metrics"] = metrics
         if plot is not None:
@@ -83,7 +109,8 @@ def run(args) -> int:
         print(json.dumps(doc, allow_nan=False))
         return 0
     print(f"{args.method}: {len(demos)} demonstration(s) -> {Y.shape[0]} samples, {Y.shape[1]} dimensions")
-    print(f"  constraint error {error:.3g}, collision {'yes' if collision else 'no'}")
+    print_execution(traj, error, done.orientation_error, collision, done.peaks, done.notes,
+                    orientation=constraints.has_orientation)
     if metrics is not None:
         print("  " + ", ".join(f"{k} {v:.4g}" for k, v in metrics.items()))
     for note in notes:
@@ -92,3 +119,27 @@ def run(args) -> int:
         if path is not None:
             print(f"  wrote {path}")
     return 0
+
+
+def _read(paths, repair_time, load) -> list:
+    """Each file with every stream; edited is its ``position`` stream, or its only stream named so.
+
+    The rule and the messages are :func:`skillbank.io.load_positions`'; read here once with every
+    stream, because the orientation, gripper and other streams come along into the result.
+    """
+    demos = []
+    for path in paths:
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"input: no such file: {str(path)!r}")
+        demo = load(path, repair_time=repair_time)
+        if "position" not in demo.streams:
+            if len(demo.streams) != 1:
+                raise ValueError(f"input: {str(path)!r} has streams {demo.stream_names} and none is "
+                                 "'position'; write the one to edit as a single-stream file")
+            demo = Demonstration(demo.t, {"position": demo[demo.stream_names[0]]}, demo.metadata)
+        if demos and demo["position"].shape[1] != demos[0]["position"].shape[1]:
+            raise ValueError(f"input: {str(path)!r} has {demo['position'].shape[1]} dimensions, but "
+                             f"{str(paths[0])!r} has {demos[0]['position'].shape[1]}")
+        demos.append(demo)
+    return demos

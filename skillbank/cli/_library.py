@@ -11,8 +11,10 @@ import numpy as np
 
 from ._options import (
     add_constraint_options,
+    add_execution_options,
     add_segmentation_options,
     constraints_from_args,
+    execution_params,
     segmentation_params,
     show_progress,
 )
@@ -98,9 +100,13 @@ def add_parser(sub):
     c.add_argument("--shortlist", type=int, default=argparse.SUPPRESS,
                    help="shortlist size for --rank shortlist (default: skillbank.selection.SHORTLIST)")
     c.add_argument("--seed", type=int, default=None, help="random seed")
-    c.add_argument("--out", type=Path, default=None, help="write the trajectory (.npz or .csv)")
+    add_execution_options(c)
+    c.add_argument("--out", type=Path, default=None,
+                   help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
-    c.add_argument("--json", action="store_true", help="print the result as JSON")
+    c.add_argument("--json", action="store_true",
+                   help="print the result as JSON: t, streams, joint_names, trajectory (the position path), "
+                        "used, rejected, constraint_error, orientation_error, collision, peak_joint_velocity")
     c.set_defaults(func=_reuse)
 
     c = cmds.add_parser("export", help="write the library to a folder of NPZ files and a manifest")
@@ -257,19 +263,51 @@ def _skill(lib, name: str):
         return name
 
 
+def output_format(args):
+    """The format of ``--out`` (checked before any work), or None without ``--out``."""
+    from ..io import trajectory_format  # the writers, only when a result is written
+
+    if args.out is None:
+        if args.format is not None:
+            raise ValueError(f"format: --format {args.format} needs --out FILE")
+        return None
+    kind = trajectory_format(args.out, args.format)
+    if kind == "rosbag" and args.out.exists():
+        raise ValueError(f"out: {str(args.out)!r} already exists; a ROS 2 bag is written to a new folder")
+    if not args.out.parent.is_dir():
+        raise ValueError(f"out: folder {str(args.out.parent)!r} does not exist")
+    return kind
+
+
+def check_robot(args) -> None:
+    """An unknown robot name fails before the work, listing the registry's."""
+    if args.robot is not None:
+        from ..robots import robot_model  # numpy only; loaded when a robot is asked for
+
+        robot_model(args.robot)
+
+
 def _reuse(args) -> int:
     from .. import io  # the writers, only when a result is written
 
-    constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle)
+    constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle,
+                                        start_orientation=args.start_orientation,
+                                        goal_orientation=args.goal_orientation)
     options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
+    execution = execution_params(args)
+    check_robot(args)
+    kind = output_format(args)
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     with _open(args, readonly=True) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           random_state=args.seed, progress=show_progress(args), **options)
+                           random_state=args.seed, progress=show_progress(args), **options, **execution)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
-        writer = io.write_csv if args.out.suffix.lower() in (".csv", ".txt") else io.write_npz
-        writer(result.trajectory, args.out)
+        io.write_trajectory(result.trajectory, args.out, format=kind)
     if args.plot is not None:
         from ..plotting import plot_edit  # matplotlib only when a figure is asked for
 
@@ -279,14 +317,32 @@ def _reuse(args) -> int:
         print(json.dumps(result.to_dict()))
         return 0
     print(f"{args.db}: skill {args.skill!r} reproduced with {args.method} from primitive(s) {result.used}")
-    collision = "yes" if result.collision else "no"
-    print(f"  constraint error {result.constraint_error:.3g}, collision {collision}")
+    print_execution(result.trajectory, result.constraint_error, result.orientation_error, result.collision,
+                    result.peaks, result.notes, orientation=constraints.has_orientation)
     for pid, reason in result.rejected.items():
         print(f"  rejected {pid}: {reason}")
     for path in (args.out, args.plot):
         if path is not None:
             print(f"  wrote {path}")
     return 0
+
+
+def print_execution(traj, constraint_error, orientation_error, collision, peaks, notes,
+                    orientation: bool = False) -> None:
+    """The text report of an executable result (shared by ``library reuse`` and ``edit``).
+
+    A plain position edit keeps its two lines; orientation, other streams and timing add theirs.
+    """
+    rotation = f", orientation error {orientation_error:.3g} rad" if orientation else ""
+    print(f"  constraint error {constraint_error:.3g}{rotation}, collision {'yes' if collision else 'no'}")
+    if traj.stream_names != ["position"] or traj.metadata.get("time_scale", 1.0) != 1.0:
+        print(f"  {traj.n_steps} samples over {traj.t[-1] - traj.t[0]:.4g} s from t = 0; streams "
+              f"{', '.join(traj.stream_names)}")
+    if "joints" in peaks:
+        print(f"  peak joint velocity {peaks['joints']['velocity']:.4g} rad/s, acceleration "
+              f"{peaks['joints']['acceleration']:.4g} rad/s^2")
+    for note in notes:
+        print(f"  note: {' '.join(note.split())}")
 
 
 def _export(args) -> int:

@@ -18,11 +18,13 @@ from ..core import Constraints, ViaPoint, parse_obstacle
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
-    "add_repair_option", "add_reader_options", "reader_options", "show_progress",
+    "add_repair_option", "add_reader_options", "reader_options", "show_progress", "add_execution_options",
+    "execution_params",
 ]
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
-CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity")
+CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity",
+                      "--start-orientation", "--goal-orientation")
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
 _SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "combine",
                   "stream_kinds", "mode")
@@ -216,6 +218,41 @@ def add_constraint_options(p) -> None:
     p.add_argument("--obstacle", action="append", default=[], metavar="sphere:X,Y,Z,R|box:...",
                    help="region to avoid: sphere:X,Y[,Z],R or box:XMIN,YMIN[,ZMIN],XMAX,YMAX[,ZMAX] "
                         "(repeatable)")
+    p.add_argument("--start-orientation", default=None, metavar="QX,QY,QZ,QW",
+                   help="orientation at the start: a unit quaternion, scalar-last (as ROS and scipy)")
+    p.add_argument("--goal-orientation", default=None, metavar="QX,QY,QZ,QW",
+                   help="orientation at the goal: a unit quaternion, scalar-last")
+
+
+def add_execution_options(p) -> None:
+    """``--duration``, ``--robot``, ``--max-joint-velocity``, ``--format`` (see :func:`execution_params`)."""
+    p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+                   help="duration of the result (default: the demonstrations' mean); time starts at 0")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="add a 'joints' stream by inverse kinematics for this robot (ur5e), from the pose "
+                        "path (metres, quaternions, in the robot's base frame)")
+    p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
+                   help="slow the whole result down uniformly until no joint moves faster (needs --robot)")
+    p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
+                   help="format of --out (default from its suffix: .csv, .npz, .script, .bag): every "
+                        "stream with the joint names (csv, npz), a UR program of servoj steps (urscript), or "
+                        "a ROS 2 bag folder of a JointTrajectory and PoseStamped poses (rosbag, needs "
+                        "skillbank[ros])")
+
+
+def execution_params(args) -> dict:
+    """``duration``, ``robot`` and ``limits`` keyword arguments from :func:`add_execution_options`' options.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> execution_params(argparse.Namespace(duration=None, robot="ur5e", max_joint_velocity=1.0))
+    {'duration': None, 'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}}
+    """
+    if args.max_joint_velocity is not None and args.robot is None:
+        raise ValueError("max-joint-velocity: a joint velocity limit needs joints: give --robot too")
+    limits = {} if args.max_joint_velocity is None else {"joint_velocity": args.max_joint_velocity}
+    return {"duration": args.duration, "robot": args.robot, "limits": limits}
 
 
 def _number(text: str, name: str, whole) -> float:
@@ -236,7 +273,7 @@ def _numbers(text: str, name: str, whole) -> list[float]:
 
 
 def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_velocity=None,
-                          end_velocity=None):
+                          end_velocity=None, start_orientation=None, goal_orientation=None):
     """Build :class:`~skillbank.core.Constraints` from command-line strings.
 
     Parameters
@@ -263,6 +300,7 @@ def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_v
             raise ValueError(f"via: expected 'PHASE:X,Y[,Z]', got {text!r}")
         vias.append(ViaPoint(_numbers(coords, "via", text), phase=_number(phase, "via phase", text)))
     obstacles = [parse_obstacle(str(text)) for text in (obstacle or ())]
-    given = dict(start=start, goal=goal, start_velocity=start_velocity, end_velocity=end_velocity)
+    given = dict(start=start, goal=goal, start_velocity=start_velocity, end_velocity=end_velocity,
+                 start_orientation=start_orientation, goal_orientation=goal_orientation)
     vec = {k: None if v is None else _numbers(str(v), k, v) for k, v in given.items()}
     return Constraints(via=vias, obstacles=obstacles, **vec)

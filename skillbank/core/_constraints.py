@@ -4,7 +4,9 @@ A :class:`Constraints` object holds what a new execution environment asks of a
 trajectory: where it starts and ends, via-points it must pass, boundary
 velocities, and regions (:class:`Sphere`, :class:`Box`) it must avoid. It works
 in any number of dimensions and turns phases into sample indices with
-:meth:`Constraints.resolve`.
+:meth:`Constraints.resolve`. Optionally it also asks for orientations (unit
+quaternions, scalar-last) at the start, the goal and via phases
+(:meth:`Constraints.resolve_orientation`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._obstacles import Obstacle
+from ._rotations import check_quaternions, quaternion_angle
 from ._validation import check_array, check_fraction, check_positive, check_time, summarise
 
 __all__ = ["Constraints", "ViaPoint"]
@@ -22,6 +25,15 @@ __all__ = ["Constraints", "ViaPoint"]
 
 def _point(value, name: str) -> np.ndarray:
     return check_array(value, name=name, ndim=1, min_samples=1)
+
+
+def _quaternion(value, name: str) -> np.ndarray:
+    """One unit quaternion, scalar-last; ValueError naming ``name`` for a wrong length or norm."""
+    q = check_array(value, name=name, ndim=1, min_samples=1)
+    if q.shape[0] != 4:
+        raise ValueError(f"{name}: expected a quaternion of 4 components (x, y, z, w), scalar-last, got "
+                         f"{q.shape[0]} component(s)")
+    return check_quaternions(q, name=name)
 
 
 class ViaPoint:
@@ -92,6 +104,13 @@ class Constraints:
         Velocities (units per second) at the first and last samples.
     obstacles : sequence of Obstacle, default=()
         Regions the trajectory must avoid (:class:`Sphere`, :class:`Box`, ...).
+    start_orientation, goal_orientation : array-like of shape (4,), optional
+        Orientations of the first and last samples: unit quaternions,
+        scalar-last ``(x, y, z, w)`` (see :mod:`skillbank.core._rotations`;
+        a norm within ``UNIT_TOLERANCE`` of 1 is renormalised).
+    via_orientation : sequence of ViaPoint or (phase, quaternion) tuples, default=()
+        Orientations at phases (or sample indices); a ViaPoint's ``position``
+        holds the quaternion.
 
     Attributes
     ----------
@@ -104,10 +123,13 @@ class Constraints:
     >>> idx, pts = c.resolve(11)
     >>> idx.tolist(), pts[1].tolist()
     ([0, 5, 10], [0.5, 0.8])
+    >>> c = Constraints(goal=[1.0, 1.0], goal_orientation=[0.0, 0.0, 1.0, 0.0])
+    >>> c.has_orientation, c.resolve_orientation(11)[0].tolist()
+    (True, [10])
     """
 
     def __init__(self, *, start=None, goal=None, via=(), start_velocity=None, end_velocity=None,
-                 obstacles=()):
+                 obstacles=(), start_orientation=None, goal_orientation=None, via_orientation=()):
         given = dict(start=start, goal=goal, start_velocity=start_velocity, end_velocity=end_velocity)
         for name, value in given.items():
             setattr(self, name, None if value is None else _point(value, name))
@@ -118,6 +140,10 @@ class Constraints:
                 raise ValueError(f"obstacles[{k}]: expected an Obstacle (Sphere, Box, ...), got "
                                  f"{type(ob).__name__}")
         self.obstacles = tuple(obstacles)
+        for name, value in (("start_orientation", start_orientation), ("goal_orientation", goal_orientation)):
+            setattr(self, name, None if value is None else _quaternion(value, name))
+        vias = self._as_list(via_orientation, "via_orientation")
+        self.via_orientation = tuple(self._as_orientation_via(v, k) for k, v in enumerate(vias))
         dims = self._dims()
         if len(set(dims.values())) > 1:
             # The first item sets the expectation; list the first few that differ from it.
@@ -146,6 +172,19 @@ class Constraints:
                 raise ValueError(f"via[{k}]: {exc}") from None
         raise ValueError(f"via[{k}]: expected a ViaPoint or a (phase, position) pair, got {v!r}")
 
+    @staticmethod
+    def _as_orientation_via(v, k):
+        name = f"via_orientation[{k}]"
+        if isinstance(v, ViaPoint):
+            q = _quaternion(v.position, name)
+            return ViaPoint(q, index=v.index) if v.phase is None else ViaPoint(q, phase=v.phase)
+        if isinstance(v, (tuple, list)) and len(v) == 2:
+            try:
+                return ViaPoint(_quaternion(v[1], name), phase=v[0])
+            except ValueError as exc:
+                raise ValueError(f"{name}: {exc}") from None
+        raise ValueError(f"{name}: expected a ViaPoint or a (phase, quaternion) pair, got {v!r}")
+
     def _dims(self) -> dict:
         dims = {k: getattr(self, k).shape[0] for k in _VECTORS if getattr(self, k) is not None}
         for k, v in enumerate(self.via):
@@ -158,6 +197,12 @@ class Constraints:
     def is_empty(self) -> bool:
         """True when no positional constraint (start, goal, via) is given."""
         return self.start is None and self.goal is None and not self.via
+
+    @property
+    def has_orientation(self) -> bool:
+        """True when a start, goal or via orientation is given."""
+        return (self.start_orientation is not None or self.goal_orientation is not None
+                or bool(self.via_orientation))
 
     @property
     def has_velocity(self) -> bool:
@@ -197,6 +242,55 @@ class Constraints:
         points = np.array([taken[i][1] for i in indices], dtype=float).reshape(len(indices), width)
         return indices, points
 
+    def resolve_orientation(self, n_steps: int):
+        """Sorted unique sample indices ``(k,)`` and unit quaternions ``(k, 4)`` of orientation constraints.
+
+        Phases land on samples as for :meth:`resolve`. Raises ValueError when
+        two different orientations (not ``q`` and ``-q``) land on one sample.
+
+        Examples
+        --------
+        >>> c = Constraints(start_orientation=[0, 0, 0, 1.0], via_orientation=[(0.5, [0, 0, 1.0, 0])])
+        >>> idx, qs = c.resolve_orientation(5)
+        >>> idx.tolist(), qs[1].tolist()
+        ([0, 2], [0.0, 0.0, 1.0, 0.0])
+        """
+        n_steps = check_positive(n_steps, name="n_steps", integer=True)
+        ends = (("start_orientation", 0), ("goal_orientation", n_steps - 1))
+        items = [(k, i, getattr(self, k)) for k, i in ends if getattr(self, k) is not None]
+        items += [(f"via_orientation[{k}]", v.sample(n_steps), v.position)
+                  for k, v in enumerate(self.via_orientation)]
+        taken: dict[int, tuple[str, np.ndarray]] = {}
+        for name, i, q in items:
+            if i in taken:
+                other, p = taken[i]
+                if float(quaternion_angle(p, q)) > 1e-12:
+                    raise ValueError(f"constraints: {other} and {name} put different orientations "
+                                     f"{p.tolist()} and {q.tolist()} on sample {i} of {n_steps}")
+                continue
+            taken[i] = (name, q)
+        indices = np.array(sorted(taken), dtype=np.intp)
+        return indices, np.array([taken[i][1] for i in indices], dtype=float).reshape(len(indices), 4)
+
+    def orientation_error(self, q) -> float:
+        """Largest angle (radians) between a constrained sample of orientations ``q`` and its target.
+
+        0.0 without orientation constraints. ``q`` and ``-q`` are the same orientation.
+
+        Examples
+        --------
+        >>> c = Constraints(goal_orientation=[0.0, 0.0, 0.0, 1.0])
+        >>> round(c.orientation_error([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, np.sin(0.05), np.cos(0.05)]]), 12)
+        0.1
+        """
+        q = check_quaternions(q, name="q")
+        if q.ndim != 2:
+            raise ValueError(f"q: expected an orientation stream of shape (n, 4), got shape {q.shape}")
+        idx, targets = self.resolve_orientation(q.shape[0])
+        if idx.size == 0:
+            return 0.0
+        return float(quaternion_angle(q[idx], targets).max())
+
     def replace(self, **changes) -> Constraints:
         """A copy with some fields replaced, e.g. ``c.replace(via=(), end_velocity=None)``.
 
@@ -205,7 +299,8 @@ class Constraints:
         >>> Constraints(goal=[1.0], via=[(0.5, [2.0])]).replace(via=()).via
         ()
         """
-        fields = ("start", "goal", "via", "start_velocity", "end_velocity", "obstacles")
+        fields = ("start", "goal", "via", "start_velocity", "end_velocity", "obstacles", "start_orientation",
+                  "goal_orientation", "via_orientation")
         unknown = sorted(set(changes) - set(fields))
         if unknown:
             raise ValueError(f"replace: expected fields among {list(fields)}, got {unknown}")
@@ -282,6 +377,10 @@ class Constraints:
     def __repr__(self) -> str:
         parts = [f"{k}={getattr(self, k).tolist()}" for k in _VECTORS if getattr(self, k) is not None]
         parts += [f"{k}={list(getattr(self, k))}" for k in ("via", "obstacles") if getattr(self, k)]
+        parts += [f"{k}={getattr(self, k).tolist()}" for k in ("start_orientation", "goal_orientation")
+                  if getattr(self, k) is not None]
+        if self.via_orientation:
+            parts.append(f"via_orientation={list(self.via_orientation)}")
         return f"Constraints({', '.join(parts)})"
 
 

@@ -1,4 +1,4 @@
-"""Trajectory editing: Laplacian trajectory editing (LTE) under task constraints.
+"""Trajectory editing: Laplacian trajectory editing (LTE) under task constraints, and orientations.
 
 Examples
 --------
@@ -13,5 +13,8 @@ Examples
 
 from ._laplacian import LaplacianSystem
 from ._lte import EditResult, lte
+from ._orientation import OrientationEdit, edit_orientation, relative_rotations
 
-__all__ = ["lte", "EditResult", "LaplacianSystem"]
+__all__ = [
+    "lte", "EditResult", "LaplacianSystem", "edit_orientation", "OrientationEdit", "relative_rotations",
+]

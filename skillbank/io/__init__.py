@@ -38,6 +38,7 @@ from ._tabular import (
     write_json,
     write_npz,
 )
+from ._trajectory_export import TRAJECTORY_FORMATS, trajectory_format, write_trajectory
 
 __all__ = [
     "FormatError",
@@ -64,4 +65,7 @@ __all__ = [
     "load_all",
     "load_folder",
     "load_positions",
+    "write_trajectory",
+    "trajectory_format",
+    "TRAJECTORY_FORMATS",
 ]

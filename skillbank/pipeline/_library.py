@@ -365,7 +365,8 @@ class Library(Adding):
         return prims
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
-              shortlist: int = SHORTLIST, random_state=None, progress: bool = False):
+              shortlist: int = SHORTLIST, random_state=None, progress: bool = False, duration=None,
+              robot=None, limits=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -374,7 +375,10 @@ class Library(Adding):
         ``"length"`` orders all of them by curve length; ``"deformation"``
         and ``"endpoints"`` by how far each candidate is from the task.
         ``progress`` shows a tqdm bar on stderr over the candidates adapted
-        (the result is the same).
+        (the result is the same). ``duration``, ``robot`` and ``limits`` make
+        the reproduction executable (time from 0, gripper and other streams
+        of the best primitive, joints by inverse kinematics, velocity and
+        acceleration limits): see :func:`skillbank.selection.reuse`.
 
         Returns
         -------
@@ -384,12 +388,15 @@ class Library(Adding):
         --------
         >>> from skillbank import Constraints
         >>> lib.reuse("press", Constraints(start=[0, 0, 0.2], goal=[0.3, 0.1, 0.0]))  # doctest: +SKIP
+        >>> lib.reuse("reach", Constraints(goal=[0.1, -0.5, 0.2], goal_orientation=[1.0, 0, 0, 0]),
+        ...           robot="ur5e", limits={"joint_velocity": 1.0})  # doctest: +SKIP
         """
         prims = self.skill(skill)  # a clear error for an empty skill before any fitting
         with tqdm(total=len(prims), desc="adapting", unit="candidate", disable=not progress) as bar:
             return reuse([p.demo for p in prims], constraints, method=method, k=k,
                          ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
-                         progress=_ticker(bar) if progress else None)
+                         progress=_ticker(bar) if progress else None, duration=duration, robot=robot,
+                         limits=limits)
 
     def export(self, folder, *, progress: bool = False):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

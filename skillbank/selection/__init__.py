@@ -4,7 +4,11 @@ The paper's "Selection of Reusable Primitives": every candidate is warped to
 the task's constraints with Laplacian trajectory editing, candidates that
 still collide or miss a constraint are dropped, the rest are ranked by curve
 length, and the best ones train a learning-from-demonstration representation
-that produces the new trajectory.
+that produces the new trajectory. The reproduction is then completed into
+something a robot executes (:func:`make_executable`): the orientation adapted
+to orientation constraints, the gripper and other recorded streams carried
+over, time from 0 within velocity and acceleration limits, and joints by
+inverse kinematics for a robot model.
 
 Examples
 --------
@@ -19,9 +23,19 @@ Examples
 """
 
 from ._candidates import RANKINGS, SHORTLIST, Candidate, Selection, select_candidates
+from ._execution import (
+    DISCRETE_STREAMS,
+    LIMITS,
+    Executable,
+    executable_dict,
+    make_executable,
+    peak_rates,
+    retime,
+)
 from ._reuse import METHODS, ReuseResult, reproduce_selection, reuse
 
 __all__ = [
     "reuse", "ReuseResult", "select_candidates", "reproduce_selection", "Selection", "Candidate",
-    "METHODS", "RANKINGS", "SHORTLIST",
+    "METHODS", "RANKINGS", "SHORTLIST", "make_executable", "Executable", "retime", "peak_rates", "LIMITS",
+    "DISCRETE_STREAMS", "executable_dict",
 ]

@@ -41,6 +41,9 @@ class Candidate:
         Root-mean-square displacement of the samples by the edit.
     message : str
         The editor's message.
+    source : Demonstration or None
+        The primitive as given, with every recorded stream (None for an
+        array): reuse carries its orientation, gripper and other streams.
     """
 
     id: object
@@ -51,6 +54,11 @@ class Candidate:
     endpoint_distance: float
     deformation: float
     message: str
+    source: Demonstration | None = None
+
+    def recorded(self) -> Demonstration:
+        """The primitive with every recorded stream (an array's positions on its time base)."""
+        return self.source if self.source is not None else Demonstration(self.t, {"position": self.original})
 
     def demo(self) -> Demonstration:
         """The adapted candidate as a Demonstration (metadata ``{"id": ...}``)."""
@@ -104,8 +112,8 @@ def _check_ids(ids, n: int) -> list:
     return ids
 
 
-def _arrays(primitives, ids, t, min_samples):
-    """``(id, t, Y)`` per primitive, rejections for unusable shapes, and the checked ids."""
+def _arrays(primitives, ids, t, min_samples, orientation=False):
+    """``(id, t, Y, source)`` per primitive, rejections for unusable shapes, and the checked ids."""
     if isinstance(primitives, (Demonstration, np.ndarray)) or not isinstance(primitives, (list, tuple)):
         raise ValueError(
             "primitives: expected a list of Demonstrations or arrays (n_steps, n_dims), "
@@ -116,7 +124,8 @@ def _arrays(primitives, ids, t, min_samples):
     ids = _check_ids(ids, len(primitives))
     out, rejected = [], {}
     for k, (pid, prim) in enumerate(zip(ids, primitives, strict=True)):
-        if isinstance(prim, Demonstration):
+        source = prim if isinstance(prim, Demonstration) else None
+        if source is not None:
             if "position" not in prim.streams:
                 rejected[pid] = f"no 'position' stream (streams {prim.stream_names})"
                 continue
@@ -124,12 +133,16 @@ def _arrays(primitives, ids, t, min_samples):
         else:
             Y = check_array(prim, name=f"primitives[{k}]", ndim=2)
             tk = np.arange(Y.shape[0], dtype=float)
+        if orientation and (source is None or "orientation" not in source.streams):
+            streams = ["position"] if source is None else source.stream_names
+            rejected[pid] = f"no 'orientation' stream for the orientation constraints (streams {streams})"
+            continue
         if Y.shape[0] < min_samples:
             rejected[pid] = f"too short: {Y.shape[0]} sample(s), need at least {min_samples}"
             continue
         if t is not None:
             Y, tk = resample(Y, t.shape[0]), t
-        out.append((pid, tk, Y))
+        out.append((pid, tk, Y, source))
     return out, rejected, ids
 
 
@@ -194,20 +207,20 @@ def select_candidates(primitives, constraints, *, ids=None, t=None, rank: str = 
     min_samples = max(2, check_positive(min_samples, name="min_samples", integer=True))
     if t is not None:
         t = check_time(t, name="t", min_samples=min_samples)
-    items, rejected, ids = _arrays(primitives, ids, t, min_samples)
+    items, rejected, ids = _arrays(primitives, ids, t, min_samples, constraints.has_orientation)
     n_dims = constraints.n_dims
     if n_dims is None and items:
         n_dims = items[0][2].shape[1]
     usable = []
-    for done, (pid, tk, Y) in enumerate(items, 1):
+    for done, (pid, tk, Y, source) in enumerate(items, 1):
         res = _adapt(Y, tk, constraints, n_dims, lte_params)
         if isinstance(res, str):
             rejected[pid] = res
         else:
-            usable.append((pid, tk, Y, res))
+            usable.append((pid, tk, Y, res, source))
         if progress is not None:
             progress(done, len(items))
-    candidates = [_candidate(pid, tk, Y, res, constraints) for pid, tk, Y, res in usable]
+    candidates = [_candidate(pid, tk, Y, res, constraints, source) for pid, tk, Y, res, source in usable]
     key = {
         "length": lambda c: (c.length,),
         "endpoints": lambda c: (c.endpoint_distance, c.length),
@@ -235,7 +248,7 @@ def _adapt(Y, t, constraints, n_dims, lte_params):
     return res
 
 
-def _candidate(pid, t, Y, res, constraints) -> Candidate:
+def _candidate(pid, t, Y, res, constraints, source=None) -> Candidate:
     P = np.asarray(res.Y, dtype=float)
     steps = np.diff(P, axis=0)
     length = float(np.sqrt(np.einsum("ij,ij->i", steps, steps)).sum())
@@ -247,4 +260,4 @@ def _candidate(pid, t, Y, res, constraints) -> Candidate:
     D = P - Y
     deformation = float(np.sqrt(np.einsum("ij,ij->i", D, D).mean()))
     return Candidate(id=pid, t=t, original=Y, adapted=P, length=length, endpoint_distance=ends,
-                     deformation=deformation, message=res.message)
+                     deformation=deformation, message=res.message, source=source)

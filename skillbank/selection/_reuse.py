@@ -7,9 +7,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core import Demonstration
-from ..core._validation import check_positive, check_time, numerical_errors, summarise
+from ..core._validation import check_array, check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, fit_reproduce, representation
 from ._candidates import SHORTLIST, Selection, select_candidates
+from ._execution import check_limits, executable_dict, make_executable, retime
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
 
@@ -25,7 +26,11 @@ class ReuseResult:
     Attributes
     ----------
     trajectory : Demonstration
-        Stream ``"position"``; metadata holds ``method``, ``used`` and ``k``.
+        Time from 0. Stream ``"position"``; where the candidates recorded them
+        ``"orientation"`` (adapted to the orientation constraints),
+        ``"gripper"`` and other streams (time-warped from the best
+        candidate); ``"joints"`` with a robot. Metadata holds ``method``,
+        ``used``, ``k``, ``time_scale`` and, with joints, ``joint_names``.
     used : list
         Ids of the candidates the representation learned from, best first.
     rejected : dict
@@ -45,6 +50,15 @@ class ReuseResult:
         The adapted candidates that were used, best first.
     message : str
         What happened, in words.
+    orientation_error : float
+        Largest angle (radians) between a constrained orientation and its target (0.0 without).
+    peaks : dict
+        Peak velocity and acceleration of ``position``, ``orientation`` and
+        ``joints`` after time scaling (see :func:`peak_rates`).
+    time_scale : float
+        How much the time base was stretched to meet the limits (1.0: not at all).
+    notes : list of str
+        Streams carried or dropped, time scaling, the representation's warnings.
     """
 
     trajectory: Demonstration
@@ -58,9 +72,17 @@ class ReuseResult:
     velocity_error: float = 0.0
     candidates: list = field(default_factory=list)
     message: str = ""
+    orientation_error: float = 0.0
+    peaks: dict = field(default_factory=dict)
+    time_scale: float = 1.0
+    notes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        """JSON-able summary: trajectory as nested lists, ids as int or str.
+        """JSON-able summary: time, every stream as nested lists, ids as int or str.
+
+        ``trajectory`` is the position path (as before streams were added);
+        ``joint_names`` and ``peak_joint_velocity`` are there with a
+        ``joints`` stream only.
 
         Examples
         --------
@@ -68,16 +90,16 @@ class ReuseResult:
         >>> from skillbank import Constraints
         >>> s = np.linspace(0, 1, 20)
         >>> res = reuse([np.c_[s, s]], Constraints(goal=[1.0, 2.0]), method="lte")
-        >>> sorted(res.to_dict())
-        ['collision', 'constraint_error', 'rejected', 'trajectory', 'used']
+        >>> sorted(res.to_dict())  # doctest: +NORMALIZE_WHITESPACE
+        ['collision', 'constraint_error', 'notes', 'orientation_error', 'peaks', 'rejected', 'streams', 't',
+         'trajectory', 'used']
         """
-        return {
-            "trajectory": self.trajectory["position"].tolist(),
-            "used": [_json_id(i) for i in self.used],
-            "rejected": {str(i): str(r) for i, r in self.rejected.items()},
-            "constraint_error": float(self.constraint_error),
-            "collision": bool(self.collision),
-        }
+        doc = executable_dict(self.trajectory, orientation_error=self.orientation_error, peaks=self.peaks,
+                              notes=self.notes)
+        doc.update({"used": [_json_id(i) for i in self.used],
+                    "rejected": {str(i): str(r) for i, r in self.rejected.items()},
+                    "constraint_error": float(self.constraint_error), "collision": bool(self.collision)})
+        return doc
 
 
 def _json_id(i):
@@ -99,7 +121,7 @@ def _check_k(k, method: str, n_usable: int) -> int:
 
 
 def reproduce_selection(selection: Selection, constraints, *, method: str = "promp", k=None,
-                        random_state=None, t=None) -> ReuseResult:
+                        random_state=None, t=None, duration=None, robot=None, limits=None) -> ReuseResult:
     """Learn ``method`` from the ``k`` best candidates of a selection and reproduce the task.
 
     The second half of :func:`reuse`; call it directly to try several
@@ -110,8 +132,10 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     selection : Selection
         From :func:`select_candidates` with the same ``constraints``.
     constraints : Constraints
-    method, k, random_state, t
-        As in :func:`reuse`.
+    method, k, random_state, t, duration, robot, limits
+        As in :func:`reuse`. ``duration`` stretches the reproduction's time
+        base uniformly here; :func:`reuse` stretches the candidates first,
+        so that velocity constraints mean the same in the result.
 
     Returns
     -------
@@ -133,6 +157,8 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
         raise ValueError(f"selection: expected a Selection, got {type(selection).__name__}")
     if t is not None:
         t = check_time(t, name="t", min_samples=cls.min_samples)
+    duration = _check_duration(duration, t)
+    limits = check_limits(limits)
     if not selection.candidates:
         # The first few reasons and a count: one line even for a skill of thousands of primitives
         # (every reason is in Selection.rejected and in ReuseResult.rejected of a successful reuse).
@@ -152,28 +178,64 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     out, collision, more = fit_reproduce(method, [c.demo() for c in chosen], task, random_state=random_state,
                                          n_steps=None if t is None else len(t))
     notes += more
-    time = out.t if t is None else t
-    Y = out["position"]
+    if t is None:
+        time = out.t - out.t[0]
+        if duration is not None:
+            time = time * (duration / time[-1])
+            time[-1] = duration
+    else:
+        time = t
+    used = [c.id for c in chosen]
+    metadata = {"method": method, "used": used, "k": k, "rank": selection.rank}
+    done = make_executable(Demonstration(time, {"position": out["position"]}, metadata),
+                           [c.recorded() for c in chosen], constraints, ids=used, robot=robot, limits=limits,
+                           fixed_time=t is not None or duration is not None, by_index=t is not None)
+    traj = done.trajectory
+    Y = traj["position"]
     with numerical_errors(f"reuse ({method} result check)"):
         error = constraints.position_error(Y)
-        vel_error = constraints.velocity_error(Y, time)
-    used = [c.id for c in chosen]
+        vel_error = constraints.velocity_error(Y, traj.t)
     message = (f"{method} from {k} of {len(selection.candidates)} usable candidate(s) "
                f"({len(selection.rejected)} rejected, ranked by {selection.rank}); constraint error "
                f"{error:.3g}; {'collides' if collision else 'collision-free'}")
+    if constraints.has_orientation:
+        message += f"; orientation error {done.orientation_error:.3g} rad"
     if notes:
         message += "; " + "; ".join(notes)
-    metadata = {"method": method, "used": used, "k": k, "rank": selection.rank}
     return ReuseResult(
-        trajectory=Demonstration(time, {"position": Y}, metadata), used=used,
-        rejected=dict(selection.rejected), constraint_error=error, collision=collision,
-        ranking=selection.ranking, method=method, k=k, velocity_error=vel_error,
-        candidates=[c.demo() for c in chosen], message=message,
+        trajectory=traj, used=used, rejected=dict(selection.rejected), constraint_error=error,
+        collision=collision, ranking=selection.ranking, method=method, k=k, velocity_error=vel_error,
+        candidates=[c.demo() for c in chosen], message=message, orientation_error=done.orientation_error,
+        peaks=done.peaks, time_scale=done.time_scale, notes=notes + done.notes,
     )
 
 
+def _check_duration(duration, t):
+    if duration is None:
+        return None
+    if t is not None:
+        raise ValueError("duration: give a duration or a time base t, not both")
+    return check_positive(duration, name="duration")
+
+
+def _retimed(primitives, duration):
+    """Each primitive's time shifted to 0 and stretched to ``duration`` (arrays get ``linspace``)."""
+    if not isinstance(primitives, (list, tuple)):
+        return primitives  # select_candidates names the problem
+    out = []
+    for k, prim in enumerate(primitives):
+        if isinstance(prim, Demonstration):
+            out.append(retime(prim, duration) if prim.n_steps >= 2 else prim)
+        else:
+            Y = check_array(prim, name=f"primitives[{k}]", ndim=2)
+            out.append(Demonstration(np.linspace(0.0, duration, Y.shape[0]), {"position": Y})
+                       if Y.shape[0] >= 2 else Y)
+    return out
+
+
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
-          rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None) -> ReuseResult:
+          rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None, duration=None, robot=None,
+          limits=None) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
@@ -182,6 +244,11 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
        least, shortest adapted curve first (the paper's curve-length
        criterion, among the candidates that fit the task), then the others.
     4. Fit the representation on the ``k`` best adapted candidates and reproduce the constraints.
+    5. Complete the pose and the other streams (:func:`make_executable`):
+       orientation from the candidates, turned to the orientation constraints
+       keeping the rotation profile; gripper and other recorded streams of
+       the best candidate, time-warped; joints by inverse kinematics with a
+       ``robot``; time from 0, stretched uniformly to meet ``limits``.
 
     Parameters
     ----------
@@ -222,6 +289,20 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     progress : callable, optional
         Called as ``progress(done, total)`` while the candidates are adapted
         (see :func:`select_candidates`).
+    duration : float, optional
+        Seconds of the reproduction (every candidate is stretched to it
+        first); default the candidates' mean duration. Not with ``t``.
+    robot : str or RobotModel, optional
+        ``"ur5e"`` (a name of :data:`skillbank.robots.ROBOTS`) adds a
+        ``joints`` stream by inverse kinematics of the pose path (positions
+        in metres and orientations in the robot's base frame), on the branch
+        of the best candidate's recorded joints when it has them.
+    limits : dict, optional
+        Velocity and acceleration limits (keys ``velocity``,
+        ``acceleration``, ``angular_velocity``, ``angular_acceleration``,
+        ``joint_velocity``, ``joint_acceleration``), met by slowing the whole
+        reproduction down uniformly; with ``duration`` or ``t`` a limit that
+        needs more time is an error.
 
     Returns
     -------
@@ -249,6 +330,11 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     cls = representation(method)
     if k is not None and cls.single_demo:
         _check_k(k, method, 1)
+    duration = _check_duration(duration, t)
+    check_limits(limits)
+    if duration is not None:
+        primitives = _retimed(primitives, duration)
     selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
                                   min_samples=cls.min_samples, progress=progress)
-    return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t)
+    return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t,
+                               duration=duration, robot=robot, limits=limits)

@@ -65,7 +65,8 @@ def _json(cli, *argv):
     code, out, err = cli("edit", *argv, "--json", "--metrics")
     assert code == 0, err
     doc = json.loads(out)
-    assert set(doc) - {"plot"} == {"trajectory", "constraint_error", "collision", "metrics"}
+    assert set(doc) - {"plot"} == {"t", "streams", "trajectory", "used", "rejected", "constraint_error",
+                                   "orientation_error", "collision", "peaks", "notes", "metrics"}
     assert isinstance(doc["constraint_error"], float) and isinstance(doc["collision"], bool)
     return doc, np.array(doc["trajectory"])
 
@@ -171,12 +172,12 @@ def test_text_output(cli, files, tmp_path):
     (["{0}", "--obstacle", "cone:0,0,1"], r"obstacle: expected 'sphere:X,Y\[,Z\],R'"),
     (["{0}", "--obstacle", "sphere:0,0,-1"], r"sphere radius"),
     (["{0}", "--start", "1,x"], r"start: expected a number, got 'x'"),
-    (["{0}", "--out", "result.json"], r"out: expected a \.csv or \.npz file name, got 'result\.json'"),
+    (["{0}", "--out", "result.json"], r"out: expected a file name ending in \.csv, .* got 'result\.json'"),
     (["{0}", "{2}"], r"input: '.*forces\.npz' has streams \['force', 'torque'\] and none is 'position'"),
     (["{1}", "{3}", "--method", "promp"], r"input: '.*line3d\.csv' has 3 dimensions, but '.*' has 2"),
     (["{0}", "--plot", "{4}/e.txt"], r"plot: expected a figure file name ending in one of \.avif, .*\.png, .*"
                                     r"\(or no extension for \.png\), got '.*e\.txt'"),
-    (["{0}", "--out", "{4}/no/such/dir/e.csv"], r"No such file or directory"),
+    (["{0}", "--out", "{4}/no/such/dir/e.csv"], r"out: folder '.*dir' does not exist"),
 ])
 def test_errors_exit_2_with_one_line(cli, files, tmp_path, argv, match):
     t = np.linspace(0.0, 1.0, 20)

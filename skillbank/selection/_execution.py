@@ -1,0 +1,396 @@
+"""From a reproduced path to something a robot executes: pose, gripper, timing and joints.
+
+A representation reproduces positions. :func:`make_executable` completes
+them with what the primitives it learned from recorded:
+
+- **orientation**: each source's orientation stream, mapped onto the
+  reproduction by phase with SLERP, averaged in the tangent space of the best
+  source (several sources), then turned to the orientation constraints by
+  :func:`skillbank.editing.edit_orientation` (a correction field that keeps the
+  rotation profile);
+- **gripper** (and any stream with whole-number values, or named in
+  :data:`DISCRETE_STREAMS`): the best source's, by zero-order hold, so the
+  values stay the recorded ones and switch at the mapped time;
+- **other streams** (force, torque, ...): the best source's, interpolated
+  linearly in phase, as recorded (not adapted to the new path; a note says
+  so); recorded ``joints`` are dropped (they no longer match the adapted pose);
+- **joints** from a robot model's inverse kinematics of the pose path, when
+  a robot is given, starting on the branch of the best source's recorded
+  joints;
+- **timing**: time starts at 0; velocity and acceleration limits are met by
+  slowing the whole reproduction down uniformly (the path is never changed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import Demonstration, continuous_quaternions, slerp
+from ..core._rotations import _exp, _log, quaternion_conjugate, quaternion_multiply
+from ..core._validation import check_array, check_positive, numerical_errors
+from ..editing import edit_orientation, relative_rotations
+from ..robots import KinematicsError, RobotModel, robot_model
+
+__all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
+           "DISCRETE_STREAMS"]
+
+#: Streams carried by zero-order hold whatever their values (commands, not measurements).
+DISCRETE_STREAMS = ("gripper",)
+#: Keys of ``limits``: task-space limits are on the norm (m/s, m/s^2, rad/s, rad/s^2), joint limits
+#: per joint (a number for all or one per joint; rad/s, rad/s^2).
+LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration", "joint_velocity",
+          "joint_acceleration")
+_STREAM_OF = {"velocity": "position", "acceleration": "position", "angular_velocity": "orientation",
+              "angular_acceleration": "orientation", "joint_velocity": "joints",
+              "joint_acceleration": "joints"}
+# A limit met to round-off: the scaled peak may exceed it by a few ulps otherwise.
+_MARGIN = 1.0 + 1e-12
+
+
+@dataclass
+class Executable:
+    """A reproduction with every stream a robot needs.
+
+    Attributes
+    ----------
+    trajectory : Demonstration
+        Streams ``position``, and where the sources had them ``orientation``,
+        ``gripper`` and other recorded streams; ``joints`` with a robot.
+        Metadata holds ``joint_names`` with joints.
+    orientation_error : float
+        Largest angle (radians) between a constrained orientation and its target.
+    peaks : dict
+        ``{stream: {"velocity": float, "acceleration": float}}`` after time
+        scaling; ``position`` in units/s (norm), ``orientation`` angular (rad/s,
+        norm), ``joints`` the largest of any joint (rad/s).
+    time_scale : float
+        Factor the time base was stretched by to meet the limits (1.0: none needed).
+    notes : list of str
+        What was carried, dropped or changed, in words.
+    """
+
+    trajectory: Demonstration
+    orientation_error: float = 0.0
+    peaks: dict = field(default_factory=dict)
+    time_scale: float = 1.0
+    notes: list = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        """JSON-able: see :func:`executable_dict`."""
+        return executable_dict(self.trajectory, orientation_error=self.orientation_error, peaks=self.peaks,
+                               notes=self.notes)
+
+
+def executable_dict(trajectory: Demonstration, *, orientation_error: float, peaks: dict, notes) -> dict:
+    """The JSON document of an executable reproduction (what ``--json`` prints, with the command's keys).
+
+    ``{"t", "streams": {name: rows}, "trajectory": position rows, "orientation_error", "peaks", "notes"}``
+    and, with a ``joints`` stream, ``"joint_names"`` and ``"peak_joint_velocity"``.
+
+    Examples
+    --------
+    >>> d = Demonstration([0.0, 1.0], {"position": [[0.0], [1.0]]})
+    >>> sorted(executable_dict(d, orientation_error=0.0, peaks={}, notes=[]))
+    ['notes', 'orientation_error', 'peaks', 'streams', 't', 'trajectory']
+    """
+    doc = {"t": trajectory.t.tolist(),
+           "streams": {name: data.tolist() for name, data in trajectory.streams.items()},
+           "trajectory": trajectory["position"].tolist(), "orientation_error": float(orientation_error),
+           "peaks": peaks, "notes": list(notes)}
+    if "joints" in trajectory.streams:
+        doc["joint_names"] = list(trajectory.metadata.get("joint_names", []))
+        doc["peak_joint_velocity"] = float(peaks["joints"]["velocity"]) if "joints" in peaks else 0.0
+    return doc
+
+
+def retime(demo: Demonstration, duration=None) -> Demonstration:
+    """The demonstration with its time shifted to start at 0 and, with ``duration``, stretched to it.
+
+    Examples
+    --------
+    >>> d = Demonstration(np.array([5.0, 6.0, 9.0]), {"position": np.zeros((3, 1))})
+    >>> retime(d).t.tolist(), retime(d, duration=2.0).t.tolist()
+    ([0.0, 1.0, 4.0], [0.0, 0.5, 2.0])
+    """
+    t = demo.t - demo.t[0]
+    if duration is not None:
+        duration = check_positive(duration, name="duration")
+        if demo.n_steps < 2:
+            raise ValueError(f"duration: a demonstration of {demo.n_steps} sample has no duration to set")
+        t = t * (duration / t[-1])
+        t[-1] = duration
+    return Demonstration(t, demo.streams, demo.metadata)
+
+
+def check_limits(limits) -> dict:
+    """``limits`` as ``{key: float or (n,) array}``, validated; ``{}`` for None.
+
+    Examples
+    --------
+    >>> check_limits({"joint_velocity": 1.0})
+    {'joint_velocity': 1.0}
+    """
+    if limits is None:
+        return {}
+    if not isinstance(limits, dict):
+        raise ValueError(f"limits: expected a dict with keys among {list(LIMITS)}, got "
+                         f"{type(limits).__name__}")
+    unknown = sorted(set(limits) - set(LIMITS))
+    if unknown:
+        raise ValueError(f"limits: expected keys among {list(LIMITS)}, got {unknown}")
+    out = {}
+    for key, value in limits.items():
+        if value is None:
+            continue
+        if key.startswith("joint_") and np.ndim(value) == 1:
+            arr = check_array(value, name=f"limits[{key!r}]", ndim=1)
+            if (arr <= 0).any():
+                raise ValueError(f"limits[{key!r}]: expected numbers > 0, got {arr.tolist()}")
+            out[key] = arr
+        else:
+            out[key] = check_positive(value, name=f"limits[{key!r}]")
+    return out
+
+
+def _rates(values: np.ndarray, t: np.ndarray):
+    """First and second time derivatives by finite differences (uneven steps allowed)."""
+    dt = np.diff(t)
+    v = values / dt[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
+    return v, a
+
+
+def _steps(name: str, data: np.ndarray) -> np.ndarray:
+    """Per-step changes: rotation vectors for orientations, differences otherwise."""
+    return relative_rotations(data) if name == "orientation" else np.diff(data, axis=0)
+
+
+def peak_rates(demo: Demonstration) -> dict:
+    """Peak velocity and acceleration of ``position``, ``orientation`` and ``joints`` (those present).
+
+    Task space: the norm of the velocity (units/s) and of the acceleration;
+    orientation: of the angular velocity (rad/s, from the relative rotation
+    between samples); joints: the largest absolute value of any joint.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 2.0, 5)
+    >>> peak_rates(Demonstration(t, {"position": np.c_[t, 0 * t]}))["position"]
+    {'velocity': 1.0, 'acceleration': 0.0}
+    """
+    out = {}
+    if demo.n_steps < 2:
+        return out
+    for name in ("position", "orientation", "joints"):
+        if name not in demo.streams:
+            continue
+        v, a = _rates(_steps(name, demo[name]), demo.t)
+        out[name] = {"velocity": float(_size(name, v).max()),
+                     "acceleration": float(_size(name, a).max()) if len(a) else 0.0}
+    return out
+
+
+def _size(name: str, x: np.ndarray) -> np.ndarray:
+    """Per-sample size of a rate: the largest joint's for joints, the norm otherwise."""
+    return np.abs(x).max(axis=1) if name == "joints" else np.linalg.norm(x, axis=1)
+
+
+def _scale_needed(demo: Demonstration, limits: dict) -> tuple[float, str]:
+    """The smallest uniform time stretch meeting every limit, and the limit that sets it."""
+    best, why = 1.0, ""
+    for key, limit in limits.items():
+        stream = _STREAM_OF[key]
+        if stream not in demo.streams:
+            continue
+        v, a = _rates(_steps(stream, demo[stream]), demo.t)
+        x = a if key.endswith("acceleration") else v
+        if not len(x):
+            continue
+        if stream == "joints":
+            limit = np.broadcast_to(limit, (x.shape[1],))
+            ratio = float((np.abs(x) / limit).max())
+        else:
+            ratio = float(np.linalg.norm(x, axis=1).max() / limit)
+        # Time stretched by s divides velocities by s and accelerations by s^2.
+        need = np.sqrt(ratio) if key.endswith("acceleration") else ratio
+        if need * _MARGIN > best:
+            best, why = need * _MARGIN, key
+    return best, why
+
+
+def _source_times(source: Demonstration, u: np.ndarray, by_index: bool) -> np.ndarray:
+    """Times of ``source`` at phases ``u`` (of its duration, or of its samples when ``by_index``)."""
+    if by_index:
+        return np.interp(u * (source.n_steps - 1), np.arange(source.n_steps), source.t)
+    return source.t[0] + u * (source.t[-1] - source.t[0])
+
+
+def _mean_orientation(streams: list) -> np.ndarray:
+    """Tangent-space mean of orientation streams sample by sample, about the first (one Karcher step)."""
+    ref = continuous_quaternions(streams[0])
+    if len(streams) == 1:
+        return ref
+    inv = quaternion_conjugate(ref)
+    V = np.mean([_log(quaternion_multiply(inv, q)) for q in streams], axis=0)
+    return continuous_quaternions(quaternion_multiply(ref, _exp(V)))
+
+
+def _is_discrete(name: str, data: np.ndarray) -> bool:
+    return name in DISCRETE_STREAMS or bool(np.all(data == np.round(data)))
+
+
+def _carry(source: Demonstration, ts: np.ndarray, name: str, label: str) -> tuple[np.ndarray, str]:
+    """One stream of ``source`` at times ``ts``: zero-order hold for discrete ones, linear otherwise."""
+    data = source[name]
+    if _is_discrete(name, data):
+        i = np.clip(np.searchsorted(source.t, ts, side="right") - 1, 0, source.n_steps - 1)
+        return data[i], f"{name}: from {label}, time-warped by zero-order hold (values kept)"
+    cols = [np.interp(ts, source.t, data[:, j]) for j in range(data.shape[1])]
+    return np.column_stack(cols), f"{name}: carried from {label} as recorded, time-warped (not adapted)"
+
+
+def _robot(robot) -> RobotModel:
+    if isinstance(robot, RobotModel):
+        return robot
+    return robot_model(robot)
+
+
+def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0: float) -> np.ndarray:
+    if orientation is None:
+        raise ValueError(f"robot: {model.name} inverse kinematics needs an 'orientation' stream, and the "
+                         "primitives have none")
+    if position.shape[1] != 3:
+        raise ValueError(f"robot: {model.name} inverse kinematics needs 3-D positions, got "
+                         f"{position.shape[1]}-D")
+    seed = None
+    if "joints" in source.streams and source["joints"].shape[1] == model.n_joints:
+        i = int(np.clip(np.searchsorted(source.t, ts0, side="right") - 1, 0, source.n_steps - 1))
+        seed = source["joints"][i]
+    try:
+        return model.ik(position, orientation, q_seed=seed)
+    except KinematicsError as exc:
+        raise KinematicsError(f"robot {model.name}: {exc}", index=exc.index, reason=exc.reason) from None
+
+
+def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot=None, limits=None,
+                    fixed_time: bool = False, by_index: bool = False, kind: str = "primitive") -> Executable:
+    """Complete a reproduced path with orientation, gripper, other streams, joints and timing.
+
+    Parameters
+    ----------
+    out : Demonstration
+        The reproduction (stream ``"position"``), its time base starting at 0.
+    sources : list of Demonstration
+        The primitives it was learned from, best first, with every recorded stream.
+    constraints : Constraints
+        Orientation constraints are met here; positions already are.
+    ids : list, optional
+        The sources' ids, for the notes.
+    kind : str, default="primitive"
+        What a source is called in the notes and messages (``"file"`` for ``skillbank edit``).
+    robot : str or RobotModel, optional
+        Adds a ``joints`` stream by inverse kinematics (``robot_model(robot)``).
+    limits : dict, optional
+        Keys of :data:`LIMITS`. Met by stretching time uniformly.
+    fixed_time : bool, default=False
+        The time base was asked for (a duration or time stamps): limits that
+        need a longer one are an error instead of a stretch.
+    by_index : bool, default=False
+        Map reproduction phase to source samples by index rather than time
+        (the sources were resampled by index onto a given time base).
+
+    Returns
+    -------
+    Executable
+
+    Raises
+    ------
+    ValueError
+        Orientation constraints without orientation streams; a robot without
+        orientation or with a pose path it cannot follow (a
+        ``KinematicsError`` naming the sample); limits that need a longer
+        time base than a fixed one, or that would change a non-zero boundary
+        velocity.
+
+    Examples
+    --------
+    >>> from skillbank import Constraints
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> src = Demonstration(t, {"position": np.c_[t, t], "gripper": [0, 0, 1, 1, 1]})
+    >>> res = make_executable(src.select(["position"]), [src], Constraints(), limits={"velocity": 0.5})
+    >>> res.time_scale > 2.8, res.trajectory["gripper"].ravel().tolist()
+    (True, [0.0, 0.0, 1.0, 1.0, 1.0])
+    """
+    limits = check_limits(limits)
+    sources = list(sources)
+    ids = list(range(len(sources))) if ids is None else list(ids)
+    t = out.t.copy()
+    n = t.shape[0]
+    u = (t - t[0]) / (t[-1] - t[0]) if n > 1 else np.zeros(1)
+    times = [_source_times(s, u, by_index) for s in sources]
+    streams = {"position": out["position"]}
+    notes = []
+    with numerical_errors("reuse (orientation)"):
+        have = [k for k, s in enumerate(sources) if "orientation" in s.streams]
+        orientation, error = None, 0.0
+        if constraints.has_orientation and not have:
+            names = sorted({name for s in sources for name in s.streams})
+            raise ValueError(f"constraints: orientation constraints need an 'orientation' stream, and "
+                             f"{kind}(s) {ids} have none (streams {names})")
+        if have:
+            mean = _mean_orientation([slerp(sources[k].t, sources[k]["orientation"], times[k]) for k in have])
+            edited = edit_orientation(mean, constraints, t=t if n > 1 else None)
+            orientation, error = edited.q, edited.orientation_error
+            streams["orientation"] = orientation
+            if len(have) > 1:
+                notes.append(f"orientation: tangent-space mean of {kind}s {[ids[k] for k in have]}")
+    best, label = sources[0], f"{kind} {ids[0]}"
+    for name in best.stream_names:
+        if name in ("position", "orientation"):
+            continue
+        if name == "joints":
+            if robot is None:
+                notes.append(f"joints: the recorded joints of {label} were dropped (they no longer match "
+                             "the adapted pose; pass a robot for joints by inverse kinematics)")
+            continue
+        streams[name], note = _carry(best, times[0], name, label)
+        notes.append(note)
+    metadata = dict(out.metadata)
+    if robot is not None:
+        model = _robot(robot)
+        with numerical_errors(f"reuse ({model.name} inverse kinematics)"):
+            streams["joints"] = _joints(model, streams["position"], orientation, best, float(times[0][0]))
+        metadata["joint_names"] = list(model.joint_names)
+        metadata["robot"] = model.name
+    demo = Demonstration(t, streams, metadata)
+    scale = 1.0
+    if limits and n > 1:
+        with numerical_errors("reuse (time scaling)"):
+            scale, key = _scale_needed(demo, limits)
+        if scale > 1.0:
+            _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
+            demo = Demonstration(t[0] + (t - t[0]) * scale, streams, metadata)
+            notes.append(f"time stretched by {scale:.4g} to meet {key} {_show(limits[key])}")
+    with numerical_errors("reuse (peak rates)"):
+        peaks = peak_rates(demo)
+    demo.metadata["time_scale"] = scale
+    return Executable(trajectory=demo, orientation_error=error, peaks=peaks, time_scale=scale, notes=notes)
+
+
+def _show(limit) -> str:
+    return f"{limit:g}" if np.ndim(limit) == 0 else str(np.asarray(limit).tolist())
+
+
+def _check_stretch(constraints, fixed_time, scale, t, key, limit) -> None:
+    duration = float(t[-1] - t[0])
+    if fixed_time:
+        raise ValueError(f"limits: {key} {_show(limit)} cannot be met in the {duration:.6g} s asked for: it "
+                         f"needs at least {duration * scale:.6g} s (leave the duration out to slow down as "
+                         "needed)")
+    for name in ("start_velocity", "end_velocity"):
+        v = getattr(constraints, name)
+        if v is not None and np.any(v != 0):
+            raise ValueError(f"limits: {key} {_show(limit)} needs the motion slowed down {scale:.4g} times, "
+                             f"which would change the non-zero {name.replace('_', ' ')} {v.tolist()}")

@@ -1,0 +1,176 @@
+"""``library reuse`` and ``edit`` as executable reproductions: orientation, robot, timing, exports, errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from skillbank import Demonstration
+from skillbank.core import exp_map, quaternion_angle
+from skillbank.io import load, read_npz, write_csv, write_npz
+from skillbank.robots import UR5e
+
+KEYS = {"t", "streams", "joint_names", "trajectory", "used", "rejected", "constraint_error",
+        "orientation_error", "collision", "peak_joint_velocity", "peaks", "notes"}
+
+
+def _q(q) -> str:
+    return ",".join(f"{v:.12f}" for v in q)
+
+
+@pytest.fixture(scope="module")
+def buttons(data_dir, tmp_path_factory):
+    """The three-button file in a library, every primitive labelled 'button'; a goal near primitive 3's."""
+    from skillbank import Library
+
+    path = data_dir / "seed" / "three_button_pressing_demo.h5"
+    db = tmp_path_factory.mktemp("lib") / "lib.db"
+    with Library(db) as lib:
+        lib.add_files([path], label="button")
+        prims = {p.id: p.demo for p in lib.primitives()}
+    end = prims[3]
+    goal = end["position"][-1] + [0.03, -0.02, 0.0]
+    goal_q = exp_map([0.0, 0.0, np.radians(10.0)], reference=end["orientation"][-1])
+    return {"db": db, "file": path, "goal": goal, "goal_q": goal_q}
+
+
+def _reuse(cli, buttons, *argv):
+    return cli("library", "reuse", buttons["db"], "--skill", "button", "--method", "ja",
+               "--goal", ",".join(f"{v:.6f}" for v in buttons["goal"]), *argv)
+
+
+def test_reuse_json_contract_with_robot_and_csv(cli, buttons, tmp_path):
+    out = tmp_path / "reach.csv"
+    code, text, err = _reuse(cli, buttons, "--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e",
+                             "--max-joint-velocity", "0.8", "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert set(doc) == KEYS
+    assert set(doc["streams"]) == {"position", "orientation", "gripper", "joints", "force", "torque"}
+    assert doc["joint_names"] == list(UR5e.joint_names) and doc["t"][0] == 0.0
+    assert doc["trajectory"] == doc["streams"]["position"]
+    assert doc["constraint_error"] < 1e-9 and doc["orientation_error"] < 1e-9 and doc["collision"] is False
+    assert 0 < doc["peak_joint_velocity"] <= 0.8
+    P, Q, J = (np.array(doc["streams"][k]) for k in ("position", "orientation", "joints"))
+    np.testing.assert_allclose(P[-1], buttons["goal"], atol=1e-6)  # the goal as typed, 6 decimals
+    assert quaternion_angle(Q[-1], buttons["goal_q"]) < 1e-9
+    position, quaternion = UR5e().fk(J)
+    assert np.abs(position - P).max() < 1e-9 and quaternion_angle(quaternion, Q).max() < 1e-9
+    header = out.read_text().splitlines()[0].split(",")
+    assert header[:8] == ["t", "position_0", "position_1", "position_2", "orientation_x", "orientation_y",
+                          "orientation_z", "orientation_w"]
+    assert [f"joints_{n}" for n in UR5e.joint_names] == [h for h in header if h.startswith("joints_")]
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table[:, 0], doc["t"])
+    np.testing.assert_array_equal(table[:, [header.index(f"joints_{n}") for n in UR5e.joint_names]], J)
+
+
+def test_reuse_text_npz_urscript_and_rosbag(cli, buttons, tmp_path):
+    argv = ["--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e", "--duration", "6"]
+    code, text, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "r.npz")
+    assert code == 0, err
+    assert "orientation error" in text and "over 6 s from t = 0" in text and "peak joint velocity" in text
+    assert "note: gripper: from primitive" in text and f"wrote {tmp_path / 'r.npz'}" in text
+    back = read_npz(tmp_path / "r.npz")
+    assert back.t[-1] == 6.0 and back.metadata["joint_names"] == list(UR5e.joint_names)
+    code, _, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "r.script")
+    assert code == 0, err
+    lines = [x.strip() for x in (tmp_path / "r.script").read_text().splitlines()]
+    assert sum(x.startswith("servoj(") for x in lines) == 6 * 125 + 1
+    assert sum(x.startswith("skillbank_gripper(") for x in lines) >= 1
+    code, _, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "bag", "--format", "rosbag")
+    assert code == 0, err
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    with AnyReader([tmp_path / "bag"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    assert counts == {"/joint_trajectory": 1, "/pose": back.n_steps}
+
+
+def test_edit_carries_the_streams_and_adds_joints(cli, buttons, tmp_path):
+    demo = load(buttons["file"]).slice(1385, 2074)
+    path = write_npz(demo, tmp_path / "move.npz")
+    goal = demo["position"][-1] + [0.02, 0.0, 0.01]
+    goal_q = exp_map([0.0, 0.1, 0.0], reference=demo["orientation"][-1])
+    code, text, err = cli("edit", path, "--goal", ",".join(map(str, goal)), "--goal-orientation", _q(goal_q),
+                          "--robot", "ur5e", "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert set(doc) == KEYS and doc["used"] == [str(path)] and doc["rejected"] == {}
+    assert doc["t"][0] == 0.0 and doc["t"][-1] == pytest.approx(demo.duration)
+    assert doc["orientation_error"] < 1e-9 and doc["constraint_error"] < 1e-9
+    J = np.array(doc["streams"]["joints"])
+    position, _ = UR5e().fk(J)
+    assert np.abs(position - np.array(doc["trajectory"])).max() < 1e-9
+
+
+def _plain_library(tmp_path):
+    from skillbank import Library
+
+    s = np.linspace(0.0, 1.0, 60)
+    db = tmp_path / "plain.db"
+    with Library(db) as lib:
+        for k in range(2):
+            Y = np.c_[0.4 + 0.1 * s, -0.2 + 0.2 * s, 0.3 + 0.01 * k + 0.05 * np.sin(np.pi * s)]
+            lib.add(Demonstration(s, {"position": Y}), segment=False, label="reach")
+    return db
+
+
+OUT = ["--out", "{tmp}/out.csv"]
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--goal-orientation", "0,0,1", *OUT], r"goal_orientation: expected a quaternion of 4 components"),
+    (["--start-orientation", "0,0,0,0", *OUT], r"start_orientation: expected unit quaternions .*zero norm"),
+    (["--goal-orientation", "0,0,1,x", *OUT], r"goal_orientation: expected a number, got 'x'"),
+    (["--goal-orientation", "0,0,0,1", *OUT],
+     r"no usable candidate: \d+: no 'orientation' stream for the orientation"),
+    (["--robot", "ur5e", *OUT], r"robot: ur5e inverse kinematics needs an 'orientation' stream"),
+    (["--robot", "ur3", *OUT], r"robot: expected one of \['ur5e'\], got 'ur3'"),
+    (["--max-joint-velocity", "1", *OUT], r"max-joint-velocity: a joint velocity limit needs joints"),
+    (["--format", "csv", "--json"], r"format: --format csv needs --out FILE"),
+    (["--duration", "-1", *OUT], r"duration: expected a number > 0"),
+    (["--out", "{tmp}/r.xlsx"], r"out: expected a file name ending in \.csv"),
+    (["--out", "{tmp}/bag", "--format", "rosbag"], r"out: '.*bag' already exists; a ROS 2 bag is written"),
+])
+def test_reuse_errors_exit_2_with_one_line(cli, tmp_path, argv, match):
+    import re
+
+    db = _plain_library(tmp_path)
+    (tmp_path / "bag").mkdir()
+    before = sorted(p.name for p in tmp_path.iterdir())
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    code, out, err = cli("library", "reuse", db, "--skill", "reach", "--goal", "0.5,0.0,0.3", *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith("skillbank library reuse: error: ") and re.search(match, err), err
+    after = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("plain.db-"))  # SQLite's WAL
+    assert after == before and not any((tmp_path / "bag").iterdir())  # nothing written, not even half
+
+
+@pytest.mark.parametrize(("goal", "argv", "match"), [
+    ("1.6,0.0,0.2", ["--robot", "ur5e"], r"robot ur5e: position: sample \d+ is out"),
+    (None, ["--robot", "ur5e", "--duration", "0.2", "--max-joint-velocity", "0.01"],
+     r"limits: joint_velocity 0.01 cannot be met in the 0.2 s asked for: it needs at least [\d.]+ s"),
+])
+def test_robot_errors_exit_2_and_write_nothing(cli, buttons, tmp_path, goal, argv, match):
+    import re
+
+    goal = goal or ",".join(f"{v:.6f}" for v in buttons["goal"])
+    code, out, err = cli("library", "reuse", buttons["db"], "--skill", "button", "--method", "ja",
+                         "--goal", goal, "--goal-orientation", _q(buttons["goal_q"]), *argv,
+                         "--out", tmp_path / "r.csv")
+    assert code == 2 and out == "" and err.count("\n") == 1 and re.search(match, err), err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_edit_errors(cli, tmp_path):
+    s = np.linspace(0.0, 1.0, 30)
+    path = write_csv(Demonstration(s, {"position": np.c_[s, s]}), tmp_path / "a.csv")
+    code, out, err = cli("edit", path, "--goal-orientation", "0,0,0,1", "--out", tmp_path / "o.csv")
+    assert code == 2 and err == ("skillbank edit: error: constraints: orientation constraints need an "
+                                 "'orientation' stream, and file(s) ['a.csv'] have none "
+                                 "(streams ['position'])\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv"]

@@ -1,0 +1,170 @@
+"""Exports of an executable reproduction, each read back: CSV, NPZ, URScript, ROS 2 bag; all or nothing."""
+
+from __future__ import annotations
+
+import builtins
+import math
+
+import numpy as np
+import pytest
+
+from skillbank.core import Demonstration, exp_map
+from skillbank.io import TRAJECTORY_FORMATS, read_npz, trajectory_format, write_trajectory
+from skillbank.robots import UR5e
+
+NAMES = list(UR5e.joint_names)
+
+
+@pytest.fixture
+def executable():
+    """1.3 s, 40 uneven samples: pose, a gripper closing then opening, joints with their names, a force."""
+    s = np.linspace(0.0, 1.0, 40)
+    t = 1.3 * s + 0.01 * np.sin(np.pi * s)
+    P = np.c_[0.4 + 0.1 * s, -0.2 + 0.2 * s, 0.3 - 0.1 * s]
+    Q = exp_map(np.c_[0 * s, 0 * s, 0.8 * s], reference=[1.0, 0.0, 0.0, 0.0])
+    gripper = np.where((s > 0.3) & (s < 0.7), 1.0, 0.0)
+    joints = UR5e().ik(P, Q)
+    return Demonstration(t, {"position": P, "orientation": Q, "gripper": gripper, "joints": joints,
+                             "force": np.c_[s, -s, 2 * s]},
+                         {"method": "ja", "joint_names": NAMES, "used": [3]})
+
+
+def test_csv_has_every_stream_and_the_joint_names(executable, tmp_path):
+    path = write_trajectory(executable, tmp_path / "out.csv")
+    header = path.read_text().splitlines()[0].split(",")
+    assert header == (["t", "position_0", "position_1", "position_2", "orientation_x", "orientation_y",
+                       "orientation_z", "orientation_w", "gripper_0"] + [f"joints_{n}" for n in NAMES]
+                      + ["force_0", "force_1", "force_2"])
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    expected = np.column_stack([executable.t] + list(executable.streams.values()))
+    np.testing.assert_array_equal(table, expected)  # %.17g: exact
+
+
+def test_npz_has_every_stream_and_the_joint_names(executable, tmp_path):
+    back = read_npz(write_trajectory(executable, tmp_path / "out.npz"))
+    assert back.stream_names == executable.stream_names and back.metadata["joint_names"] == NAMES
+    for name in executable.streams:
+        np.testing.assert_array_equal(back[name], executable[name])
+    np.testing.assert_array_equal(back.t, executable.t)
+
+
+@pytest.mark.parametrize("rate", [125.0, 500.0, 7.0])
+def test_urscript_servoj_at_the_rate_and_gripper_at_its_switches(executable, tmp_path, rate):
+    path = write_trajectory(executable, tmp_path / "arm.script", rate=rate)
+    lines = [line.strip() for line in path.read_text().splitlines()]
+    servo = [x for x in lines if x.startswith("servoj(")]
+    duration = executable.t[-1] - executable.t[0]
+    assert len(servo) == math.ceil(duration * rate) + 1
+    assert all(f"t={1 / rate:.6g}," in x for x in servo)
+    calls = [i for i, x in enumerate(lines) if x.startswith("skillbank_gripper(")]
+    assert [lines[i] for i in calls] == [f"skillbank_gripper({v})" for v in (0, 1, 0)]
+    # each call comes right before the servoj of the first control step at or after the recorded switch
+    g = executable["gripper"][:, 0]
+    switches = executable.t[np.flatnonzero(np.diff(g)) + 1]
+    steps = [sum(x.startswith("servoj(") for x in lines[:i]) for i in calls[1:]]
+    assert steps == [math.ceil((s - executable.t[0]) * rate - 1e-9) for s in switches]
+    # the first and last servoj are the trajectory's first and last configurations; movej goes to the first
+    first = np.array(servo[0][len("servoj(["):servo[0].index("]")].split(","), dtype=float)
+    last = np.array(servo[-1][len("servoj(["):servo[-1].index("]")].split(","), dtype=float)
+    np.testing.assert_allclose(first, executable["joints"][0], atol=1e-9)
+    np.testing.assert_allclose(last, executable["joints"][-1], atol=1e-9)
+    movej = next(x for x in lines if x.startswith("movej("))
+    assert movej[len("movej("):movej.index("]") + 1] == servo[0][len("servoj("):servo[0].index("]") + 1]
+    assert "set_tool_digital_out(0, value > 0.5)" in lines and lines[-1] == "skillbank_trajectory()"
+    assert lines.index("def skillbank_gripper(value):") < calls[0]
+
+
+def test_urscript_gripper_command_is_configurable(executable, tmp_path):
+    path = write_trajectory(executable, tmp_path / "arm.urscript",
+                            gripper_command="rq_move_norm(value * 100)  # Robotiq, threshold {threshold}")
+    text = path.read_text()
+    assert "    rq_move_norm(value * 100)  # Robotiq, threshold 0.5" in text
+    assert "set_tool_digital_out" not in text
+
+
+def test_rosbag_read_back_with_rosbags(executable, tmp_path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    path = write_trajectory(executable, tmp_path / "bag", format="rosbag", start_time=1700000000.25)
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        assert topics == {"/joint_trajectory": "trajectory_msgs/msg/JointTrajectory",
+                          "/pose": "geometry_msgs/msg/PoseStamped"}
+        msgs = {topic: [] for topic in topics}
+        for conn, stamp, raw in reader.messages():
+            msgs[conn.topic].append((stamp, reader.deserialize(raw, conn.msgtype)))
+    [(_, traj)] = msgs["/joint_trajectory"]
+    assert list(traj.joint_names) == NAMES and len(traj.points) == executable.n_steps
+    np.testing.assert_array_equal(np.array([p.positions for p in traj.points]), executable["joints"])
+    from_start = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in traj.points])
+    np.testing.assert_allclose(from_start, executable.t - executable.t[0], atol=1e-9)
+    poses = msgs["/pose"]
+    assert len(poses) == executable.n_steps
+    P = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for _, m in poses])
+    Q = np.array([[m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w]
+                  for _, m in poses])
+    np.testing.assert_array_equal(P, executable["position"])
+    np.testing.assert_array_equal(Q, executable["orientation"])
+    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for _, m in poses])
+    np.testing.assert_allclose(stamps - 1700000000.25, executable.t - executable.t[0], atol=1e-6)
+    assert {m.header.frame_id for _, m in poses} == {"base"}
+
+
+def test_formats_and_suffixes():
+    assert TRAJECTORY_FORMATS == ("csv", "npz", "urscript", "rosbag")
+    assert [trajectory_format(p) for p in ("a.csv", "a.TXT", "a.npz", "a.script", "a.urscript", "a.bag")] == [
+        "csv", "csv", "npz", "urscript", "urscript", "rosbag"]
+
+
+def _no_rosbags(monkeypatch):
+    real = builtins.__import__
+
+    def fake(name, *args, **kwargs):
+        if name.startswith("rosbags"):
+            raise ImportError(f"No module named {name!r}")
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", fake)
+
+
+@pytest.mark.parametrize(("change", "kwargs", "match"), [
+    (None, {"format": "bag"}, r"format: expected one of \['csv', 'npz', 'urscript', 'rosbag'\], got 'bag'"),
+    (None, {"path": "out.xlsx"}, r"out: expected a file name ending in .csv"),
+    (None, {"path": "missing/out.csv"}, r"out: folder '.*missing' does not exist"),
+    (None, {"path": "arm.script", "rate": 0}, r"rate: expected a number > 0"),
+    ("no joints", {"path": "arm.script"}, r"demo: a URScript export replays joints, and the trajectory"),
+    ("no orientation", {"path": "b", "format": "rosbag"}, r"demo: a ROS bag holds the pose path"),
+    ("bad metadata", {"path": "out.npz"}, r"demo.metadata: expected JSON-serialisable values"),
+])
+def test_errors_write_nothing(executable, tmp_path, change, kwargs, match):
+    demo = executable
+    if change == "no joints":
+        demo = executable.select(["position", "orientation", "gripper"])
+    elif change == "no orientation":
+        demo = executable.select(["position", "joints"])
+    elif change == "bad metadata":
+        demo = Demonstration(executable.t, executable.streams, {"bad": object()})
+    path = tmp_path / kwargs.pop("path", "out.csv")
+    with pytest.raises(ValueError, match=match):
+        write_trajectory(demo, path, **kwargs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no file, no temporary left
+
+
+def test_a_failed_write_leaves_the_old_file(executable, tmp_path):
+    path = tmp_path / "out.npz"
+    path.write_bytes(b"old")
+    with pytest.raises(ValueError, match=r"demo.metadata"):
+        write_trajectory(Demonstration(executable.t, executable.streams, {"bad": object()}), path)
+    assert path.read_bytes() == b"old" and [p.name for p in tmp_path.iterdir()] == ["out.npz"]
+
+
+def test_rosbag_errors(executable, tmp_path, monkeypatch):
+    (tmp_path / "taken").mkdir()
+    with pytest.raises(ValueError, match=r"out: '.*taken' already exists; a ROS 2 bag is written to a new"):
+        write_trajectory(executable, tmp_path / "taken", format="rosbag")
+    _no_rosbags(monkeypatch)
+    with pytest.raises(ImportError, match=r"^writing a ROS 2 bag needs the 'rosbags' package: "
+                                          r"pip install skillbank\[ros\]$"):
+        write_trajectory(executable, tmp_path / "bag", format="rosbag")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
