@@ -12,9 +12,11 @@ import numpy as np
 from ._options import (
     add_constraint_options,
     add_execution_options,
+    add_reader_options,
     add_segmentation_options,
     constraints_from_args,
     execution_params,
+    reader_options,
     segmentation_params,
     show_progress,
 )
@@ -47,8 +49,11 @@ def add_parser(sub):
     c = cmds.add_parser("add", help="segment demonstrations and store their primitives (all files or none, "
                                     "unless --keep-going)")
     c.add_argument("db", type=Path, help=_DB)
-    c.add_argument("files", nargs="+", type=Path, help="demonstration files (.h5, .mat, .csv, .npz)")
+    c.add_argument("files", nargs="+", type=Path,
+                   help="demonstration files (.h5, .mat, .csv, .npz, ROS 1/2 bags, .mcap, LeRobot dataset "
+                        "folders, robomimic .hdf5)")
     add_segmentation_options(c)
+    add_reader_options(c)
     c.add_argument("--whole", action="store_true", help="store each demonstration as one primitive")
     c.add_argument("--label", default=None, help="label every primitive added")
     c.add_argument("--assign", choices=["incremental", "none", "recluster"], default="incremental",
@@ -163,7 +168,7 @@ def _add(args) -> int:
     segmentation = {"streams": args.stream, **segmentation_params(args)}
     with _open(args) as lib:
         report = lib.add_files(args.files, index=args.demo, group=args.group, segment=not args.whole,
-                               repair_time=args.repair_time,
+                               repair_time=args.repair_time, reader_options=reader_options(args),
                                segmentation=segmentation, label=args.label, assign=args.assign,
                                keep_going=args.keep_going, progress=show_progress(args))
     command = getattr(args, "command_name", "skillbank library add")

@@ -147,11 +147,15 @@ def add_reader_options(p) -> None:
                         "'0:12.5,20:31' in seconds")
     g.add_argument("--episodes", default=None, metavar="SELECTION",
                    help="LeRobot / robomimic episodes to read: '0:100' or '3,7' (default: all)")
+    g.add_argument("--feature", action="append", default=None, metavar="FEATURE[=STREAM]", dest="features",
+                   help="LeRobot: read only these features (repeatable), each as the stream STREAM if given "
+                        "(a library needs a 'position' stream: --feature observation.state=position)")
 
 
 def reader_options(args) -> dict:
     """The reader options given on the command line, for :func:`skillbank.io.load_all`."""
-    names = ("topics", "reference", "rate", "max_gap", "parent_frame", "child_frame", "split", "episodes")
+    names = ("topics", "reference", "rate", "max_gap", "parent_frame", "child_frame", "split", "episodes",
+             "features")
     return {name: getattr(args, name) for name in names if getattr(args, name, None) is not None}
 
 

@@ -223,7 +223,9 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
         the bookkeeping columns (``timestamp``, ``frame_index``,
         ``episode_index``, ``index``, ``task_index``). Video, image and
         string features are skipped, with a note in
-        ``metadata["skipped_features"]``.
+        ``metadata["skipped_features"]``. ``"FEATURE=STREAM"`` names the
+        stream (``"observation.state=position"``: a library stores
+        primitives of a ``position`` stream).
     progress : bool, default=False
         A tqdm bar over the episodes.
 
@@ -269,11 +271,20 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
                if isinstance(v, dict) and str(v.get("dtype")) in _NOT_NUMBERS}
     numeric = [k for k, v in specs.items()
                if k not in _BOOKKEEPING and k not in skipped and isinstance(v, dict)]
+    renames = {}
     if features is not None:
         features = [features] if isinstance(features, str) else list(features)
+        if not all(isinstance(f, str) for f in features):
+            raise ValueError(f"features: expected names or 'FEATURE=STREAM' strings, got {features!r}")
+        renames = dict(f.split("=", 1) for f in features if "=" in f)
+        features = [f.split("=", 1)[0] for f in features]
         unknown = [f for f in features if f not in numeric]
         if unknown or not features:
             raise ValueError(f"features: expected names among {numeric}, got {unknown or features}")
+        if any(not name.strip() for name in renames.values()) or \
+                len({renames.get(f, f) for f in features}) < len(features):
+            raise ValueError(f"features: expected one distinct, non-empty stream name per feature, got "
+                             f"{[renames.get(f, f) for f in features]}")
         numeric = features
     if not numeric:
         raise FormatError(root, f"expected numeric features in {LEROBOT_INFO}, found "
@@ -293,6 +304,9 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
     demos = []
     for ep in tqdm(chosen, desc="reading episodes", unit="episode", disable=not progress, leave=False):
         demos.append(_episode(root, info, index[ep], ep, numeric, widths, tasks, common, cache, pq))
+    if renames:
+        demos = [Demonstration(d.t, {renames.get(k, k): v for k, v in d.streams.items()}, d.metadata)
+                 for d in demos]
     return demos
 
 

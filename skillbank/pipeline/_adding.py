@@ -205,7 +205,7 @@ class Adding:
 
     def add_files(self, paths, *, index=None, group: str = "normalized", segment: bool = True,
                   segmentation=None, label=None, assign: str = "incremental", keep_going: bool = False,
-                  progress: bool = False, repair_time=None) -> dict:
+                  progress: bool = False, repair_time=None, reader_options=None) -> dict:
         """Read demonstration files and add every demonstration in them as one batch.
 
         By default all or nothing: every file is read and every
@@ -228,6 +228,10 @@ class Adding:
         repair_time : {None, "drop"}, default=None
             Repeated time stamps are an error; ``"drop"`` drops them
             (:func:`skillbank.io.load_all`).
+        reader_options : mapping, optional
+            Options of the recording readers (ROS bags, MCAP, LeRobot,
+            robomimic), e.g. ``{"topics": ["/ft=wrench"], "episodes": "0:100"}``
+            (:func:`skillbank.io.load_all`); other formats ignore them.
         keep_going : bool, default=False
         progress : bool, default=False
             tqdm bars while reading and cutting.
@@ -260,8 +264,9 @@ class Adding:
 
         for path in tqdm(paths, desc="reading", unit="file", disable=not progress):
             try:
-                demos = [load(path, index=index, group=group, repair_time=repair_time)] if index is not None \
-                    else load_all(path, group=group, repair_time=repair_time)
+                demos = [load(path, index=index, group=group, repair_time=repair_time,
+                              reader_options=reader_options)] if index is not None \
+                    else load_all(path, group=group, repair_time=repair_time, reader_options=reader_options)
                 for k, demo in enumerate(demos):
                     _check_demo(demo, "demonstration" if len(demos) == 1 else f"demonstration {k}")
             except (ValueError, OSError) as exc:

@@ -180,6 +180,15 @@ def test_features_option(tmp_path):
     with pytest.raises(ValueError, match=r"features: expected names among \['observation.state', 'action', "
                                          r"'next.reward'\], got \['observation.images.top'\]"):
         read_lerobot(root, features=["observation.images.top"])
+    # FEATURE=STREAM names the stream
+    demo = read_lerobot(root, features=["observation.state=position", "action"])[1]
+    assert demo.stream_names == ["position", "action"]
+    np.testing.assert_array_equal(demo["position"], -demo["action"])
+    with pytest.raises(ValueError, match=r"features: expected one distinct, non-empty stream name per "
+                                         r"feature, got \['action', 'action'\]"):
+        read_lerobot(root, features=["observation.state=action", "action"])
+    with pytest.raises(ValueError, match=r"features: expected names or 'FEATURE=STREAM' strings, got \[3\]"):
+        read_lerobot(root, features=[3])
 
 
 def test_what_is_not_a_dataset(tmp_path):
@@ -317,3 +326,21 @@ def test_segment_command_reads_chosen_episodes(tmp_path, cli):
     assert doc["n_demos"] == 2 and doc["demo"] == 1 and set(doc["changepoints"]) == {"observation.state"}
     code, out, err = cli("segment", root, "--episodes", "5:9")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "episodes" in err
+
+
+def test_library_add_takes_the_chosen_episodes(tmp_path, cli):
+    episodes = [{"task": f"reach {k}", "features": {"observation.state": np.column_stack(
+        [np.linspace(0.0, 1.0 + k, 40), np.zeros(40)])}} for k in range(4)]
+    root = write_lerobot(tmp_path / "ds", "v2.1", episodes)
+    db = tmp_path / "lib.sqlite"
+    assert cli("library", "init", db)[0] == 0
+    code, out, err = cli("library", "add", db, root, "--episodes", "1:3", "--whole", "--json")
+    # a library keeps primitives of a 'position' stream: the state is read as one
+    assert code == 2 and "expected a 'position' stream" in err
+    code, out, err = cli("library", "add", db, root, "--episodes", "1:3", "--feature",
+                         "observation.state=position", "--whole", "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert len(report["demonstrations"]) == 2 and report["failed"] == {}
+    code, out, err = cli("library", "list", db, "--json")
+    assert code == 0, err

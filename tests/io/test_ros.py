@@ -800,3 +800,16 @@ def test_segment_command_names_a_topic_that_is_not_there(tmp_path, cli):
     code, out, err = cli("segment", path, "--topic", "/nope=joints")
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and "/nope" in err
+
+
+def test_library_add_reads_a_bag_with_hand_mapped_topics(tmp_path, cli):
+    recording, _ = synthetic(duration=3.0)
+    path = write_bag(tmp_path, "sqlite3", recording)
+    db = tmp_path / "lib.sqlite"
+    assert cli("library", "init", db)[0] == 0
+    code, out, err = cli("library", "add", db, path, "--topic", "/tool_pose=pose", "--topic", "/ft=wrench",
+                         "--whole", "--json")
+    assert code == 0, err
+    assert len(json.loads(out)["demonstrations"]) == 1
+    code, out, err = cli("library", "add", db, path, "--topic", "/missing=pose")
+    assert code == 2 and "/missing" in err and len(err.strip().splitlines()) == 1
