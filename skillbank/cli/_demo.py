@@ -33,6 +33,10 @@ def run(args) -> int:
             outcome = r["error"] if "error" in r else (
                 f"used {r['used']}, constraint error {r['constraint_error']:.2g}, collision {r['collision']}")
             print(f"reuse {r['skill']} ({r['method']}): {outcome}")
+        ex = summary.get("executable")
+        if ex is not None:
+            print(f"executable reproduction ({ex['skill']} on a UR5e, streams {', '.join(ex['streams'])}): "
+                  f"{ex['csv']}")
         print(f"figures and summary written to {summary['out']}")
         print(f"open {summary['summary']}")
     return 0

@@ -1,6 +1,6 @@
 """Reproducible experiments and the main demo job."""
 
-from ._demo import run_segmentation_demo, synthetic_multistream
+from ._demo import run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._library_demo import run_library_demo
 from ._rail import (
     PAPER_REPRESENTATIVES,
@@ -13,7 +13,8 @@ from ._rail import (
 )
 
 __all__ = [
-    "run_segmentation_demo", "run_library_demo", "synthetic_multistream", "PAPER_REPRESENTATIVES",
+    "run_segmentation_demo", "run_library_demo", "synthetic_multistream", "synthetic_ur5e",
+    "PAPER_REPRESENTATIVES",
     "RailExperimentResult",
     "composition", "count_misclustered", "plot_rail_experiment", "rail_experiment", "run_rail_experiment",
 ]

@@ -9,9 +9,10 @@ import numpy as np
 from ..core import Demonstration
 from ..io import load_lasa, write_json
 from ..plotting import plot_keypoint_probability, plot_segmentation_summary, plot_segments
+from ..robots import robot_model
 from ..segmentation import segment
 
-__all__ = ["run_segmentation_demo", "synthetic_multistream"]
+__all__ = ["run_segmentation_demo", "synthetic_multistream", "synthetic_ur5e"]
 
 
 def synthetic_multistream(*, n_steps: int = 1200, random_state=0) -> Demonstration:
@@ -45,6 +46,52 @@ def synthetic_multistream(*, n_steps: int = 1200, random_state=0) -> Demonstrati
     force[bounds[1]:bounds[2], 2] = -5.0
     return Demonstration(t, {"position": position, "gripper": gripper, "force": force},
                          {"source": "synthetic", "true_keypoints": bounds[1:-1].tolist()})
+
+
+#: Joint waypoints (UR5e, radians, chain order) of :func:`synthetic_ur5e`: from above a table,
+#: down to an object, over to a second place and back up; the wrist keeps the tool pointing down.
+UR5E_WAYPOINTS = np.array([
+    [0.00, -1.75, 1.75, -1.57, -1.57, 0.0],
+    [0.35, -1.35, 1.95, -2.17, -1.57, 0.35],
+    [-0.45, -1.45, 2.05, -2.17, -1.57, -0.45],
+    [0.00, -1.75, 1.75, -1.57, -1.57, 0.0],
+])
+
+
+def synthetic_ur5e(*, n_steps: int = 900, random_state=0) -> Demonstration:
+    """A kinesthetic-teaching-like UR5e recording: joints, flange pose and gripper, consistent by FK.
+
+    Three minimum-jerk moves through :data:`UR5E_WAYPOINTS` (slightly
+    perturbed with ``random_state``) at about 125 Hz; the flange pose is the
+    forward kinematics of the joints, so inverse kinematics of any pose near
+    the path is reachable; the gripper closes after the first move and opens
+    after the second. Embedded data for ``make demo``'s executable reproduction.
+
+    Examples
+    --------
+    >>> demo = synthetic_ur5e()
+    >>> demo.stream_names, demo.metadata["joint_names"][0]
+    (['joints', 'position', 'orientation', 'gripper'], 'shoulder_pan_joint')
+    """
+    robot = robot_model("ur5e")
+    rng = np.random.default_rng(random_state)
+    waypoints = UR5E_WAYPOINTS + rng.normal(0.0, 0.03, UR5E_WAYPOINTS.shape) * [1, 1, 1, 0, 0, 1]
+    waypoints[-1] = waypoints[0]
+    bounds = np.array([0, n_steps // 3, 2 * n_steps // 3, n_steps])
+    t = np.arange(n_steps) / 125.0
+    joints = np.empty((n_steps, 6))
+    for k in range(3):
+        a, b = bounds[k], bounds[k + 1]
+        s = (t[a:b] - t[a]) / (t[b - 1] - t[a])
+        blend = 10 * s**3 - 15 * s**4 + 6 * s**5  # minimum-jerk profile
+        joints[a:b] = waypoints[k] + blend[:, None] * (waypoints[k + 1] - waypoints[k])
+    position, orientation = robot.fk(joints)
+    gripper = np.zeros((n_steps, 1))
+    gripper[bounds[1]:bounds[2]] = 1.0
+    return Demonstration(t, {"joints": joints, "position": position, "orientation": orientation,
+                             "gripper": gripper},
+                         {"source": "synthetic-ur5e", "joint_names": list(robot.joint_names),
+                          "true_keypoints": bounds[1:-1].tolist()})
 
 
 def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:

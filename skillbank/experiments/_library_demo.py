@@ -12,11 +12,11 @@ import numpy as np
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
-from ..core import Constraints, Demonstration, Sphere
-from ..io import load, load_lasa, load_rail, write_json
+from ..core import Constraints, Demonstration, Sphere, exp_map
+from ..io import load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
-from ..plotting import draw_edit
-from ._demo import run_segmentation_demo, synthetic_multistream
+from ..plotting import draw_edit, plot_executable
+from ._demo import run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 
 __all__ = ["run_library_demo"]
 
@@ -253,10 +253,58 @@ def _markdown(result, rows, reuses, seg) -> str:
                   f"{'**collides**' if item['collision'] else 'collision-free'}.", ""]
         lines += [f"- rejected {k}: {v}" for k, v in item["rejected"].items()]
         lines += ["", f"![{item['skill']}]({Path(item['figure']).name})", ""]
+    ex = result.get("executable")
+    if ex is not None:
+        lines += ["## An executable reproduction (UR5e)", "",
+                  f"`{Path(ex['csv']).name}`: skill '{ex['skill']}' reused for a goal moved by "
+                  f"{EXECUTABLE_OFFSET.tolist()} m and turned 10 deg about the tool axis, with inverse "
+                  f"kinematics on a UR5e and joint speeds at most 1 rad/s: streams {ex['streams']}, "
+                  f"{ex['duration']:.2f} s from t = 0, constraint error {ex['constraint_error']:.2g} m, "
+                  f"orientation error {ex['orientation_error']:.2g} rad, peak joint speed "
+                  f"{ex['peak_joint_velocity']:.3g} rad/s.", "",
+                  f"![executable]({Path(ex['figure']).name})", ""]
     if seg is not None:
         lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
                   "demonstration): [segmentation/summary.md](segmentation/summary.md).", ""]
     return "\n".join(lines)
+
+
+#: The executable reproduction's task: the first move's goal moved by this much (m), and its goal
+#: orientation turned by this angle about the tool's z axis (rad).
+EXECUTABLE_OFFSET, EXECUTABLE_TURN = np.array([0.05, -0.03, 0.0]), np.radians(10.0)
+
+
+def _executable(lib, out: Path, data, random_state) -> dict:
+    """A reproduction a UR5e executes, written as CSV with joints: pose, gripper, timing and joints.
+
+    Without data, the skill is the moves of a synthetic UR5e recording (embedded); with data, the
+    three-button presses labelled 'press-button'. The task: the first primitive's goal moved by
+    ``EXECUTABLE_OFFSET`` and turned by ``EXECUTABLE_TURN`` about the tool axis; IK on the UR5e,
+    joint speeds at most 1 rad/s.
+    """
+    if data is None:
+        skill = "ur5e-move"
+        lib.add(synthetic_ur5e(random_state=random_state), label=skill, assign="none",
+                source="synthetic-ur5e")
+    else:
+        skill = "press-button"
+    prims = sorted(lib.primitives(label=skill), key=lambda p: p.id)
+    first = prims[0].demo
+    # the turn about the tool's own z axis: a rotation vector in the end orientation's frame
+    goal_orientation = exp_map([0.0, 0.0, EXECUTABLE_TURN], reference=first["orientation"][-1])
+    task = Constraints(start=first["position"][0], goal=first["position"][-1] + EXECUTABLE_OFFSET,
+                       start_orientation=first["orientation"][0], goal_orientation=goal_orientation)
+    res = lib.reuse(skill, task, method="ja", robot="ur5e", limits={"joint_velocity": 1.0},
+                    random_state=random_state)
+    csv = write_trajectory(res.trajectory, out / "reach_ur5e.csv")
+    figure = plot_executable(res.trajectory, out / "reach_ur5e.png", demos=[p.demo for p in prims],
+                             constraints=task, title=f"'{skill}' reused on a UR5e: goal moved by "
+                             f"{EXECUTABLE_OFFSET.tolist()} m and turned 10 deg about the tool axis")
+    d = res.to_dict()
+    return {"skill": skill, "csv": str(csv), "figure": str(figure), "used": d["used"],
+            "streams": res.trajectory.stream_names, "duration": float(res.trajectory.t[-1]),
+            "constraint_error": d["constraint_error"], "orientation_error": float(res.orientation_error),
+            "peak_joint_velocity": d.get("peak_joint_velocity"), "notes": list(res.notes)}
 
 
 def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
@@ -332,11 +380,15 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         if not (data / "rail").is_dir() or not (data / "seed").is_dir():
             raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
     # load, add, cluster, label; the clusters' figure; the two reuse tasks; the segmentation demo
-    step = _Steps(4 + 1 + 2 + int(bool(segmentation)), progress)
+    step = _Steps(4 + 1 + 2 + 1 + int(bool(segmentation)), progress)
     try:
         with Library(db) as lib:
             rows, source, features, figures, reuses, summary = _build_and_reuse(
                 lib, out, data, random_state, step)
+            step("executable reproduction (UR5e)")
+            executable = _executable(lib, out, data, random_state)
+            figures["executable"] = executable["figure"]
+            summary = lib.summary()
         seg = None
         if segmentation:
             step("segmentation demo")
@@ -345,7 +397,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         step.close()
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
-              "skills": rows, "reuse": reuses, "figures": figures,
+              "skills": rows, "reuse": reuses, "figures": figures, "executable": executable,
               "segmentation": None if seg is None else seg["summary"]}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"

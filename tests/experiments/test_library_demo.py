@@ -23,6 +23,15 @@ def check_result(res, out):
         assert "error" not in item, item
         assert item["constraint_error"] < 1e-6 and not item["collision"]
     assert "majority" in Path(res["summary"]).read_text()
+    # one reproduction a UR5e executes, as CSV: pose, gripper and joints from t = 0
+    ex = res["executable"]
+    header = Path(ex["csv"]).read_text().splitlines()[0].split(",")
+    assert header[0] == "t" and "orientation_w" in header and "joints_shoulder_pan_joint" in header
+    assert "gripper_0" in header or "gripper" in header
+    rows = np.loadtxt(ex["csv"], delimiter=",", skiprows=1)
+    assert rows[0, 0] == 0.0 and ex["constraint_error"] < 1e-6 and ex["orientation_error"] < 1e-9
+    assert ex["peak_joint_velocity"] <= 1.0 + 1e-9
+    assert "reach_ur5e.csv" in Path(res["summary"]).read_text()
 
 
 def test_lasa_library_demo(tmp_path, capsys):
@@ -36,18 +45,19 @@ def test_lasa_library_demo(tmp_path, capsys):
     assert wshape["skill"] == "WShape" and "sphere" in wshape["task"] and len(wshape["used"]) == 3
     assert place["skill"] == "place" and len(place["used"]) == 1
     with Library(res["library"]) as lib:
-        assert lib.summary()["n_demonstrations"] == res["n_demonstrations"] == 31
+        # 28 LASA drawings, 3 synthetic pick-and-place, 1 synthetic UR5e recording
+        assert lib.summary()["n_demonstrations"] == res["n_demonstrations"] == 32
         ids = {p.id for p in lib.primitives(label="WShape", load=False)}
         assert set(wshape["used"]) <= ids
     # a second run replaces the library rather than adding to it; this one shows its progress
     again = run_library_demo(tmp_path, segmentation=False, progress=True)
-    assert again["n_demonstrations"] == 31 and again["n_primitives"] == res["n_primitives"]
+    assert again["n_demonstrations"] == 32 and again["n_primitives"] == res["n_primitives"]
     err = capsys.readouterr().err
     for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
-                 "figure of the clusters", "reusing WShape", "reusing place"):
+                 "figure of the clusters", "reusing WShape", "reusing place", "executable reproduction"):
         assert step in err, err
-    # 4 steps to build the library, its figure, two reuses; no segmentation here
-    assert "0/7 [00:00, loading LASA]" in err and "6/7" in err
+    # 4 steps to build the library, its figure, two reuses, the executable one; no segmentation here
+    assert "0/8 [00:00, loading LASA]" in err and "7/8" in err
 
 
 def test_progress_steps_are_named_as_they_start(capsys):
