@@ -30,3 +30,28 @@ plot_segments(b, here / "three_button_segmented.png", dims=3, below=("force", "g
 plot_keypoint_probability(b, here / "three_button_probabilities.png")
 cuts = (b.keypoint_times - demo.t[0]).round(2).tolist()
 print(f"R demo 3: {r.keypoints.tolist()}; three-button: {cuts} s -> {here}")
+
+# issue 14: a three-button press reused on the UR5e: a new button position and goal orientation
+import tempfile  # noqa: E402
+
+from skillbank import Constraints  # noqa: E402
+from skillbank.core import exp_map  # noqa: E402
+from skillbank.pipeline import Library  # noqa: E402
+from skillbank.plotting import plot_executable  # noqa: E402
+
+with tempfile.TemporaryDirectory() as tmp, Library(Path(tmp) / "lib.sqlite", create=True) as lib:
+    lib.add(demo)  # segmented with the defaults: gripper, three presses, gripper
+    prims = sorted(lib.primitives(), key=lambda p: p.start)
+    for p in prims[1:4]:  # the three segments that end at a press
+        lib.label("press", primitive=p.id)
+    first = prims[1].demo
+    task = Constraints(start=first["position"][0], goal=first["position"][-1] + [0.05, -0.03, 0.0],
+                       start_orientation=first["orientation"][0],
+                       goal_orientation=exp_map([0.0, 0.0, 0.1745], reference=first["orientation"][-1]))
+    res = lib.reuse("press", task, method="ja", robot="ur5e", limits={"joint_velocity": 0.5})
+    plot_executable(res.trajectory, here / "three_button_reuse_ur5e.png", demos=[p.demo for p in prims[1:4]],
+                    constraints=task, title="a press reused on the UR5e: the button moved by (5, -3, 0) cm, "
+                    "the goal turned 10 deg about the tool axis")
+    peak = res.to_dict().get("peak_joint_velocity")
+    print(f"reuse on the UR5e: used {res.used}, orientation error {res.orientation_error:.1e} rad, "
+          f"peak joint speed {peak:.3f} rad/s, {res.trajectory.t[-1]:.2f} s")
