@@ -86,3 +86,32 @@ def test_from_array_default_clock():
     demo = Demonstration.from_array(np.ones((4, 3)), dt=0.5)
     np.testing.assert_array_equal(demo.t, [0.0, 0.5, 1.0, 1.5])
     assert demo.stream_names == ["position"]
+
+
+def test_orientation_stream_is_unit_and_continuous():
+    t = np.linspace(0.0, 1.0, 4)
+    half = np.sqrt(0.5)
+    q = np.array([[0, 0, 0, 1.0], [0, 0, -half, -half], [0, 0, 1.0, 0], [0, 0, 0.6, 0.8005]])
+    demo = Demonstration(t, {"orientation": q})
+    Q = demo["orientation"]
+    np.testing.assert_allclose(np.linalg.norm(Q, axis=1), 1.0)
+    # the second sample is -q of a quarter turn: flipped so that no two neighbours are a half sphere apart
+    assert np.all(np.einsum("ij,ij->i", Q[1:], Q[:-1]) >= 0)
+    np.testing.assert_allclose(Q[1], [0, 0, half, half])
+
+
+@pytest.mark.parametrize(
+    ("q", "match"),
+    [
+        (np.tile([0, 0, 0, 2.0], (3, 1)),
+         r"streams\['orientation'\]: expected unit quaternions \(norm within 0.01 of 1\), got norm 2 at "
+         r"sample 0 \(3 such samples"),
+        (np.zeros((3, 4)),
+         r"streams\['orientation'\]: expected unit quaternions .*got zero norm at sample 0"),
+        (np.zeros((3, 3)), r"streams\['orientation'\]: expected quaternions of 4 components \(x, y, z, w\), "
+                           r"got shape \(3, 3\)"),
+    ],
+)
+def test_orientation_stream_errors(q, match):
+    with pytest.raises(ValueError, match=match):
+        Demonstration(np.arange(3.0), {"orientation": q})

@@ -6,9 +6,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ._rotations import check_quaternions, continuous_quaternions, slerp
 from ._validation import check_array, check_time
 
-__all__ = ["Demonstration"]
+__all__ = ["Demonstration", "ORIENTATION"]
+
+#: The stream that holds the end effector's orientation: unit quaternions, scalar-last (x, y, z, w).
+ORIENTATION = "orientation"
 
 
 class Demonstration:
@@ -19,7 +23,12 @@ class Demonstration:
     t : array-like of shape (n_steps,)
         Time in seconds, strictly increasing.
     streams : mapping of str to array-like of shape (n_steps, n_dims)
-        Named data streams. A 1-D stream is stored as one column.
+        Named data streams. A 1-D stream is stored as one column. The
+        ``"orientation"`` stream holds unit quaternions, scalar-last
+        ``(x, y, z, w)`` as scipy and ROS (readers of scalar-first files
+        convert): each must have a norm within 0.01 of 1 (it is then
+        renormalised), and signs are flipped where needed (``q`` and ``-q``
+        are the same rotation) so that the stream is continuous.
     metadata : mapping, optional
         Free metadata (``source``, ``label``, ``user``, ...).
 
@@ -56,6 +65,9 @@ class Demonstration:
                 raise ValueError(
                     f"streams[{key!r}]: expected {n} samples to match t, got {arr.shape[0]}"
                 )
+            if key == ORIENTATION:
+                # unit norm and no sign jumps: every interpolation and difference downstream relies on it
+                arr = continuous_quaternions(check_quaternions(arr, name=f"streams[{key!r}]"))
             self.streams[key] = arr
         self.metadata: dict = dict(metadata or {})
 
@@ -87,8 +99,9 @@ class Demonstration:
     def from_clocks(cls, clocked: Mapping, *, reference: str | None = None, metadata=None):
         """Put streams recorded on different clocks onto one time base.
 
-        Each stream is linearly interpolated onto the reference stream's clock;
-        outside a stream's own time range its edge value is held.
+        Each stream is linearly interpolated onto the reference stream's clock
+        (the ``"orientation"`` stream by SLERP); outside a stream's own time
+        range its edge value is held.
 
         Parameters
         ----------
@@ -128,6 +141,9 @@ class Demonstration:
         for key, (tk, yk) in parsed.items():
             if key == reference or (tk.shape == t_ref.shape and np.array_equal(tk, t_ref)):
                 streams[key] = yk
+            elif key == ORIENTATION:
+                # rotations interpolate along the great circle (SLERP), not component by component
+                streams[key] = slerp(tk, check_quaternions(yk, name=f"clocked[{key!r}] data"), t_ref)
             else:
                 streams[key] = np.column_stack([np.interp(t_ref, tk, col) for col in yk.T])
         return cls(t_ref, streams, metadata)

@@ -91,7 +91,7 @@ def _joint_order(path, n_columns: int, names: list[str] | None) -> tuple[list[in
     return list(range(n_columns)), names
 
 
-def read_robot_h5(path, *, repair_time=None, joint_names=None) -> Demonstration:
+def read_robot_h5(path, *, repair_time=None, joint_names=None, scalar_first: bool = False) -> Demonstration:
     """Read a robot recording with one HDF5 group (and clock) per sensor.
 
     The groups ``joint_state_info``, ``transform_info``, ``wrench_info`` and
@@ -119,7 +119,9 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None) -> Demonstration:
     -------
     Demonstration
         Streams ``joints`` (unwrapped), ``position``, ``orientation``
-        (quaternions as stored), ``force``, ``torque`` and ``gripper``; the
+        (unit quaternions, scalar-last as stored, SLERP-interpolated onto the
+        joints' clock, signs made continuous; ``scalar_first=True`` for files
+        that store ``(w, x, y, z)``), ``force``, ``torque`` and ``gripper``; the
         last four only when their group exists. ``t`` starts at 0; metadata
         holds ``source``, ``format`` (``"robot-h5"``), ``t0``, the absolute
         start time in seconds, and ``joint_names``, the names of the
@@ -170,6 +172,8 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None) -> Demonstration:
         group, _, clock = ROBOT_STREAMS[name]
         t_k, data, dropped[name] = check_clock(p, clocks[name] - start, data, repair_time=repair_time,
                                                where=f"stream {name!r} (clock '{group}/{clock}')")
+        if name == "orientation" and scalar_first:
+            data = data[:, [1, 2, 3, 0]]  # (w, x, y, z) -> (x, y, z, w), the convention inside skillbank
         # Joint angles are stored wrapped to (-pi, pi]; a jump of 2 pi is not motion.
         clocked[name] = (t_k, np.unwrap(data, axis=0) if name == "joints" else data)
 

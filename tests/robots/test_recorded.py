@@ -106,3 +106,18 @@ def test_reader_joint_names_errors(tmp_path):
     for bad in ("elbow", ["a", "a", "b", "c", "d", "e"], ["a", ""], [], [1, 2]):
         with pytest.raises(ValueError, match=r"^joint_names: expected a list of distinct non-empty names"):
             read_robot_h5(path, joint_names=bad)
+
+
+def test_scalar_first_orientation_option(data_dir, tmp_path):
+    # the same file with its quaternions stored (w, x, y, z) reads back the same with scalar_first=True
+    import shutil
+
+    src = data_dir / "seed" / "three_button_pressing_demo.h5"
+    copy = tmp_path / "wxyz.h5"
+    shutil.copy(src, copy)
+    with h5py.File(copy, "r+") as h5:
+        q = h5["transform_info/transform_orientations"][...]
+        h5["transform_info/transform_orientations"][...] = q[:, [3, 0, 1, 2]]
+    a, b = read_robot_h5(src), read_robot_h5(copy, scalar_first=True)
+    np.testing.assert_allclose(a["orientation"], b["orientation"], atol=1e-12)
+    assert np.all(np.einsum("ij,ij->i", a["orientation"][1:], a["orientation"][:-1]) >= 0)
