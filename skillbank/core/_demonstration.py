@@ -13,6 +13,8 @@ __all__ = ["Demonstration", "ORIENTATION"]
 
 #: The stream that holds the end effector's orientation: unit quaternions, scalar-last (x, y, z, w).
 ORIENTATION = "orientation"
+# |q|^2 of a quaternion normalised in float64 is within a few units of round-off of 1
+_UNIT_ROUNDOFF = 8 * np.finfo(float).eps
 
 
 class Demonstration:
@@ -67,7 +69,11 @@ class Demonstration:
                 )
             if key == ORIENTATION:
                 # unit norm and no sign jumps: every interpolation and difference downstream relies on it
-                arr = continuous_quaternions(check_quaternions(arr, name=f"streams[{key!r}]"))
+                unit = check_quaternions(arr, name=f"streams[{key!r}]")
+                # samples already of norm 1 to round-off keep their bits: reading a stored stream back
+                # gives the same numbers (and the same content hash), however often it is checked
+                off = np.abs(np.einsum("ij,ij->i", arr, arr) - 1.0) > _UNIT_ROUNDOFF
+                arr = continuous_quaternions(np.where(off[:, None], unit, arr))
             self.streams[key] = arr
         self.metadata: dict = dict(metadata or {})
 
