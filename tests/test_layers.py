@@ -28,6 +28,7 @@ LAYERS = (
     ("representations", "robots"),
     ("selection",),
     ("store",),
+    ("planning",),
     ("pipeline",),
     ("plotting",),
     ("experiments",),
@@ -131,14 +132,14 @@ def test_every_sub_package_is_in_a_layer():
 
 @pytest.mark.parametrize("module, planted, expected", [
     ("core/_paths.py", "from ..pipeline import Library\n",
-     "core (layer 0) imports pipeline (layer 6): upward"),
+     "core (layer 0) imports pipeline (layer 7): upward"),
     ("segmentation/_gate.py",
      "\n\ndef _peek():\n    # why: none\n    from ..clustering import HeadingFeatures\n",
      "segmentation imports clustering of the same layer: sideways"),
     ("store/_sqlite.py", "\n\ndef _peek():\n    from ..selection import reuse\n    return reuse\n",
      "import inside a function without a comment saying why"),
     ("metrics/_shape.py", "from .. import editing\n", "metrics (layer 1) imports editing (layer 2): upward"),
-    ("io/_lasa.py", "import skillbank.plotting\n", "io (layer 1) imports plotting (layer 7): upward"),
+    ("io/_lasa.py", "import skillbank.plotting\n", "io (layer 1) imports plotting (layer 8): upward"),
 ])
 def test_a_planted_backward_import_is_caught(tmp_path, module, planted, expected):
     copy = tmp_path / "skillbank"

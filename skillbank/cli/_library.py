@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -23,8 +24,52 @@ from ._options import (
 
 __all__ = ["add_parser"]
 
-_DB = "the library file (see 'library init')"
-_DB_READ = "the library file; opened read-only, so a library in a folder you cannot write works"
+_DB = "the library: a file (see 'library init') or a postgresql:// URL"
+_DB_READ = ("the library, a file or a postgresql:// URL; opened read-only, so a library in a folder you "
+            "cannot write works")
+_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
+
+
+class _URL:
+    """A library URL from the command line: the library opens with all of it, messages show it masked."""
+
+    def __init__(self, url: str):
+        self.url = url
+
+    def __str__(self) -> str:
+        from ..store import mask_url  # the store package, when a URL is printed (after a command ran)
+
+        return mask_url(self.url)
+
+    @property
+    def name(self) -> str:
+        """The URL's last path part (the database), for figure titles."""
+        return str(self).split("?", 1)[0].rstrip("/").rsplit("/", 1)[-1]
+
+
+def _location(text: str):
+    """A ``db`` argument: a URL of a store backend (``postgresql://...``), else a library file.
+
+    ``sqlite:///relative`` and ``sqlite:////absolute`` name a file, as the store reads them.
+
+    Examples
+    --------
+    >>> _location("lib.db"), _location("sqlite:////data/lib.db")
+    (PosixPath('lib.db'), PosixPath('/data/lib.db'))
+    >>> str(_location("postgresql://ann:s3cret@db.lab/skills"))
+    'postgresql://ann:***@db.lab/skills'
+    """
+    if not _SCHEME.match(text):
+        return Path(text)
+    scheme, rest = text.split("://", 1)
+    if scheme.lower() == "sqlite":
+        return Path(rest[1:] if rest.startswith("/") else rest)
+    return _URL(text)
+
+
+def _target(location):
+    """What the store opens: the full URL (password included), or the path."""
+    return location.url if isinstance(location, _URL) else location
 
 
 def add_parser(sub):
@@ -37,18 +82,19 @@ def add_parser(sub):
     >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
     ArgumentParser(...)
     """
-    p = sub.add_parser("library", help="a durable library of motion primitives (SQLite)")
+    p = sub.add_parser("library", help="a durable library of motion primitives (SQLite or PostgreSQL)")
     cmds = p.add_subparsers(dest="library_command", required=True)
 
-    c = cmds.add_parser("init", help="create an empty library file")
-    c.add_argument("db", type=Path, help="the library file to create (an existing library is left as it is)")
+    c = cmds.add_parser("init", help="create an empty library (a file, or tables in a PostgreSQL database)")
+    c.add_argument("db", type=_location, help="the library file or postgresql:// URL (its database must "
+                                              "exist) to create; an existing library is left as it is")
     c.add_argument("--json", action="store_true", help="print the library, whether it was created, and its "
                                                        "schema version as JSON")
     c.set_defaults(func=_init)
 
     c = cmds.add_parser("add", help="segment demonstrations and store their primitives (all files or none, "
                                     "unless --keep-going)")
-    c.add_argument("db", type=Path, help=_DB)
+    c.add_argument("db", type=_location, help=_DB)
     c.add_argument("files", nargs="+", type=Path,
                    help="demonstration files (.h5, .mat, .csv, .npz, ROS 1/2 bags, .mcap, LeRobot dataset "
                         "folders, robomimic .hdf5)")
@@ -67,7 +113,7 @@ def add_parser(sub):
     c.set_defaults(func=_add)
 
     c = cmds.add_parser("cluster", help="(re)cluster every primitive; records a new version")
-    c.add_argument("db", type=Path, help=_DB)
+    c.add_argument("db", type=_location, help=_DB)
     c.add_argument("--stretch", type=float, default=None, help="stretching constant (default 1.2)")
     c.add_argument("--features", choices=["default", "position"], default="default",
                    help="direction over time in the heading frame (default) or resampled positions")
@@ -79,7 +125,7 @@ def add_parser(sub):
     c.set_defaults(func=_cluster)
 
     c = cmds.add_parser("label", help="label a cluster (current version) or a primitive")
-    c.add_argument("db", type=Path, help=_DB)
+    c.add_argument("db", type=_location, help=_DB)
     which = c.add_mutually_exclusive_group(required=True)
     which.add_argument("--cluster", type=int, default=None, help="cluster id (see 'library list')")
     which.add_argument("--primitive", type=int, default=None, help="primitive id")
@@ -88,12 +134,26 @@ def add_parser(sub):
     c.set_defaults(func=_label)
 
     c = cmds.add_parser("list", help="skills with counts and labels, unassigned primitives, then primitives")
-    c.add_argument("db", type=Path, help=_DB_READ)
+    c.add_argument("db", type=_location, help=_DB_READ)
     c.add_argument("--json", action="store_true", help="print the library summary as JSON")
     c.set_defaults(func=_list)
 
+    c = cmds.add_parser("describe", help="attach a PDDL action schema and its binding to a skill label "
+                                         "(for 'skillbank plan'); without --action, show it")
+    c.add_argument("db", type=_location, help=_DB)
+    c.add_argument("label", help="the skill's label; the action must be named like it")
+    c.add_argument("--action", type=Path, default=None, metavar="FILE.pddl",
+                   help="a file holding one (:action LABEL :parameters (...) :precondition ... :effect ...)")
+    c.add_argument("--binding", default=None, metavar="JSON",
+                   help="how the action binds to geometry, a JSON object or a .json file: goal (a "
+                        "parameter), offset [dx,dy,dz], orientation, obstacles, gripper {start,end}, "
+                        "method, duration, velocity (see docs/planning.md)")
+    c.add_argument("--remove", action="store_true", help="remove the label's description (a new revision)")
+    c.add_argument("--json", action="store_true", help="print the description as JSON")
+    c.set_defaults(func=_describe)
+
     c = cmds.add_parser("reuse", help="reproduce a skill under new constraints")
-    c.add_argument("db", type=Path, help=_DB_READ)
+    c.add_argument("db", type=_location, help=_DB_READ)
     c.add_argument("--skill", required=True, help="a label, or a cluster id")
     add_constraint_options(c)
     c.add_argument("--method", default="promp",
@@ -115,7 +175,7 @@ def add_parser(sub):
     c.set_defaults(func=_reuse)
 
     c = cmds.add_parser("export", help="write the library to a folder of NPZ files and a manifest")
-    c.add_argument("db", type=Path, help=_DB_READ)
+    c.add_argument("db", type=_location, help=_DB_READ)
     c.add_argument("folder", type=Path, help="a new or empty folder to write to")
     c.add_argument("--json", action="store_true", help="print the folder, the manifest and the number of "
                                                        "demonstrations as JSON")
@@ -123,13 +183,22 @@ def add_parser(sub):
 
     c = cmds.add_parser("import", help="copy an exported folder into an empty library, or merge it into "
                                        "a non-empty one (skipping demonstrations already there)")
-    c.add_argument("db", type=Path, help="the library (created when missing)")
+    c.add_argument("db", type=_location, help="the library (created when missing)")
     c.add_argument("folder", type=Path, help="a folder written by 'library export'")
     c.add_argument("--json", action="store_true", help="print the counts and id maps as JSON")
     c.set_defaults(func=_import)
 
+    c = cmds.add_parser("copy", help="copy a library into an empty one, between SQLite files and PostgreSQL "
+                                     "(ids, versions and labels kept)")
+    c.add_argument("src", type=_location, help="the library to copy, a file or a postgresql:// URL "
+                                               "(opened read-only)")
+    c.add_argument("dst", type=_location, help="an empty or new library (a file or a postgresql:// URL); a "
+                                               "non-empty one is refused")
+    c.add_argument("--json", action="store_true", help="print the counts copied as JSON")
+    c.set_defaults(func=_copy)
+
     c = cmds.add_parser("remove", help="delete a demonstration with its primitives")
-    c.add_argument("db", type=Path, help=_DB)
+    c.add_argument("db", type=_location, help=_DB)
     c.add_argument("demonstration", type=int, help="id of the demonstration (see 'library list')")
     c.add_argument("--json", action="store_true",
                    help="print the removed demonstration and its primitives as JSON")
@@ -141,7 +210,7 @@ def _library(location, **kwargs):
     # The pipeline pulls in scikit-learn; imported when a library command runs, not for --help.
     from ..pipeline import Library
 
-    return Library(location, **kwargs)
+    return Library(_target(location), **kwargs)
 
 
 def _open(args, *, create=False, readonly=False):
@@ -151,10 +220,12 @@ def _open(args, *, create=False, readonly=False):
 
 
 def _init(args) -> int:
-    created = not args.db.exists()
+    url = isinstance(args.db, _URL)
+    created = not url and not args.db.exists()
     # an existing library is validated (and migrated) and otherwise left as it is
-    with _library(args.db, create=created) as lib:
+    with _library(args.db, create=url or created) as lib:
         schema = lib.schema_version
+        created = created or bool(getattr(lib.store, "created", False))  # a URL's store says
     if args.json:
         print(json.dumps({"library": str(args.db), "created": created, "schema_version": schema}))
     elif created:
@@ -292,6 +363,49 @@ def check_robot(args) -> None:
         robot_model(args.robot)
 
 
+def _binding(text):
+    """``--binding``: a JSON object, or a file holding one."""
+    if text is None:
+        return None
+    if not text.lstrip().startswith("{"):
+        path = Path(text)
+        if not path.is_file():
+            raise ValueError(f"binding: expected a JSON object or a .json file, got {text!r}")
+        text = path.read_text(encoding="utf-8")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"binding: expected a JSON object, got invalid JSON ({exc})") from None
+
+
+def _describe(args) -> int:
+    if args.remove and (args.action is not None or args.binding is not None):
+        raise ValueError("remove: --remove takes neither --action nor --binding")
+    if args.action is None and args.binding is not None:
+        raise ValueError("binding: --binding needs --action FILE.pddl too")
+    action = None
+    if args.action is not None:
+        if not args.action.is_file():
+            raise ValueError(f"action: expected a PDDL file, got {str(args.action)!r}, which is not a file")
+        action = args.action.read_text(encoding="utf-8")
+    binding = _binding(args.binding)
+    with _open(args, readonly=action is None and not args.remove) as lib:
+        if action is not None or args.remove:
+            lib.describe(args.label, action, binding)
+        found = [d for d in lib.descriptions() if d["label"] == args.label]
+    doc = found[0] if found else {"label": args.label, "action": None}
+    if args.json:
+        print(json.dumps(doc))
+        return 0
+    if not found:
+        print(f"{args.db}: skill {args.label!r} has no description")
+        return 0
+    print(f"{args.db}: skill {args.label!r}, description revision {doc['revision']} ({doc['created']})")
+    print("  " + doc["action"].replace("\n", "\n  "))
+    print(f"  binding {json.dumps(doc['binding'])}")
+    return 0
+
+
 def _reuse(args) -> int:
     from .. import io  # the writers, only when a result is written
 
@@ -379,6 +493,28 @@ def _import(args) -> int:
         return 0
     print(f"{line} (merged); skipped {len(res['skipped'])} demonstration(s) already in the library; "
           f"assigned {len(res['assigned'])} primitive(s) to the current clusters")
+    return 0
+
+
+def _copy(args) -> int:
+    # the progress bar and the store alone: a copy needs no pipeline (scikit-learn)
+    from tqdm import tqdm
+
+    from ..store import copy_library, open_store  # as above
+
+    def tick(done, total):
+        bar.total = total
+        bar.update(done - bar.n)
+
+    with open_store(_target(args.src), create=False, readonly=True) as src, \
+            open_store(_target(args.dst)) as dst, \
+            tqdm(desc="copying", unit="demo", disable=not show_progress(args)) as bar:
+        counts = copy_library(src, dst, progress=tick)
+    if args.json:
+        print(json.dumps({"source": str(args.src), "destination": str(args.dst), **counts}))
+        return 0
+    print(f"{args.dst}: copied {counts['demonstrations']} demonstration(s), {counts['primitives']} "
+          f"primitive(s) and {counts['versions']} clustering version(s) from {args.src}")
     return 0
 
 

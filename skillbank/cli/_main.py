@@ -7,12 +7,12 @@ import os
 import sys
 
 from ..core import __version__
-from . import _cluster, _demo, _edit, _experiment, _library, _segment
+from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment
 from ._options import join_negative_values
 
 __all__ = ["main", "build_parser", "leaf_parsers"]
 
-_COMMANDS = (_segment, _demo, _cluster, _experiment, _library, _edit)
+_COMMANDS = (_segment, _demo, _cluster, _experiment, _library, _edit, _plan)
 
 
 class _OneLineParser(argparse.ArgumentParser):

@@ -9,6 +9,7 @@ from tqdm import tqdm
 from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
 from ..core import Demonstration
 from ..core._validation import check_id, check_positive
+from ..planning import describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ._adding import Adding
@@ -397,6 +398,46 @@ class Library(Adding):
                          ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
                          progress=_ticker(bar) if progress else None, duration=duration, robot=robot,
                          limits=limits)
+
+    # -- planning ---------------------------------------------------------------------------------
+    def describe(self, label, action, binding=None) -> int:
+        """Attach a PDDL action schema and its binding to skill ``label``; returns the revision number.
+
+        The action is named like the label; ``binding`` says how its
+        parameters bind to geometry (see :mod:`skillbank.planning`).
+        ``action=None`` removes the description. Each call adds a revision
+        (kept, exported and imported with the library).
+
+        Examples
+        --------
+        >>> lib.describe("press", "(:action press :parameters (?b - button) :effect (pressed ?b))",
+        ...              {"offset": [0, 0, 0.002]})  # doctest: +SKIP
+        1
+        """
+        return describe_skill(self.store, label, action, binding)
+
+    def descriptions(self, *, history: bool = False) -> list:
+        """Skill descriptions ``{"label", "revision", "created", "action", "binding"}`` (current ones)."""
+        return self.store.descriptions(history=history)
+
+    def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False):
+        """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
+
+        See :func:`skillbank.planning.plan_task`; ``progress`` shows a tqdm bar over the steps.
+
+        Returns
+        -------
+        skillbank.planning.PlanResult
+
+        Examples
+        --------
+        >>> res = lib.plan("scene.json", robot="ur5e")  # doctest: +SKIP
+        >>> [(s.action, s.args) for s in res.steps]  # doctest: +SKIP
+        [('press', ('b3',)), ('press', ('b1',))]
+        """
+        with tqdm(desc="plan steps", unit="step", disable=not progress) as bar:
+            return plan_task(self.store, scene, domain=domain, robot=robot, limits=limits,
+                             random_state=random_state, progress=_ticker(bar) if progress else None)
 
     def export(self, folder, *, progress: bool = False):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

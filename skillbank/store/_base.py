@@ -24,7 +24,7 @@ import numpy as np
 
 from ..core import Demonstration
 
-__all__ = ["Store", "Primitive", "check_item", "check_items"]
+__all__ = ["Store", "Primitive", "check_item", "check_items", "check_description"]
 
 #: The keys of an item of :meth:`Store.add_demonstrations`: the parameters of :meth:`Store.add_demonstration`.
 ITEM_KEYS = ("demo", "bounds", "source", "label", "provenance", "members")
@@ -130,6 +130,27 @@ def check_items(items) -> list:
         raise ValueError(f"items: expected a list of dicts with 'demo' and 'bounds', "
                          f"got {type(items).__name__}")
     return [check_item(item, f"items[{k}]") for k, item in enumerate(items)]
+
+
+def check_description(label, action, binding) -> tuple:
+    """Check the arguments of :meth:`Store.set_description`; returns them (``binding`` a plain dict).
+
+    Examples
+    --------
+    >>> check_description("press", "(:action press :parameters (?b))", {})[0]
+    'press'
+    >>> check_description("press", 3, {})
+    Traceback (most recent call last):
+    ...
+    ValueError: action: expected PDDL text (a string) or None, got int
+    """
+    if not isinstance(label, str) or not label.strip():
+        raise ValueError(f"label: expected a non-empty string, got {label!r}")
+    if action is not None and (not isinstance(action, str) or not action.strip()):
+        raise ValueError(f"action: expected PDDL text (a string) or None, got {type(action).__name__}")
+    if not isinstance(binding, dict) or not all(isinstance(k, str) for k in binding):
+        raise ValueError(f"binding: expected a dict with string keys, got {type(binding).__name__}")
+    return label, action, dict(binding)
 
 
 class Store(ABC):
@@ -292,6 +313,28 @@ class Store(ABC):
     @abstractmethod
     def set_label(self, name, *, cluster=None, primitive=None) -> None:
         """Label a cluster of the current version or one primitive; ``name=None`` removes the label."""
+
+    # -- skill descriptions --------------------------------------------------------------------
+    def set_description(self, label: str, action, binding: dict) -> int:
+        """Record a new revision of the description of skill ``label``; returns its revision number.
+
+        ``action`` is PDDL text (an action schema; None removes the
+        description), ``binding`` a JSON-able dict (how its parameters bind to
+        geometry). Revisions of a label are numbered 1, 2, ...; the highest is
+        current. The store keeps them as given: the pipeline checks them.
+        One transaction. A backend without descriptions raises ValueError.
+        """
+        raise ValueError(f"library {self.location!r}: its backend {type(self).__name__} does not store "
+                         "skill descriptions")
+
+    def descriptions(self, *, history: bool = False) -> list[dict]:
+        """Skill descriptions as ``{"label", "revision", "created", "action", "binding"}``, by label.
+
+        Only the current revision of each label, removed ones left out; with
+        ``history``, every revision (removals included, ``action`` None), by
+        label then revision. A backend without descriptions has none.
+        """
+        return []
 
     # -- transfer ------------------------------------------------------------------------------
     @abstractmethod

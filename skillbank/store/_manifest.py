@@ -211,6 +211,17 @@ def _version(item, where: str) -> dict:
             "n_clusters": n, "file": _entry(_key(v, "file", where), f"{where}.file"), "labels": labels}
 
 
+def _description(item, where: str) -> dict:
+    d = _object(item, where)
+    action = d.get("action")
+    if action is not None and not isinstance(action, str):
+        _fail(f"{where}.action", "PDDL text (a string) or null", _describe(action))
+    return {"label": _text(_key(d, "label", where), f"{where}.label"),
+            "revision": _integer(_key(d, "revision", where), f"{where}.revision", 1),
+            "created": _text(_key(d, "created", where), f"{where}.created"), "action": action,
+            "binding": _object(_key(d, "binding", where), f"{where}.binding")}
+
+
 def _entry(value, where: str) -> str:
     if not isinstance(value, str) or not value or len(value) > _MAX_PATH or "\x00" in value:
         _fail(where, f"a relative file path of at most {_MAX_PATH} characters", _describe(value))
@@ -226,8 +237,9 @@ def check_manifest(doc) -> dict:
     ``0 <= start < stop``, ``label``); each version's number, ``params``
     (with the ``features`` and ``n_points`` a later add needs),
     ``n_clusters``, ``file`` and labels (clusters in ``0..n_clusters-1``);
-    unique ids. :func:`read_export` checks what needs the files. Raises a
-    one-line ValueError naming the entry.
+    each skill description's ``label``, ``revision``, ``created``, ``action``
+    (text or null) and ``binding`` (an object); unique ids. :func:`read_export`
+    checks what needs the files. Raises a one-line ValueError naming the entry.
 
     Examples
     --------
@@ -258,7 +270,11 @@ def check_manifest(doc) -> dict:
                   f"{pid}, which {seen[pid]} has too")
         seen[pid] = where
     _unique([v["version"] for v in versions], "versions", "version")
-    return {"schema_version": schema, "demonstrations": demos, "versions": versions}
+    descriptions = [_description(d, f"descriptions[{k}]")
+                    for k, d in enumerate(_array(top.get("descriptions", []), "descriptions"))]
+    _unique([(d["label"], d["revision"]) for d in descriptions], "descriptions", "label and revision")
+    return {"schema_version": schema, "demonstrations": demos, "versions": versions,
+            "descriptions": descriptions}
 
 
 # -- files -----------------------------------------------------------------------------------------

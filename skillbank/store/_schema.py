@@ -3,7 +3,9 @@
 The schema version is SQLite's ``PRAGMA user_version``; ``meta`` holds
 ``application = skillbank``. Version 1 (the first released layout) lacked
 segmentation provenance and did not record how a primitive joined its cluster;
-:func:`migrate` brings it to version 2.
+version 2 had no skill descriptions (the PDDL action schema and binding a
+label carries for ``skillbank plan``). :func:`migrate` brings either to
+version 3.
 
 A file is identified (version, tables, ``meta``) before anything is written to
 it, so a foreign SQLite file is refused exactly as it was found. A read-only
@@ -24,7 +26,7 @@ from pathlib import Path
 
 __all__ = ["SCHEMA_VERSION", "connect", "transaction", "now", "database_errors"]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 APPLICATION = "skillbank"
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
@@ -56,6 +58,14 @@ _MIGRATE_1_TO_2 = (
     "params TEXT NOT NULL, created TEXT NOT NULL)",
     "ALTER TABLE demonstrations ADD COLUMN provenance_id INTEGER REFERENCES provenance(id)",
     "ALTER TABLE cluster_members ADD COLUMN assigned TEXT NOT NULL DEFAULT 'fit'",
+)
+
+# Version 2 -> 3: skill descriptions, kept per label as numbered revisions (the highest is current;
+# a NULL action removes the description), so a description is versioned and survives reclustering
+# as its label does.
+_MIGRATE_2_TO_3 = (
+    "CREATE TABLE skill_descriptions (label TEXT NOT NULL, revision INTEGER NOT NULL, created TEXT NOT NULL, "
+    "action TEXT, binding TEXT NOT NULL, PRIMARY KEY (label, revision))",
 )
 
 
@@ -122,7 +132,7 @@ def _wal(conn) -> None:
 
 
 def _create(conn) -> None:
-    for sql in _TABLES_V1 + _MIGRATE_1_TO_2:
+    for sql in _TABLES_V1 + _MIGRATE_1_TO_2 + _MIGRATE_2_TO_3:
         conn.execute(sql)
     conn.execute("INSERT INTO meta (key, value) VALUES (?, ?)", ("application", APPLICATION))
     conn.execute("INSERT INTO meta (key, value) VALUES (?, ?)", ("created", now()))
@@ -139,6 +149,10 @@ def migrate(conn, version: int) -> int:
         pid = conn.execute("SELECT last_insert_rowid()").fetchone()[0]
         conn.execute("UPDATE demonstrations SET provenance_id = ?", (pid,))
         version = 2
+    if version == 2:
+        for sql in _MIGRATE_2_TO_3:
+            conn.execute(sql)
+        version = 3
     conn.execute(f"PRAGMA user_version = {int(version)}")
     return version
 

@@ -8,10 +8,10 @@ import numpy as np
 
 from ..core._validation import check_id
 from ._arrays import from_json, from_npy, to_json, to_npy
-from ._base import Primitive, Store, check_items
+from ._base import Primitive, Store, check_description, check_items
 from ._records import insert_demonstration, load_demonstrations, primitive_demo
 from ._schema import connect, database_errors, now, transaction
-from ._transfer import export_library, import_library
+from ._transfer import SQLiteRecords, export_library, import_library
 
 __all__ = ["SQLiteStore"]
 
@@ -238,6 +238,21 @@ class SQLiteStore(Store):
             if name is not None:
                 conn.execute("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
                              (version, k, name))
+
+    # -- skill descriptions -----------------------------------------------------------------------
+    def set_description(self, label, action, binding) -> int:
+        label, action, binding = check_description(label, action, binding)
+        with self._errors(), transaction(self._writable("describe a skill")) as conn:
+            last = conn.execute("SELECT MAX(revision) FROM skill_descriptions WHERE label = ?",
+                                (label,)).fetchone()[0]
+            revision = 1 if last is None else int(last) + 1
+            conn.execute("INSERT INTO skill_descriptions (label, revision, created, action, binding) "
+                         "VALUES (?, ?, ?, ?, ?)", (label, revision, now(), action, to_json(binding)))
+        return revision
+
+    def descriptions(self, *, history=False) -> list:
+        with self._errors():
+            return SQLiteRecords(self.conn).descriptions(history=history)
 
     # -- transfer --------------------------------------------------------------------------------
     def export(self, folder, *, progress=None):

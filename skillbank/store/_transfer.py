@@ -1,9 +1,21 @@
-"""Export a library to a folder of NPZ files plus ``manifest.json``, and import it back."""
+"""Moving a library: export to a folder, import from one, and copy between stores.
+
+Three flows over one *records* protocol. A records object reads a library's
+rows as plain records, the demonstrations (id, source, created, provenance,
+primitives and the :class:`~skillbank.core.Demonstration`) and the clustering
+versions (number, created, params, labels and arrays), inside one consistent
+snapshot; and writes such records inside one transaction, keeping their ids or
+letting the library number them. :class:`SQLiteRecords` serves a SQLite
+connection; :class:`skillbank.store.PostgresStore` has its own. So export,
+import and copy are written once, for every backend and every pair of them.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -13,19 +25,238 @@ from ..io import write_npz
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._manifest import FORMAT, MANIFEST, read_export
 from ._records import chunks, insert_demonstration, load_demonstrations, placeholders
-from ._schema import SCHEMA_VERSION, now, transaction
+from ._schema import SCHEMA_VERSION, database_errors, now, transaction
 
-__all__ = ["export_library", "import_library", "content_hash", "MANIFEST", "FORMAT"]
+__all__ = ["export_library", "import_library", "write_export", "import_records", "copy_library",
+           "records_of", "SQLiteRecords", "content_hash", "MANIFEST", "FORMAT", "COUNTED"]
+
+#: The tables whose ids a copy keeps counting from where the source left off (its next ids are the source's).
+COUNTED = ("demonstrations", "primitives", "cluster_versions")
 
 
-def export_library(conn, folder, *, progress=None) -> Path:
+class SQLiteRecords:
+    """The records protocol over an open SQLite library connection (see the module docstring).
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        In autocommit mode, as :func:`skillbank.store._schema.connect` opens it.
+    location : str, optional
+        Names the library in messages; SQLite errors become one-line ValueErrors.
+    """
+
+    def __init__(self, conn, location=None):
+        self.conn = conn
+        self.location = location
+
+    def _errors(self):
+        return contextlib.nullcontext() if self.location is None else database_errors(self.location)
+
+    @contextlib.contextmanager
+    def snapshot(self):
+        """A read transaction: in WAL mode it sees one consistent state while others write."""
+        with self._errors():
+            self.conn.execute("BEGIN")
+            try:
+                yield self
+            finally:
+                self.conn.execute("COMMIT")
+
+    @contextlib.contextmanager
+    def writing(self):
+        """One write transaction (``BEGIN IMMEDIATE``: concurrent writers queue on the lock)."""
+        with self._errors(), transaction(self.conn):
+            yield self
+
+    def counts(self) -> tuple:
+        """``(demonstrations, clustering versions)`` stored."""
+        return self.conn.execute("SELECT (SELECT COUNT(*) FROM demonstrations), "
+                                 "(SELECT COUNT(*) FROM cluster_versions)").fetchone()
+
+    def demonstrations(self) -> tuple:
+        """``(count, iterator of demonstration records by id)``, read one at a time."""
+        rows = self.conn.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
+                                 "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
+                                 "ORDER BY d.id").fetchall()
+
+        def records():
+            for did, source, created, kind, params, p_created in rows:
+                prims = self.conn.execute("SELECT id, start, stop, label FROM primitives "
+                                          "WHERE demonstration_id = ? ORDER BY id", (did,)).fetchall()
+                yield demonstration_record(did, source, created, (kind, params, p_created), prims,
+                                           load_demonstrations(self.conn, [did])[did])
+
+        return len(rows), records()
+
+    def versions(self):
+        """Clustering version records, oldest first."""
+        for v, created, params, n, centers, mean, comps in self.conn.execute(
+                "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
+                "FROM cluster_versions ORDER BY version").fetchall():
+            members = self.conn.execute("SELECT primitive_id, cluster, features, assigned "
+                                        "FROM cluster_members WHERE version = ? ORDER BY primitive_id",
+                                        (v,)).fetchall()
+            labels = self.conn.execute("SELECT cluster, label FROM cluster_labels WHERE version = ? "
+                                       "ORDER BY cluster", (v,)).fetchall()
+            yield version_record(v, created, params, n, (centers, mean, comps), members, labels)
+
+    def lengths(self, n_steps):
+        """``{id: Demonstration}`` chunks of the stored demonstrations with one of the lengths ``n_steps``."""
+        lengths = sorted(set(n_steps))
+        ids = [r[0] for part in chunks(lengths) for r in self.conn.execute(
+            f"SELECT id FROM demonstrations WHERE n_steps IN ({placeholders(len(part))})", part)]
+        for part in chunks(sorted(ids)):  # a chunk at a time: memory stays bounded on a large library
+            yield load_demonstrations(self.conn, part)
+
+    def insert_demonstration(self, d, *, keep_id: bool) -> tuple:
+        """Insert a demonstration record; returns ``(its id, {old primitive id: new})``."""
+        prov, prims = d["provenance"], d["primitives"]
+        did, pids = insert_demonstration(
+            self.conn, d["demo"], [(p["start"], p["stop"]) for p in prims], source=d["source"],
+            labels=[p["label"] for p in prims],
+            provenance=None if prov is None else (prov["kind"], prov["params"], prov["created"]),
+            created=d["created"], demo_id=d["id"] if keep_id else None,
+            primitive_ids=[p["id"] for p in prims] if keep_id else None)
+        return did, {p["id"]: new for p, new in zip(prims, pids, strict=True)}
+
+    def insert_version(self, v, primitives: dict) -> int:
+        """Insert a version record with its number; ``primitives`` maps its member ids to stored ones."""
+        a = v["arrays"]
+        self.conn.execute(
+            "INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
+            "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
+            (v["version"], v["created"], to_json(v["params"]), v["n_clusters"], to_npy(a["centers"]),
+             to_npy(a["pca_mean"]), to_npy(a["pca_components"])))
+        self.conn.executemany(
+            "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
+            "VALUES (?, ?, ?, ?, ?)",
+            [(v["version"], primitives[i], c, to_npy(f), s) for i, c, f, s in zip(
+                a["member_ids"], a["member_clusters"], a["member_features"], a["member_assigned"],
+                strict=True)])
+        self.conn.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
+                              [(v["version"], c, lab) for c, lab in v["labels"]])
+        return v["version"]
+
+    def counters(self) -> dict:
+        """``{table: last id handed out}`` (SQLite's AUTOINCREMENT counters)."""
+        return {t: n for t, n in self.conn.execute("SELECT name, seq FROM sqlite_sequence")
+                if t in COUNTED}
+
+    def set_counters(self, counters: dict) -> None:
+        """Make the next ids follow ``counters`` (never lowering one)."""
+        for table in COUNTED:
+            last = int(counters.get(table, 0))
+            if self.conn.execute("UPDATE sqlite_sequence SET seq = MAX(seq, ?) WHERE name = ?",
+                                 (last, table)).rowcount == 0 and last:
+                self.conn.execute("INSERT INTO sqlite_sequence (name, seq) VALUES (?, ?)", (table, last))
+
+    def descriptions(self, *, history: bool = True) -> list:
+        """Skill description records ``{"label", "revision", "created", "action", "binding"}`` by label,
+        revision: every revision, or (``history=False``) each label's current one unless removed."""
+        rows = self.conn.execute("SELECT label, revision, created, action, binding FROM skill_descriptions "
+                                 "ORDER BY label, revision").fetchall()
+        out = [{"label": lab, "revision": int(r), "created": c, "action": a, "binding": from_json(b)}
+               for lab, r, c, a, b in rows]
+        return out if history else current_descriptions(out)
+
+    def insert_descriptions(self, rows) -> None:
+        """Insert description records with their revision numbers (inside the caller's transaction)."""
+        self.conn.executemany(
+            "INSERT INTO skill_descriptions (label, revision, created, action, binding) "
+            "VALUES (?, ?, ?, ?, ?)",
+            [(d["label"], d["revision"], d["created"], d["action"], to_json(d["binding"])) for d in rows])
+
+
+def current_descriptions(rows) -> list:
+    """The current revision of each label among description records, removed ones (no action) left out.
+
+    Examples
+    --------
+    >>> rows = [{"label": "a", "revision": 1, "action": "x"}, {"label": "a", "revision": 2, "action": None},
+    ...         {"label": "b", "revision": 1, "action": "y"}]
+    >>> [d["label"] for d in current_descriptions(rows)]
+    ['b']
+    """
+    last = {}
+    for d in rows:
+        if d["label"] not in last or d["revision"] > last[d["label"]]["revision"]:
+            last[d["label"]] = d
+    return [last[k] for k in sorted(last) if last[k]["action"] is not None]
+
+
+def _merge_descriptions(records, imported, *, copy: bool) -> dict:
+    """Write imported description records (inside the import's transaction); ``{label: revision}`` added.
+
+    A copy (into a library without descriptions) keeps every revision as it
+    is; a merge adds an imported label's current description (or its removal)
+    as a new revision where it differs from the library's current one.
+    """
+    if not imported:
+        return {}
+    if not callable(getattr(records, "insert_descriptions", None)):
+        raise ValueError(f"the export holds {len(imported)} skill description(s), which this library's "
+                         "backend cannot store")
+    stored = records.descriptions(history=True)
+    if copy and not stored:  # an empty library may still hold descriptions: then it merges them
+        records.insert_descriptions(imported)
+        return {d["label"]: d["revision"] for d in current_descriptions(imported)}
+    last, mine, theirs = {}, {}, {}
+    for d in stored:
+        if d["revision"] > last.get(d["label"], 0):
+            last[d["label"]], mine[d["label"]] = d["revision"], d
+    for d in imported:
+        if d["label"] not in theirs or d["revision"] > theirs[d["label"]]["revision"]:
+            theirs[d["label"]] = d
+    new = [dict(d, revision=last.get(label, 0) + 1) for label, d in sorted(theirs.items())
+           if (d["action"] is not None if label not in mine else  # a removal of nothing adds nothing
+               (mine[label]["action"], mine[label]["binding"]) != (d["action"], d["binding"]))]
+    records.insert_descriptions(new)
+    return {d["label"]: d["revision"] for d in new}
+
+
+def demonstration_record(did, source, created, provenance, primitives, demo) -> dict:
+    """A demonstration record from rows: ``provenance`` is ``(kind, params JSON, created)``."""
+    kind, params, p_created = provenance
+    return {"id": int(did), "source": source, "created": created, "demo": demo,
+            "provenance": None if kind is None else {"kind": kind, "params": from_json(params),
+                                                     "created": p_created},
+            "primitives": [{"id": int(i), "start": int(a), "stop": int(b), "label": lab}
+                           for i, a, b, lab in primitives]}
+
+
+def version_record(version, created, params, n_clusters, arrays, members, labels) -> dict:
+    """A version record from rows: ``arrays`` the ``.npy`` bytes of centres, PCA mean and components;
+    ``members`` ``(primitive id, cluster, features .npy, assigned)``; ``labels`` ``(cluster, label)``."""
+    centers, mean, comps = (from_npy(b) for b in arrays)
+    return {"version": int(version), "created": created, "params": from_json(params),
+            "n_clusters": int(n_clusters), "labels": [(int(c), lab) for c, lab in labels],
+            "arrays": {"centers": centers, "pca_mean": mean, "pca_components": comps,
+                       "member_ids": [int(m[0]) for m in members],
+                       "member_clusters": [int(m[1]) for m in members],
+                       "member_features": [from_npy(m[2]) for m in members],
+                       "member_assigned": [m[3] for m in members]}}
+
+
+def records_of(store):
+    """The records protocol of an open store: its own ``records()``, else a SQLite store's connection."""
+    own = getattr(store, "records", None)
+    if callable(own):
+        return own()
+    conn = getattr(store, "conn", None)
+    if isinstance(conn, sqlite3.Connection):
+        return SQLiteRecords(conn, store.location)
+    raise ValueError(f"library {store.location!r}: its backend {type(store).__name__} cannot be exported, "
+                     "imported or copied (it has no records())")
+
+
+def write_export(records, folder, *, progress=None) -> Path:
     """Write every demonstration, primitive, clustering version, label and provenance to ``folder``.
 
     Layout: ``demonstrations/demo_<id>.npz`` (``t``, every stream, metadata;
     see :func:`skillbank.io.write_npz`), ``versions/version_<n>.npz`` (centres,
     PCA arrays, members, their clusters and features) and ``manifest.json``
-    (everything else). Runs in one read transaction, so it is a consistent
-    snapshot even while other processes write. ``progress``, when given, is
+    (everything else). Read in one snapshot (``records.snapshot()``), so it is
+    consistent even while other processes write. ``progress``, when given, is
     called as ``progress(done, total)`` with the demonstrations written so far.
 
     Returns
@@ -40,54 +271,45 @@ def export_library(conn, folder, *, progress=None) -> Path:
         raise ValueError(f"folder: expected a new or empty folder, {str(folder)!r} is not empty")
     (folder / "demonstrations").mkdir(parents=True, exist_ok=True)
     (folder / "versions").mkdir(exist_ok=True)
-    conn.execute("BEGIN")  # a snapshot: readers see one consistent state in WAL mode
-    try:
-        demos_doc, versions_doc = [], []
-        rows = conn.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
-                            "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
-                            "ORDER BY d.id").fetchall()
+    demos_doc, versions_doc = [], []
+    with records.snapshot():
+        total, demos = records.demonstrations()
         if progress is not None:
-            progress(0, len(rows))
-        for done, (did, source, created, kind, params, p_created) in enumerate(rows, 1):
-            demo = load_demonstrations(conn, [did])[did]
-            name = f"demonstrations/demo_{did:06d}.npz"
-            write_npz(demo, folder / name)
-            prims = conn.execute("SELECT id, start, stop, label FROM primitives WHERE demonstration_id = ? "
-                                 "ORDER BY id", (did,)).fetchall()
-            demos_doc.append({
-                "id": did, "file": name, "source": source, "created": created,
-                "provenance": None if kind is None else {"kind": kind, "params": from_json(params),
-                                                         "created": p_created},
-                "primitives": [{"id": i, "start": a, "stop": b, "label": lab} for i, a, b, lab in prims]})
+            progress(0, total)
+        for done, d in enumerate(demos, 1):
+            name = f"demonstrations/demo_{d['id']:06d}.npz"
+            write_npz(d["demo"], folder / name)
+            demos_doc.append({"id": d["id"], "file": name, "source": d["source"], "created": d["created"],
+                              "provenance": d["provenance"], "primitives": d["primitives"]})
             if progress is not None:
-                progress(done, len(rows))
-        for v, created, params, n, centers, mean, comps in conn.execute(
-                "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
-                "FROM cluster_versions ORDER BY version").fetchall():
-            members = conn.execute("SELECT primitive_id, cluster, features, assigned FROM cluster_members "
-                                   "WHERE version = ? ORDER BY primitive_id", (v,)).fetchall()
-            feats = [from_npy(m[2]) for m in members]
-            width = feats[0].shape[0] if feats else from_npy(comps).shape[0]
-            name = f"versions/version_{v:04d}.npz"
+                progress(done, total)
+        for v in records.versions():
+            a = v["arrays"]
+            feats, m = a["member_features"], len(a["member_ids"])
+            width = feats[0].shape[0] if m else a["pca_components"].shape[0]
+            name = f"versions/version_{v['version']:04d}.npz"
             np.savez_compressed(
-                folder / name, centers=from_npy(centers), pca_mean=from_npy(mean),
-                pca_components=from_npy(comps),
-                member_ids=np.array([m[0] for m in members], dtype=np.int64),
-                member_clusters=np.array([m[1] for m in members], dtype=np.int64),
-                member_features=np.array(feats, dtype=float).reshape(len(members), width),
-                member_assigned=np.array([m[3] for m in members], dtype=str))
-            labels = conn.execute("SELECT cluster, label FROM cluster_labels WHERE version = ? "
-                                  "ORDER BY cluster", (v,)).fetchall()
-            versions_doc.append({"version": v, "created": created, "params": from_json(params),
-                                 "n_clusters": n, "file": name,
-                                 "labels": [{"cluster": c, "label": lab} for c, lab in labels]})
-    finally:
-        conn.execute("COMMIT")
+                folder / name, centers=a["centers"], pca_mean=a["pca_mean"],
+                pca_components=a["pca_components"],
+                member_ids=np.array(a["member_ids"], dtype=np.int64),
+                member_clusters=np.array(a["member_clusters"], dtype=np.int64),
+                member_features=np.array(feats, dtype=float).reshape(m, width),
+                member_assigned=np.array(a["member_assigned"], dtype=str))
+            versions_doc.append({"version": v["version"], "created": v["created"], "params": v["params"],
+                                 "n_clusters": v["n_clusters"], "file": name,
+                                 "labels": [{"cluster": c, "label": lab} for c, lab in v["labels"]]})
+        described = getattr(records, "descriptions", None)
+        descriptions = described(history=True) if callable(described) else []
     manifest = {"format": FORMAT, "schema_version": SCHEMA_VERSION, "exported": now(),
-                "demonstrations": demos_doc, "versions": versions_doc}
+                "demonstrations": demos_doc, "versions": versions_doc, "descriptions": descriptions}
     path = folder / MANIFEST
     path.write_text(json.dumps(manifest, indent=1, allow_nan=False))
     return path
+
+
+def export_library(conn, folder, *, progress=None) -> Path:
+    """:func:`write_export` of the SQLite library open on ``conn``."""
+    return write_export(SQLiteRecords(conn), folder, progress=progress)
 
 
 def content_hash(demo: Demonstration) -> str:
@@ -120,64 +342,27 @@ def content_hash(demo: Demonstration) -> str:
     return h.hexdigest()
 
 
-def _existing_hashes(conn, n_steps) -> dict:
+def _existing_hashes(records, n_steps) -> dict:
     """``{content hash: id}`` of the stored demonstrations with one of the lengths ``n_steps``."""
-    lengths = sorted(set(n_steps))
-    ids = [r[0] for part in chunks(lengths) for r in conn.execute(
-        f"SELECT id FROM demonstrations WHERE n_steps IN ({placeholders(len(part))})", part)]
     out = {}
-    for part in chunks(sorted(ids)):  # a chunk at a time: memory stays bounded on a large library
-        for did, demo in sorted(load_demonstrations(conn, part).items()):
+    for part in records.lengths(n_steps):
+        for did, demo in sorted(part.items()):
             out.setdefault(content_hash(demo), did)
     return out
 
 
-def _insert_demonstration(conn, d, *, keep_id: bool) -> tuple:
-    prov = d["provenance"]
-    prims = d["primitives"]
-    did, pids = insert_demonstration(
-        conn, d["demo"], [(p["start"], p["stop"]) for p in prims], source=d["source"],
-        labels=[p["label"] for p in prims],
-        provenance=None if prov is None else (prov["kind"], prov["params"], prov["created"]),
-        created=d["created"], demo_id=d["id"] if keep_id else None,
-        primitive_ids=[p["id"] for p in prims] if keep_id else None)
-    return did, {p["id"]: new for p, new in zip(prims, pids, strict=True)}
+def import_records(records, doc) -> dict:
+    """Write a checked export ``doc`` (:func:`~skillbank.store._manifest.read_export`) in one transaction.
 
-
-def _insert_version(conn, v, primitives: dict) -> int:
-    a = v["arrays"]
-    conn.execute(
-        "INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
-        "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
-        (v["version"], v["created"], to_json(v["params"]), v["n_clusters"], to_npy(a["centers"]),
-         to_npy(a["pca_mean"]), to_npy(a["pca_components"])))
-    conn.executemany(
-        "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
-        "VALUES (?, ?, ?, ?, ?)",
-        [(v["version"], primitives[i], c, to_npy(f), s) for i, c, f, s in zip(
-            a["member_ids"], a["member_clusters"], a["member_features"], a["member_assigned"], strict=True)])
-    conn.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
-                     [(v["version"], c, lab) for c, lab in v["labels"]])
-    return v["version"]
-
-
-def import_library(conn, folder) -> dict:
-    """Import an exported folder in one transaction, after checking all of it.
-
-    Everything is read and checked first (:func:`~skillbank.store._manifest.read_export`:
-    paths confined to the folder, the manifest validated, the files checked
-    against it), so a bad folder changes nothing. Then:
-
-    - into an **empty** library (no demonstrations, no clustering versions),
+    - Into an **empty** library (no demonstrations, no clustering versions),
       an exact copy: ids, versions, memberships and labels are kept;
     - into a **non-empty** library, a merge: a demonstration whose content
-      (:func:`~skillbank.store._manifest.content_hash`) the library already
-      holds is skipped; every other one is added, renumbered, with its
-      primitives and their own labels. The imported clustering versions are
-      not added (they describe another population): the library's current
-      version stays current, with its labels, and the new primitives stay
-      unclustered here (:meth:`skillbank.pipeline.Library.import_folder`
-      assigns them).
+      (:func:`content_hash`) the library already holds is skipped; every other
+      one is added, renumbered, with its primitives and their own labels. The
+      imported clustering versions are not added (they describe another
+      population): the library's current version stays current, with its
+      labels, and the new primitives stay unclustered here
+      (:meth:`skillbank.pipeline.Library.import_folder` assigns them).
 
     Returns
     -------
@@ -186,21 +371,102 @@ def import_library(conn, folder) -> dict:
         "primitives": {old: new}, "versions": {old: new},
         "skipped": {old demonstration id: id of the copy already stored}}``.
     """
-    doc = read_export(folder)
     hashes = {d["id"]: content_hash(d["demo"]) for d in doc["demonstrations"]}
     maps = {"mode": "copy", "demonstrations": {}, "primitives": {}, "versions": {}, "skipped": {}}
-    with transaction(conn):
-        empty = conn.execute("SELECT (SELECT COUNT(*) FROM demonstrations) + "
-                             "(SELECT COUNT(*) FROM cluster_versions)").fetchone()[0] == 0
-        stored = {} if empty else _existing_hashes(conn, [d["demo"].n_steps for d in doc["demonstrations"]])
+    with records.writing():
+        empty = sum(records.counts()) == 0
+        lengths = [d["demo"].n_steps for d in doc["demonstrations"]]
+        stored = {} if empty else _existing_hashes(records, lengths)
         maps["mode"] = "copy" if empty else "merge"
         for d in doc["demonstrations"]:
             if hashes[d["id"]] in stored:
                 maps["skipped"][d["id"]] = stored[hashes[d["id"]]]
                 continue
-            did, prims = _insert_demonstration(conn, d, keep_id=empty)
+            did, prims = records.insert_demonstration(d, keep_id=empty)
             maps["demonstrations"][d["id"]] = did
             maps["primitives"].update(prims)
         for v in doc["versions"] if empty else ():
-            maps["versions"][v["version"]] = _insert_version(conn, v, maps["primitives"])
+            maps["versions"][v["version"]] = records.insert_version(v, maps["primitives"])
+        maps["descriptions"] = _merge_descriptions(records, doc.get("descriptions", []), copy=empty)
     return maps
+
+
+def import_library(conn, folder) -> dict:
+    """Import an exported folder into the SQLite library open on ``conn``, after checking all of it.
+
+    Everything is read and checked first (:func:`~skillbank.store._manifest.read_export`:
+    paths confined to the folder, the manifest validated, the files checked
+    against it), so a bad folder changes nothing; then :func:`import_records`.
+    """
+    return import_records(SQLiteRecords(conn), read_export(folder))
+
+
+def copy_library(source, destination, *, progress=None) -> dict:
+    """Copy the library ``source`` into the empty library ``destination``: ids and versions kept.
+
+    Any two stores (:class:`~skillbank.store.SQLiteStore`,
+    :class:`~skillbank.store.PostgresStore`, either direction). The source is
+    read in one snapshot, a demonstration at a time (memory stays bounded),
+    and the destination written in one transaction: a failed copy leaves it
+    empty. Every demonstration (streams, metadata, source, created time,
+    provenance), primitive (range, own label), clustering version (params,
+    arrays, members with their features and how they joined, cluster
+    labels) and the id counters are copied, so the next demonstration added
+    to either gets the same id.
+
+    Parameters
+    ----------
+    source, destination : Store
+        Open stores; ``source`` may be read-only.
+    progress : callable, optional
+        Called as ``progress(done, total)`` with the demonstrations copied so far.
+
+    Returns
+    -------
+    dict
+        ``{"demonstrations": n, "primitives": n, "versions": n}`` copied.
+
+    Raises
+    ------
+    ValueError
+        When ``destination`` already holds demonstrations or clustering
+        versions (nothing is written; to merge, export and import).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from skillbank.store import open_store
+    >>> folder = tempfile.mkdtemp()
+    >>> t = np.linspace(0.0, 1.0, 20)
+    >>> with open_store(os.path.join(folder, "a.db")) as a, open_store(os.path.join(folder, "b.db")) as b:
+    ...     _ = a.add_demonstration(Demonstration.from_array(np.c_[t, t], t), [(0, 10), (10, 20)])
+    ...     copy_library(a, b), b.demonstration_ids()
+    ({'demonstrations': 1, 'primitives': 2, 'versions': 0}, [1])
+    """
+    src, dst = records_of(source), records_of(destination)
+    counts = {"demonstrations": 0, "primitives": 0, "versions": 0}
+    with src.snapshot(), dst.writing():
+        n_demos, n_versions = dst.counts()
+        if n_demos or n_versions:
+            raise ValueError(f"destination: expected an empty library, {destination.location!r} holds "
+                             f"{n_demos} demonstration(s) and {n_versions} clustering version(s); "
+                             "'library copy' writes only into an empty library (to merge, 'library export' "
+                             "then 'library import')")
+        total, demos = src.demonstrations()
+        if progress is not None:
+            progress(0, total)
+        primitives = {}
+        for done, d in enumerate(demos, 1):
+            _, prims = dst.insert_demonstration(d, keep_id=True)
+            primitives.update(prims)
+            counts["demonstrations"] = done
+            if progress is not None:
+                progress(done, total)
+        counts["primitives"] = len(primitives)
+        for v in src.versions():
+            dst.insert_version(v, primitives)
+            counts["versions"] += 1
+        described = getattr(src, "descriptions", None)
+        _merge_descriptions(dst, described(history=True) if callable(described) else [], copy=True)
+        dst.set_counters(src.counters())
+    return counts

@@ -235,7 +235,7 @@ def test_a_demonstration_that_cannot_join_is_reported(run, tmp_path):
 def test_every_library_command_prints_json_and_cluster_ids_agree(run, tmp_path):
     db = tmp_path / "j.db"
     code, out, _ = run("library", "init", db, "--json")
-    assert code == 0 and json.loads(out) == {"library": str(db), "created": True, "schema_version": 2}
+    assert code == 0 and json.loads(out) == {"library": str(db), "created": True, "schema_version": 3}
     assert json.loads(run("library", "init", db, "--json")[1])["created"] is False
     specs = {f"w{k}": (200, 3, 1.0 + 2.0 * (k % 2)) for k in range(6)}
     run("library", "add", db, *_wave_files(tmp_path, specs), "--whole")

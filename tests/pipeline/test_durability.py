@@ -285,7 +285,7 @@ def test_migrates_a_version_1_library(tmp_path):
     conn.close()
 
     with Library(path) as lib:
-        assert lib.store.conn.execute("PRAGMA user_version").fetchone()[0] == 2
+        assert lib.store.conn.execute("PRAGMA user_version").fetchone()[0] == 3
         assert lib.check() == "ok"
         assert lib.provenance(1) == {"unknown": True, "migrated_from_schema": 1}
         prims = lib.primitives()

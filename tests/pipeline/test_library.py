@@ -45,7 +45,7 @@ def test_wal_mode_and_schema_version(tmp_path):
     Library(tmp_path / "a.db").close()
     conn = sqlite3.connect(tmp_path / "a.db")
     assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
-    assert conn.execute("PRAGMA user_version").fetchone()[0] == Library.schema_version == 2
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == Library.schema_version == 3
     conn.close()
 
 

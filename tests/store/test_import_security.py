@@ -392,7 +392,7 @@ def test_the_untouched_export_imports(exported, tmp_path):
     assert first["versions"] == {1: 1} and first["skipped"] == {}
     again = _import(db, exported)
     assert again == {"mode": "merge", "demonstrations": {}, "primitives": {}, "versions": {},
-                     "skipped": {1: 1, 2: 2, 3: 3}}
+                     "skipped": {1: 1, 2: 2, 3: 3}, "descriptions": {}}
 
 
 def test_a_symlink_inside_the_folder_to_a_file_inside_is_followed(exported, tmp_path):

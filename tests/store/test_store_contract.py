@@ -2,7 +2,8 @@
 
 The ``store`` fixture is parametrised over the registered backends that can be started here, so a
 new backend (one class plus one line in ``skillbank.store.STORES``) runs these tests by adding a
-factory to ``FACTORIES``.
+factory to ``FACTORIES``. A factory gets the test's ``request`` and may ask it for fixtures (the
+PostgreSQL one a fresh database of the session's server, ``tests/store/conftest.py``).
 """
 
 from __future__ import annotations
@@ -16,17 +17,21 @@ from skillbank import Demonstration
 from skillbank.store import STORES, SQLiteStore, Store, open_store
 
 
-def _sqlite(tmp_path: Path) -> Store:
-    return open_store(f"sqlite:///{tmp_path / 'contract.db'}")
+def _sqlite(request) -> Store:
+    return open_store(f"sqlite:///{request.getfixturevalue('tmp_path') / 'contract.db'}")
+
+
+def _postgres(request) -> Store:
+    return open_store(request.getfixturevalue("postgres_url"))
 
 
 #: backend scheme -> factory of a fresh, empty store
-FACTORIES = {"sqlite": _sqlite}
+FACTORIES = {"sqlite": _sqlite, "postgresql": _postgres}
 
 
 @pytest.fixture(params=sorted(FACTORIES))
-def store(request, tmp_path):
-    s = FACTORIES[request.param](tmp_path)
+def store(request):
+    s = FACTORIES[request.param](request)
     assert isinstance(s, STORES[request.param])
     yield s
     s.close()

@@ -1,0 +1,110 @@
+"""``skillbank plan``: plan a task over the library's labelled skills and reproduce it as one trajectory."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ._library import _DB_READ, _location, _target, check_robot, output_format, print_execution
+from ._options import show_progress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub):
+    """Register ``skillbank plan``.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parser = argparse.ArgumentParser(prog="skillbank")
+    >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
+    ArgumentParser(...)
+    """
+    p = sub.add_parser("plan", help="plan a task over labelled skills (PDDL) and reproduce it as one "
+                                    "trajectory (needs skillbank[plan])")
+    p.add_argument("db", type=_location, help=_DB_READ)
+    p.add_argument("--scene", type=Path, required=True,
+                   help="scene file (JSON): objects with type/position/orientation, obstacles, init, goal, "
+                        "start (see docs/planning.md)")
+    p.add_argument("--domain", type=Path, default=None,
+                   help="a PDDL domain to use as it is (default: built from the skills' descriptions, see "
+                        "'library describe')")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="add one continuous 'joints' stream by inverse kinematics for this robot (ur5e)")
+    p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
+                   help="slow each step down uniformly until no joint moves faster (needs --robot)")
+    p.add_argument("--seed", type=int, default=None, help="random seed (for methods that sample)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
+    p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
+                   help="format of --out (default from its suffix)")
+    p.add_argument("--plot", type=Path, default=None,
+                   help="write a 3-D figure of the path coloured by step, with the scene's objects and "
+                        "obstacles, and the PDDL files beside it (<plot>.domain.pddl, <plot>.problem.pddl)")
+    p.add_argument("--json", action="store_true",
+                   help="print plan, steps (action, args, skill, start, stop, used), t, streams, collision, "
+                        "constraint_error as JSON")
+    p.set_defaults(func=_plan)
+    return p
+
+
+def _plan(args) -> int:
+    from .. import io  # the writers, only when a result is written
+    from ..planning import load_scene, plan_task, write_pddl  # the planner's layers, when a plan runs
+    from ..store import open_store  # the store, when a plan runs (not for --help)
+
+    if args.max_joint_velocity is not None and args.robot is None:
+        raise ValueError("max-joint-velocity: a joint velocity limit needs joints: give --robot too")
+    limits = {} if args.max_joint_velocity is None else {"joint_velocity": args.max_joint_velocity}
+    check_robot(args)
+    kind = output_format(args)
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
+    scene = load_scene(args.scene)
+    if args.domain is not None and not args.domain.is_file():
+        raise ValueError(f"domain: expected a PDDL domain file, got {str(args.domain)!r}, which is not "
+                         "a file")
+    with open_store(_target(args.db), create=False, readonly=True) as store:
+        tick = None
+        if show_progress(args):
+            from tqdm import tqdm  # a bar on a terminal only
+
+            bar = tqdm(desc="plan steps", unit="step")
+
+            def tick(done, total):
+                bar.total = total
+                bar.update(done - bar.n)
+        result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
+                           random_state=args.seed, progress=tick)
+        prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
+            if args.plot is not None else {}
+    if args.out is not None:
+        io.write_trajectory(result.trajectory, args.out, format=kind)
+    written = [args.out] if args.out is not None else []
+    if args.plot is not None:
+        from ..plotting import plot_plan  # matplotlib only when a figure is asked for
+
+        stem = args.plot.with_suffix("") if args.plot.suffix else args.plot
+        written += list(write_pddl(result, stem))
+        written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
+    if args.json:
+        doc = result.to_dict()
+        doc["written"] = [str(p) for p in written]
+        print(json.dumps(doc, allow_nan=False))
+        return 0
+    print(f"{args.db}: plan of {len(result.plan)} step(s) for {len(scene.goal)} goal fact(s)")
+    for k, s in enumerate(result.steps, 1):
+        print(f"  {k}. ({' '.join([s.action, *s.args])}) by skill {s.skill!r} from primitive(s) {s.used}, "
+              f"samples {s.start}:{s.stop}, ends {s.constraint_error:.3g} from its goal")
+    joins = ", ".join(f"{k} {v:.3g}" for k, v in result.join_error.items())
+    print(f"  joins: largest gap {joins}")
+    traj = result.trajectory
+    print_execution(traj, result.constraint_error, max(s.orientation_error for s in result.steps),
+                    result.collision, traj.metadata.get("peaks", {}), result.notes,
+                    orientation=any(s.goal_orientation is not None for s in result.steps))
+    for path in written:
+        print(f"  wrote {path}")
+    return 0

@@ -1,0 +1,156 @@
+"""How a skill's action binds to geometry: its goal pose, obstacles, gripper, method and timing.
+
+A skill's description is a PDDL action schema plus a *binding*, a JSON object
+with any of these keys (every one optional):
+
+``goal``
+    The parameter (``"?b"``) whose object's pose is the step's goal. Default
+    (the convention): the last argument that is an object with a position.
+``offset``
+    ``[dx, dy, dz]`` added to that position (world frame, metres); default none.
+``orientation``
+    ``"object"`` (default: the object's orientation, when it has one),
+    ``"none"`` (leave the orientation free), or a quaternion ``[x, y, z, w]``.
+``obstacles``
+    ``"all"`` (default) or a list of the scene's obstacle names that apply.
+``gripper``
+    ``{"start": value, "end": value}``: the gripper command at the step's first
+    and last sample (held in between at ``start``); default the skill's recorded
+    gripper, else the value carried from the previous step.
+``method``, ``k``, ``duration``
+    The reuse's representation (default ``"lte"``), candidates, seconds.
+``velocity``
+    ``"zero"`` (default: the step starts and ends at rest) or ``"free"``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core._rotations import check_quaternions
+from ..core._validation import check_array, check_positive
+from ..representations import REPRESENTATIONS
+
+__all__ = ["Binding", "check_binding", "BINDING_KEYS", "DEFAULT_METHOD"]
+
+BINDING_KEYS = ("goal", "offset", "orientation", "obstacles", "gripper", "method", "k", "duration",
+                "velocity")
+#: The representation a plan step uses unless its binding names another: LTE edits the best
+#: candidate itself, so each step stays one recorded motion, met to round-off.
+DEFAULT_METHOD = "lte"
+
+
+@dataclass
+class Binding:
+    """A checked binding (see the module docstring); ``as_dict`` gives back the JSON form."""
+
+    goal: str | None = None
+    offset: np.ndarray | None = None
+    orientation: object = "object"
+    obstacles: object = "all"
+    gripper_start: float | None = None
+    gripper_end: float | None = None
+    method: str = DEFAULT_METHOD
+    k: int | None = None
+    duration: float | None = None
+    velocity: str = "zero"
+
+    def as_dict(self) -> dict:
+        """The JSON-able binding, with only what differs from the defaults."""
+        out = {}
+        if self.goal is not None:
+            out["goal"] = self.goal
+        if self.offset is not None:
+            out["offset"] = self.offset.tolist()
+        if not isinstance(self.orientation, str):
+            out["orientation"] = np.asarray(self.orientation).tolist()
+        elif self.orientation != "object":
+            out["orientation"] = self.orientation
+        if self.obstacles != "all":
+            out["obstacles"] = list(self.obstacles)
+        ends = (("start", self.gripper_start), ("end", self.gripper_end))
+        gripper = {k: v for k, v in ends if v is not None}
+        if gripper:
+            out["gripper"] = gripper
+        if self.method != DEFAULT_METHOD:
+            out["method"] = self.method
+        for key in ("k", "duration"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
+        if self.velocity != "zero":
+            out["velocity"] = self.velocity
+        return out
+
+
+def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
+    """Check a binding against an action's parameters (``[(name, type)]``).
+
+    Examples
+    --------
+    >>> b = check_binding({"goal": "?b", "offset": [0, 0, 0.01]}, [("?b", "button")])
+    >>> b.goal, b.offset.tolist(), b.method
+    ('?b', [0.0, 0.0, 0.01], 'lte')
+    >>> check_binding({"goal": "?x"}, [("?b", "button")])
+    Traceback (most recent call last):
+    ...
+    ValueError: binding.goal: expected a parameter of the action (['?b']), got '?x'
+    """
+    if doc is None:
+        doc = {}
+    if not isinstance(doc, dict):
+        raise ValueError(f"{name}: expected a JSON object with keys among {list(BINDING_KEYS)}, got "
+                         f"{type(doc).__name__}")
+    extra = sorted(set(doc) - set(BINDING_KEYS), key=str)
+    if extra:
+        raise ValueError(f"{name}: unknown key {extra[0]!r}; expected keys among {list(BINDING_KEYS)}")
+    out = Binding()
+    names = [p for p, _ in parameters]
+    if doc.get("goal") is not None:
+        goal = doc["goal"]
+        goal = goal.lower() if isinstance(goal, str) else goal
+        if goal not in names:
+            raise ValueError(f"{name}.goal: expected a parameter of the action ({names}), "
+                             f"got {doc['goal']!r}")
+        out.goal = goal
+    if doc.get("offset") is not None:
+        out.offset = check_array(doc["offset"], name=f"{name}.offset", ndim=1, min_samples=1)
+        if out.offset.shape[0] != 3:
+            raise ValueError(f"{name}.offset: expected 3 numbers (dx, dy, dz), got {out.offset.shape[0]}")
+    orientation = doc.get("orientation", "object")
+    if isinstance(orientation, str):
+        if orientation not in ("object", "none"):
+            raise ValueError(f"{name}.orientation: expected 'object', 'none' or a quaternion [x, y, z, w], "
+                             f"got {orientation!r}")
+        out.orientation = orientation
+    else:
+        q = check_array(orientation, name=f"{name}.orientation", ndim=1, min_samples=1)
+        if q.shape[0] != 4:
+            raise ValueError(f"{name}.orientation: expected a quaternion of 4 numbers, got {q.shape[0]}")
+        out.orientation = check_quaternions(q, name=f"{name}.orientation")
+    obstacles = doc.get("obstacles", "all")
+    if obstacles != "all" and (not isinstance(obstacles, list)
+                               or not all(isinstance(o, str) for o in obstacles)):
+        raise ValueError(f"{name}.obstacles: expected 'all' or a list of obstacle names, got {obstacles!r}")
+    out.obstacles = obstacles
+    gripper = doc.get("gripper", {})
+    if not isinstance(gripper, dict) or set(gripper) - {"start", "end"}:
+        raise ValueError(f"{name}.gripper: expected an object with 'start' and/or 'end', got {gripper!r}")
+    for key in ("start", "end"):
+        if gripper.get(key) is not None:
+            value = float(check_array([gripper[key]], name=f"{name}.gripper.{key}", ndim=1)[0])
+            setattr(out, f"gripper_{key}", value)
+    method = doc.get("method", DEFAULT_METHOD)
+    if method not in REPRESENTATIONS:
+        raise ValueError(f"{name}.method: expected one of {list(REPRESENTATIONS)}, got {method!r}")
+    out.method = method
+    if doc.get("k") is not None:
+        out.k = check_positive(doc["k"], name=f"{name}.k", integer=True)
+    if doc.get("duration") is not None:
+        out.duration = check_positive(doc["duration"], name=f"{name}.duration")
+    velocity = doc.get("velocity", "zero")
+    if velocity not in ("zero", "free"):
+        raise ValueError(f"{name}.velocity: expected 'zero' or 'free', got {velocity!r}")
+    out.velocity = velocity
+    return out
