@@ -15,7 +15,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import find_peaks
 
-from ._gate import _nearest_run
 from ._profile import TYPICAL_PERCENTILE, speed_norm
 
 __all__ = ["KINDS", "stream_kind", "discrete_events", "contact_events", "rest_events", "rest_speed"]
@@ -240,6 +239,18 @@ REST_BAND = 0.02
 MOVEMENT_FRACTION = 0.2
 
 
+def _run_around(mask: np.ndarray, i: int) -> tuple[int, int]:
+    """``(start, end)`` of the run of True in ``mask`` that holds index ``i`` (``mask[i]`` is True).
+
+    Two scans outward from ``i`` in compiled code: the valleys of a long noisy
+    stream are many, and each one's run is short.
+    """
+    left, right = mask[i::-1], mask[i:]
+    k = left.size if left.all() else int(np.argmin(left))
+    m = right.size if right.all() else int(np.argmin(right))
+    return i - k + 1, i + m - 1
+
+
 def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the motion comes to rest between two movements.
 
@@ -290,7 +301,7 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
             continue
         ratio = float(v[c]) / side
         # the run of the valley's bottom that holds c, within the valley
-        a, b = _nearest_run(v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c]), c - lo)
+        a, b = _run_around(v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c]), c - lo)
         events.append(lo + (a + b) // 2)
         ratios.append(ratio)
         conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** REST_EXPONENT))
