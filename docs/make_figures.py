@@ -55,3 +55,16 @@ with tempfile.TemporaryDirectory() as tmp, Library(Path(tmp) / "lib.sqlite", cre
     peak = res.to_dict().get("peak_joint_velocity")
     print(f"reuse on the UR5e: used {res.used}, orientation error {res.orientation_error:.1e} rad, "
           f"peak joint speed {peak:.3f} rad/s, {res.trajectory.t[-1]:.2f} s")
+
+# issue 15: tasks never demonstrated, planned over labelled skills (skillbank.experiments._planning_demo)
+import shutil  # noqa: E402
+
+from skillbank.experiments import button_task, rail_task, reach_task  # noqa: E402
+
+with tempfile.TemporaryDirectory() as tmp:
+    for name, item in (("buttons", button_task(tmp, data)), ("rail", rail_task(tmp, data)),
+                       ("reach", reach_task(tmp))):
+        shutil.copyfile(item["files"]["figure"], here / f"planning_{name}.png")
+        worst = max(s["end_error"] for s in item["steps"])
+        print(f"planning {name}: {item['plan']}, largest end error {worst:.1e} m, "
+              f"collision {item['collision']}, clearance {item['clearance']}")

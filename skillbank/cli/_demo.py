@@ -37,6 +37,8 @@ def run(args) -> int:
         if ex is not None:
             print(f"executable reproduction ({ex['skill']} on a UR5e, streams {', '.join(ex['streams'])}): "
                   f"{ex['csv']}")
+        if summary.get("planning"):
+            print(f"tasks never demonstrated, planned over the skills: {summary['planning']}")
         print(f"figures and summary written to {summary['out']}")
         print(f"open {summary['summary']}")
     return 0

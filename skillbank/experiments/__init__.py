@@ -2,6 +2,7 @@
 
 from ._demo import run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._library_demo import run_library_demo
+from ._planning_demo import button_task, rail_task, reach_task, run_planning_demo
 from ._rail import (
     PAPER_REPRESENTATIVES,
     RailExperimentResult,
@@ -14,6 +15,7 @@ from ._rail import (
 
 __all__ = [
     "run_segmentation_demo", "run_library_demo", "synthetic_multistream", "synthetic_ur5e",
+    "run_planning_demo", "button_task", "rail_task", "reach_task",
     "PAPER_REPRESENTATIVES",
     "RailExperimentResult",
     "composition", "count_misclustered", "plot_rail_experiment", "rail_experiment", "run_rail_experiment",

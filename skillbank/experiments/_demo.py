@@ -15,6 +15,14 @@ from ..segmentation import segment
 __all__ = ["run_segmentation_demo", "synthetic_multistream", "synthetic_ur5e"]
 
 
+def fresh_library(db: Path) -> None:
+    """Remove a demo's library file and its SQLite side files, so a run starts from nothing."""
+    for suffix in ("", "-wal", "-shm", "-journal"):
+        p = Path(str(db) + suffix)
+        if p.exists():
+            p.unlink()
+
+
 def synthetic_multistream(*, n_steps: int = 1200, random_state=0) -> Demonstration:
     """A pick-and-place-like demonstration with known primitive boundaries.
 

@@ -16,7 +16,8 @@ from ..core import Constraints, Demonstration, Sphere, exp_map
 from ..io import load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..plotting import draw_edit, plot_executable
-from ._demo import run_segmentation_demo, synthetic_multistream, synthetic_ur5e
+from ._demo import fresh_library, run_segmentation_demo, synthetic_multistream, synthetic_ur5e
+from ._planning_demo import run_planning_demo
 
 __all__ = ["run_library_demo"]
 
@@ -60,13 +61,6 @@ class _Steps:
 
     def close(self) -> None:
         self._bar.close()
-
-
-def _fresh(db: Path) -> None:
-    for suffix in ("", "-wal", "-shm", "-journal"):
-        p = Path(str(db) + suffix)
-        if p.exists():
-            p.unlink()
 
 
 def _names(lib, order_names) -> dict:
@@ -263,6 +257,10 @@ def _markdown(result, rows, reuses, seg) -> str:
                   f"orientation error {ex['orientation_error']:.2g} rad, peak joint speed "
                   f"{ex['peak_joint_velocity']:.3g} rad/s.", "",
                   f"![executable]({Path(ex['figure']).name})", ""]
+    if result.get("planning"):
+        lines += ["## Tasks never demonstrated", "", "Skills labelled in libraries of their own, "
+                  "described with PDDL actions, composed by a planner and chained into one trajectory: "
+                  "[planning/summary.md](planning/summary.md).", ""]
     if seg is not None:
         lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
                   "demonstration): [segmentation/summary.md](segmentation/summary.md).", ""]
@@ -374,13 +372,13 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     db = out / "library.sqlite"
-    _fresh(db)
+    fresh_library(db)
     if data is not None:
         data = Path(data)
         if not (data / "rail").is_dir() or not (data / "seed").is_dir():
             raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
     # load, add, cluster, label; the clusters' figure; the two reuse tasks; the segmentation demo
-    step = _Steps(4 + 1 + 2 + 1 + int(bool(segmentation)), progress)
+    step = _Steps(4 + 1 + 2 + 1 + 1 + int(bool(segmentation)), progress)
     try:
         with Library(db) as lib:
             rows, source, features, figures, reuses, summary = _build_and_reuse(
@@ -389,6 +387,9 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
             executable = _executable(lib, out, data, random_state)
             figures["executable"] = executable["figure"]
             summary = lib.summary()
+        step("planning (tasks never demonstrated)")
+        planning = run_planning_demo(out / "planning", data=data, random_state=random_state)
+        figures.update({f"plan_{k}": v["files"]["figure"] for k, v in planning["tasks"].items()})
         seg = None
         if segmentation:
             step("segmentation demo")
@@ -398,6 +399,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
               "skills": rows, "reuse": reuses, "figures": figures, "executable": executable,
+              "planning": planning["summary"],
               "segmentation": None if seg is None else seg["summary"]}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"

@@ -339,7 +339,11 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         pieces.append(streams)
         steps.append(PlanStep(action, tuple(args), skill.label, first, first + n, list(res.used), goal,
                               goal_q, b.method, float(res.constraint_error), float(res.orientation_error),
-                              bool(res.collision), step_notes + [f"{where}: {x}" for x in res.notes]))
+                              bool(res.collision), step_notes + [
+                                  f"{where}: {x}" for x in res.notes
+                                  # with a robot the chain computes the joints itself: reuse's note that
+                                  # it dropped the recorded joints does not apply
+                                  if not (model is not None and x.startswith("joints"))]))
         notes += step_notes
         position, orientation = streams["position"][-1], streams.get("orientation", [None])[-1]
         joints = streams["joints"][-1] if model is not None else None

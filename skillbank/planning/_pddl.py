@@ -256,7 +256,7 @@ def domain_text(actions, *, name: str = "skillbank", types=()) -> Domain:
     ({'pressed': ['button']}, ['button'])
     """
     actions = list(actions)
-    kinds = sorted({t for a in actions for _, t in a.parameters} | set(types) - {"object"})
+    kinds = sorted(({t for a in actions for _, t in a.parameters} | set(types)) - {"object"})
     preds = _predicates(actions, f"domain {name}")
     reqs = ":strips :typing" + (" :negative-preconditions" if any(a.negative for a in actions) else "")
     lines = [f"(define (domain {name})", f"  (:requirements {reqs})"]

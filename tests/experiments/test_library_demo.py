@@ -32,6 +32,8 @@ def check_result(res, out):
     assert rows[0, 0] == 0.0 and ex["constraint_error"] < 1e-6 and ex["orientation_error"] < 1e-9
     assert ex["peak_joint_velocity"] <= 1.0 + 1e-9
     assert "reach_ur5e.csv" in Path(res["summary"]).read_text()
+    # a task never demonstrated, planned and chained
+    assert Path(res["planning"]).is_file() and "planning/summary.md" in Path(res["summary"]).read_text()
 
 
 def test_lasa_library_demo(tmp_path, capsys):
@@ -54,10 +56,11 @@ def test_lasa_library_demo(tmp_path, capsys):
     assert again["n_demonstrations"] == 32 and again["n_primitives"] == res["n_primitives"]
     err = capsys.readouterr().err
     for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
-                 "figure of the clusters", "reusing WShape", "reusing place", "executable reproduction"):
+                 "figure of the clusters", "reusing WShape", "reusing place", "executable reproduction",
+                 "planning"):
         assert step in err, err
-    # 4 steps to build the library, its figure, two reuses, the executable one; no segmentation here
-    assert "0/8 [00:00, loading LASA]" in err and "7/8" in err
+    # 4 steps to build the library, its figure, two reuses, the executable one, planning; no segmentation
+    assert "0/9 [00:00, loading LASA]" in err and "8/9" in err
 
 
 def test_progress_steps_are_named_as_they_start(capsys):
