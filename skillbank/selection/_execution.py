@@ -42,6 +42,9 @@ DISCRETE_STREAMS = ("gripper",)
 #: per joint (a number for all or one per joint; rad/s, rad/s^2).
 LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration", "joint_velocity",
           "joint_acceleration")
+#: Recorded streams that are derivatives of the path (RAIL stores them): not carried onto a new path.
+DERIVED_STREAMS = ("velocity", "acceleration", "jerk", "angular_velocity", "angular_acceleration")
+
 _STREAM_OF = {"velocity": "position", "acceleration": "position", "angular_velocity": "orientation",
               "angular_acceleration": "orientation", "joint_velocity": "joints",
               "joint_acceleration": "joints"}
@@ -354,6 +357,11 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
             if robot is None:
                 notes.append(f"joints: the recorded joints of {label} were dropped (they no longer match "
                              "the adapted pose; pass a robot for joints by inverse kinematics)")
+            continue
+        if name in DERIVED_STREAMS:
+            # derivatives of the recorded path describe the demonstration, not the adapted path
+            notes.append(f"{name}: the recorded {name} of {label} was dropped (a derivative of the "
+                         "demonstrated path; differentiate the result's position for the new one)")
             continue
         streams[name], note = _carry(best, times[0], name, label)
         notes.append(note)

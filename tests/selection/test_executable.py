@@ -153,6 +153,17 @@ def test_arrays_still_work_and_get_no_other_streams():
     assert set(res.peaks) == {"position"} and "joints" not in res.to_dict()
 
 
+def test_recorded_derivatives_are_not_carried_onto_the_new_path():
+    # RAIL stores velocity and acceleration: they describe the demonstration, not the adapted path
+    s = np.linspace(0.0, 1.0, 60)
+    t = 2.0 * s
+    P = np.c_[s, s ** 2, 0 * s]
+    demo = Demonstration(t, {"position": P, "velocity": np.gradient(P, t, axis=0), "force": np.c_[s, s, s]})
+    res = reuse([demo], Constraints(goal=[1.2, 0.5, 0.1]), method="lte")
+    assert res.trajectory.stream_names == ["position", "force"]
+    assert any(n.startswith("velocity: the recorded velocity of primitive 0 was dropped") for n in res.notes)
+
+
 def test_robot_joints_reproduce_the_pose_path_on_the_recorded_branch():
     task = Constraints(goal=GOAL, goal_orientation=GOAL_Q)
     res = reuse(SKILL, task, method="promp", robot="ur5e", random_state=0, limits={"joint_velocity": 1.0})
