@@ -62,14 +62,17 @@ def _text_lines(p) -> list[str]:
 
 
 def read_csv(path) -> Demonstration:
-    """Read a CSV file: a header row, a first column ``t``, then one stream.
+    """Read a CSV file: a header row, a first column ``t``, then one stream (or a written reproduction).
 
     Returns
     -------
     Demonstration
-        Stream ``position`` holds every column after ``t``. Metadata holds
-        ``source``, ``format`` (``"csv"``) and ``columns`` (the header names
-        of the stream's columns).
+        Stream ``position`` holds every column after ``t``. A file written
+        by :func:`skillbank.io.write_trajectory` (columns ``position_...``,
+        then ``orientation_x..w``, ``gripper_0``, ``joints_<name>``, ...) is
+        read back stream by stream, with ``metadata["joint_names"]``.
+        Metadata holds ``source``, ``format`` (``"csv"``) and ``columns``
+        (the header names of the columns after ``t``).
 
     Raises
     ------
@@ -98,8 +101,41 @@ def read_csv(path) -> Demonstration:
         raise FormatError(p, "expected at least one data row after the header, found none")
     table = _table(p, lines, header=True)
     metadata = {"source": str(p), "format": "csv", "columns": header[1:]}
+    groups = _stream_groups(header[1:])
     with reading(p, "invalid data"):
-        return Demonstration(table[:, 0], {"position": table[:, 1:]}, metadata)
+        if groups is None:
+            return Demonstration(table[:, 0], {"position": table[:, 1:]}, metadata)
+        streams = {name: table[:, 1 + a:1 + b] for name, (a, b) in groups.items()}
+        if "joints" in groups:
+            a, b = groups["joints"]
+            metadata["joint_names"] = [c[len("joints_"):] for c in header[1 + a:1 + b]]
+        return Demonstration(table[:, 0], streams, metadata)
+
+
+def _stream_groups(columns) -> dict | None:
+    """Columns ``<stream>_<suffix>`` grouped by stream, as a reproduction is written; None otherwise.
+
+    Only a file whose first columns are ``position_...`` and that holds at
+    least two streams, each in one block of columns, is read as several
+    streams (what :func:`skillbank.io.write_trajectory` writes); anything else
+    stays one ``position`` stream, as CSV files always were read.
+
+    Examples
+    --------
+    >>> _stream_groups(["position_0", "position_1", "gripper_0"])
+    {'position': (0, 2), 'gripper': (2, 3)}
+    >>> _stream_groups(["x", "y"]) is None
+    True
+    """
+    names = [c.split("_", 1)[0] if "_" in c else None for c in columns]
+    if None in names or names[0] != "position" or len(set(names)) < 2:
+        return None
+    groups: dict = {}
+    for k, name in enumerate(names):
+        if name in groups and groups[name][1] != k:
+            return None  # a stream's columns apart: not a file written stream by stream
+        groups[name] = (groups[name][0] if name in groups else k, k + 1)
+    return groups
 
 
 def read_feature_matrix(path) -> np.ndarray:

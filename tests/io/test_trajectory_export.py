@@ -168,3 +168,19 @@ def test_rosbag_errors(executable, tmp_path, monkeypatch):
                                           r"pip install skillbank\[ros\]$"):
         write_trajectory(executable, tmp_path / "bag", format="rosbag")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
+
+
+def test_a_written_reproduction_reads_back_stream_by_stream(tmp_path):
+    from skillbank import Demonstration
+    from skillbank.io import load, write_trajectory
+
+    t = np.linspace(0.0, 1.0, 5)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (5, 1))
+    demo = Demonstration(t, {"position": np.c_[t, 2 * t, 3 * t], "orientation": q,
+                             "gripper": (t > 0.5).astype(float), "joints": np.c_[t, t, t, t, t, -t]},
+                         {"joint_names": ["a", "b", "c", "d", "e", "f"]})
+    back = load(write_trajectory(demo, tmp_path / "r.csv"))
+    assert back.stream_names == ["position", "orientation", "gripper", "joints"]
+    for name in demo.stream_names:
+        np.testing.assert_allclose(back[name], demo[name], atol=1e-12)
+    assert back.metadata["joint_names"] == ["a", "b", "c", "d", "e", "f"]
