@@ -31,6 +31,11 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_clustering.py
 	$(PY) benchmarks/bench_clustering_quality.py --seeds 10
 	$(PY) benchmarks/bench_editing.py
+	$(PY) benchmarks/bench_ik.py
+	$(PY) benchmarks/bench_reuse_robot.py
+	$(PY) benchmarks/bench_planning.py
+	$(PY) benchmarks/bench_ingest.py
+	$(PY) benchmarks/bench_scale.py store
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache
