@@ -36,6 +36,8 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_planning.py
 	$(PY) benchmarks/bench_ingest.py
 	$(PY) benchmarks/bench_scale.py store
+	$(PY) benchmarks/bench_scale.py ingest
+	$(PY) benchmarks/bench_scale.py cluster
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache

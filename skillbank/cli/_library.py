@@ -13,10 +13,12 @@ import numpy as np
 from ._options import (
     add_constraint_options,
     add_execution_options,
+    add_parallel_options,
     add_reader_options,
     add_segmentation_options,
     constraints_from_args,
     execution_params,
+    parallel_params,
     reader_options,
     segmentation_params,
     show_progress,
@@ -110,6 +112,7 @@ def add_parser(sub):
                         "exit with status 2 if any failed (default: a bad file adds nothing)")
     c.add_argument("--json", action="store_true",
                    help="print the new ids, the failed files and the unclustered demonstrations as JSON")
+    add_parallel_options(c)
     c.set_defaults(func=_add)
 
     c = cmds.add_parser("cluster", help="(re)cluster every primitive; records a new version")
@@ -241,7 +244,8 @@ def _add(args) -> int:
         report = lib.add_files(args.files, index=args.demo, group=args.group, segment=not args.whole,
                                repair_time=args.repair_time, reader_options=reader_options(args),
                                segmentation=segmentation, label=args.label, assign=args.assign,
-                               keep_going=args.keep_going, progress=show_progress(args))
+                               keep_going=args.keep_going, progress=show_progress(args),
+                               **parallel_params(args))
     command = getattr(args, "command_name", "skillbank library add")
     for path, reason in report["failed"].items():
         print(f"{command}: skipped {path}: {reason}", file=sys.stderr)

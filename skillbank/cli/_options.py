@@ -10,6 +10,7 @@ library's defaults apply and are written in one place.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 
@@ -19,8 +20,11 @@ __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
     "add_repair_option", "add_reader_options", "reader_options", "show_progress", "add_execution_options",
-    "execution_params",
+    "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE",
 ]
+
+#: The environment variable naming a Dask scheduler for `library add` when no option says otherwise.
+SCHEDULER_VARIABLE = "SKILLBANK_SCHEDULER"
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
 CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity",
@@ -94,6 +98,51 @@ def ratio_or_none(value: str):
 def show_progress(args) -> bool:
     """Progress bars for a person watching: on a terminal, and not under ``--json``."""
     return not getattr(args, "json", False) and sys.stderr.isatty()
+
+
+def _workers(value: str) -> int:
+    try:
+        number = int(value)
+        if number < 0:
+            raise ValueError
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value!r}") from None
+    return number
+
+
+def add_parallel_options(p) -> None:
+    """``--workers`` and ``--scheduler``: prepare inputs on a Dask cluster (see :func:`parallel_params`)."""
+    g = p.add_argument_group("parallel, on Dask (pip install 'skillbank[dask]'; see docs/scaling.md)")
+    g.add_argument("--workers", type=_workers, default=None, metavar="N",
+                   help="read and segment on a new local Dask cluster of N worker processes, writing here "
+                        "(with --keep-going, in transactions of 50 demonstrations); 0: in this process, "
+                        f"ignoring ${SCHEDULER_VARIABLE}")
+    g.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="read and segment on an existing Dask cluster, whose workers must see the files "
+                        f"(default: ${SCHEDULER_VARIABLE} when set and --workers is not given)")
+
+
+def parallel_params(args, environ=None) -> dict:
+    """``workers`` and ``scheduler`` keyword arguments from :func:`add_parallel_options`' options.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parallel_params(argparse.Namespace(workers=None, scheduler=None), {"SKILLBANK_SCHEDULER": "tcp://h:8786"})
+    {'workers': None, 'scheduler': 'tcp://h:8786'}
+    >>> parallel_params(argparse.Namespace(workers=0, scheduler=None), {"SKILLBANK_SCHEDULER": "tcp://h:8786"})
+    {'workers': None, 'scheduler': None}
+    """
+    environ = os.environ if environ is None else environ
+    workers, scheduler = args.workers, args.scheduler
+    if workers == 0:
+        if scheduler is not None:
+            raise ValueError(f"workers: --workers 0 adds in this process, --scheduler on a cluster: give "
+                             f"one, got --workers 0 and --scheduler {scheduler!r}")
+        return {"workers": None, "scheduler": None}
+    if workers is None and scheduler is None:
+        scheduler = environ.get(SCHEDULER_VARIABLE, "").strip() or None
+    return {"workers": workers, "scheduler": scheduler}
 
 
 def join_negative_values(argv, options=CONSTRAINT_OPTIONS) -> list:

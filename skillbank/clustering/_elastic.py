@@ -20,6 +20,7 @@ from ._em import (
     solve_paper,
 )
 from ._hierarchy import MIN_MEMBERS, hierarchy_seeds
+from ._incremental import grow, point_stats, pooled, sample_of, separation
 from ._primitive import nearest_centre
 
 __all__ = ["ElasticClustering"]
@@ -117,7 +118,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         Node positions. Nodes that end with no points (possible in
         ``"paper"`` mode) are dropped.
     labels_ : ndarray of shape (n_samples,)
-        Index of the nearest node of each training point (``predict(X)``).
+        Index of the nearest node of each training point (``predict(X)``);
+        after :meth:`partial_fit`, the cluster each point of the batch joined.
     n_clusters_ : int
     energy_ : float
         ``U_X + lambda sum_{i<j} ||x_i - x_j||^2`` of the selected map.
@@ -137,6 +139,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         (``inf`` with one cluster): the evidence that it is a cluster of its own.
     n_iter_ : int
         EM rounds run for the selected map.
+    n_samples_seen_ : int
+        Points fitted: by ``fit`` and every ``partial_fit`` since.
     n_features_in_ : int
 
     Examples
@@ -323,7 +327,12 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             self.separation_ = delta.min(axis=1)
         else:
             self.separation_ = np.full(1, np.inf)
-        self._X = X
+        # What partial_fit needs, of a size independent of the number of points: each cluster's
+        # statistics and the bounding box of the data (for the round-off floor of a spread).
+        self._stats = point_stats(X, self.labels_, self.n_clusters_)
+        self._samples = sample_of(X, self.labels_, self._keys.random(X.shape[0]), self.n_clusters_)
+        self._lo, self._hi = X.min(axis=0), X.max(axis=0)
+        self.n_samples_seen_ = int(X.shape[0])
         return self
 
     # -- public API -------------------------------------------------------------------------------
@@ -348,16 +357,35 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         X = self._check_X(X, reset=True)
         rng = check_random_state(self.random_state)
         start = X[rng.randint(X.shape[0])][None, :]
+        self._keys = np.random.default_rng(rng.randint(2 ** 31 - 1))  # partial_fit's sampling keys
         with numerical_errors("ElasticClustering.fit"):
             return self._store(X.copy(), *self._grow(X, start, p))
 
     def partial_fit(self, X, y=None):
-        """Add points to a fitted model, as a growing library receives new primitives.
+        """Add a batch of points to a fitted model in memory that does not grow with the points seen.
 
-        The new points are appended to the training data, EM is re-run from
-        the current nodes, and nodes are added while the criterion accepts
-        them (``n_clusters="auto"``). Existing clusters are never removed.
-        An unfitted model is simply fitted.
+        Each cluster is kept as sufficient statistics (count, mean, scatter
+        matrix) and a uniform sample of at most 1,000 of its members, not as
+        its points. The batch is assigned to the nearest
+        nodes and EM runs on it, each node update counting the earlier
+        members of its cluster through their statistics. Then, as in
+        ``criterion="auto"`` (also for ``"hierarchy"``), the cluster with the
+        most clearly separated split is split and EM re-run, while the new
+        cluster is at least ``min_separation`` from every other (judged on
+        the statistics, so the number of clusters does not depend on how
+        many points were seen); ``"paper"`` adds a node at the batch's last
+        point while the energy falls. A fixed ``n_clusters`` only moves the
+        nodes. An unfitted model is fitted on the batch.
+
+        What this gives up against refitting all the points: earlier points
+        are never reassigned to another cluster (their statistics stay with
+        the cluster they joined, so the result depends on the order of the
+        batches); a split divides a cluster's earlier members as its sample
+        divides (estimated statistics once it has more than 1,000); clusters
+        are never merged or removed; and small batches of few points per
+        cluster in many dimensions miss splits a refit finds (see
+        ``docs/scaling.md``). Memory is ``O(n_clusters_ * (1000 +
+        n_features) * n_features)`` plus the batch.
 
         Parameters
         ----------
@@ -367,19 +395,57 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         Returns
         -------
         self
+            ``labels_`` then holds the batch's clusters, ``cluster_sizes_``
+            every point seen, ``n_samples_seen_`` their number; the paths
+            describe the maps tried in this call (their separation: the
+            smallest ``delta`` of a cluster new in this call).
 
         Examples
         --------
         >>> model = ElasticClustering().fit([[0.0], [0.1], [0.2]])
         >>> model.partial_fit([[9.0], [9.1], [9.2]]).n_clusters_
         2
+        >>> model.cluster_sizes_.tolist(), model.n_samples_seen_
+        ([3, 3], 6)
         """
         if not hasattr(self, "cluster_centers_"):
             return self.fit(X)
         p = self._params()
-        X = np.vstack([self._X, self._check_X(X, reset=False)])
+        X = self._check_X(X, reset=False)
+        lo, hi = np.minimum(self._lo, X.min(axis=0)), np.maximum(self._hi, X.max(axis=0))
+
+        def scale_of(offset):  # the largest absolute coordinate of every point seen, centred on offset
+            return float(np.max(np.maximum(np.abs(hi - offset), np.abs(lo - offset))))
+
         with numerical_errors("ElasticClustering.partial_fit"):
-            return self._store(X, *self._grow(X, self.cluster_centers_.copy(), p))
+            nodes, labels, stats, samples, energy, n_iter, path = grow(
+                X, self._keys.random(X.shape[0]), self._stats, self._samples, self.cluster_centers_, p,
+                criterion=self.criterion, scale_of=scale_of)
+            check_finite_result(nodes, name="ElasticClustering (cluster centres)")
+            check_finite_result(energy, name="ElasticClustering (energy)")
+            keep = np.flatnonzero(stats.counts > 0)  # a node left without points (paper mode) is dropped
+            remap = np.full(nodes.shape[0], -1)
+            remap[keep] = np.arange(keep.size)
+            self._stats = stats.take(keep)
+            self._samples = [samples[i] for i in keep]
+            self.cluster_centers_ = nodes[keep]
+            self.labels_ = remap[labels].astype(np.intp)
+            self.n_clusters_ = int(keep.size)
+            self.energy_, self.n_iter_ = float(energy), int(n_iter)
+            self.n_clusters_tried_ = np.array([q[0] for q in path], dtype=np.intp)
+            self.energy_path_ = np.array([q[1] for q in path], dtype=float)
+            self.separation_path_ = np.array([q[2] for q in path], dtype=float)
+            self.cluster_sizes_ = np.rint(self._stats.counts).astype(np.intp)  # estimates after some splits
+            if self.n_clusters_ > 1:
+                centre = pooled(self._stats).means[0]
+                delta = separation(self._stats.shifted(centre), scale_of(centre))
+                np.fill_diagonal(delta, np.inf)
+                self.separation_ = delta.min(axis=1)
+            else:
+                self.separation_ = np.full(1, np.inf)
+            self._lo, self._hi = lo, hi
+            self.n_samples_seen_ += int(X.shape[0])
+        return self
 
     def predict(self, X):
         """Index of the nearest node of each point.

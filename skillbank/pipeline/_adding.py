@@ -16,10 +16,15 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..clustering import nearest_centre, primitive_features
-from ..core import Demonstration, __version__
-from ..io import FormatError, load, load_all
-from ..segmentation import MultimodalSegmenter
+from ._parallel import (
+    BATCH_SIZE,
+    add_in_parallel,
+    assignment,
+    check_demo,
+    file_reason,
+    prepare,
+    read_file,
+)
 
 __all__ = ["Adding", "ASSIGN", "check_label"]
 
@@ -44,20 +49,6 @@ def _check_options(assign, label, segmentation):
     return None if label is None else check_label(label)
 
 
-def _check_demo(demo, name):
-    if not isinstance(demo, Demonstration):
-        raise ValueError(f"{name}: expected a Demonstration, got {type(demo).__name__}")
-    if "position" not in demo.streams:
-        raise ValueError(f"{name}: expected a 'position' stream, got streams {demo.stream_names}")
-
-
-def _file_reason(exc, path) -> str:
-    """What went wrong with a file, without repeating its name (the caller gives it)."""
-    if isinstance(exc, FormatError) and Path(exc.path) == Path(path):
-        return f"cannot read it: {exc.reason}"
-    return " ".join(str(exc).split())
-
-
 class Adding:
     """``add``, ``add_many`` and ``add_files`` of :class:`~skillbank.pipeline.Library`."""
 
@@ -66,45 +57,27 @@ class Adding:
             raise ValueError(f"library {self.store.location!r} is open read-only: cannot {what}")
 
     # -- one demonstration ---------------------------------------------------------------------
-    @staticmethod
-    def _bounds(demo, segment, segmentation):
-        if not segment:
-            return [(0, demo.n_steps)], {"segment": False}
-        params = dict(segmentation or {})
-        streams = params.pop("streams", None)
-        result = MultimodalSegmenter(**params).fit(demo, streams).result_
-        return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
-                               "streams": streams, "requested": params, "resolved": result.params,
-                               "mode": result.mode, "skillbank_version": __version__}
+    def _snapshot(self, cache: dict | None = None):
+        """The current clustering version as the store gives it (what an add assigns to), or None.
+
+        ``cache`` (a dict) keeps the last version read, so a batch reads it
+        once; it is read again when another process has reclustered since.
+        """
+        cache = {} if cache is None else cache
+        version = self.store.current_version()
+        if version is None:
+            return None
+        if cache.get("version") != version:
+            cache.clear()
+            cache.update(self.store.version(version))
+        return cache
 
     def _assignment(self, parts, cache: dict):
         """``(members, None)`` in the current version for primitive samples ``parts``, or ``(None, why)``.
 
         ``why`` is None when there is no clustering to join yet.
         """
-        version = self.store.current_version()
-        if version is None:
-            return None, None
-        if cache.get("version") != version:
-            cache.clear()
-            cache.update(self.store.version(version))
-        p = cache["params"]
-        dims = sorted({part["position"].shape[1] for part in parts})
-        fitted = p.get("n_dims")  # recorded by cluster() from this release on; older: the width check below
-        if fitted is not None and dims != [fitted]:
-            return None, (f"its positions have {', '.join(map(str, dims))} dimension(s), clustering version "
-                          f"{version} was fitted on {fitted}-D positions")
-        try:
-            F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
-        except ValueError as exc:
-            return None, f"clustering version {version} cannot featurise it: {exc}"
-        width = cache["pca_mean"].shape[0]
-        if F.shape[1] != width:
-            return None, (f"its {F.shape[1]} features do not match the {width} of clustering version "
-                          f"{version} (fitted on positions of another number of dimensions)")
-        X = (F - cache["pca_mean"]) @ cache["pca_components"].T
-        return {"version": version, "clusters": nearest_centre(X, cache["centers"]).tolist(),
-                "features": X}, None
+        return assignment(parts, self._snapshot(cache))
 
     def _assign(self, parts, cache: dict):
         """Clusters of the current version for primitive samples ``parts`` (None when they cannot join)."""
@@ -112,16 +85,9 @@ class Adding:
 
     def _prepare(self, demo, *, segment, segmentation, label, source, assign, cache) -> tuple:
         """``(store item, why it stays unclustered or None)``: everything but the write."""
-        bounds, provenance = self._bounds(demo, segment, segmentation)
-        src = source if source is not None else demo.metadata.get("source")
-        members, why = None, None
-        if assign == "incremental":
-            members, why = self._assignment([demo.slice(a, b) for a, b in bounds], cache)
-        if why is not None:
-            provenance["assignment"] = {"version": cache["version"], "clustered": False, "reason": why}
-        item = {"demo": demo, "bounds": bounds, "source": None if src is None else str(src), "label": label,
-                "provenance": provenance, "members": members}
-        return item, why
+        snapshot = self._snapshot(cache) if assign == "incremental" else None
+        return prepare(demo, segment=segment, segmentation=segmentation, label=label, source=source,
+                       assign=assign, snapshot=snapshot)
 
     def _recluster(self, progress: bool = False) -> int:
         params = self.clustering_params() or {}
@@ -184,7 +150,7 @@ class Adding:
         self._check_writable("add demonstrations")
         demos = list(demos)
         for k, demo in enumerate(demos):
-            _check_demo(demo, f"demos[{k}]")
+            check_demo(demo, f"demos[{k}]")
         cache, prepared = {}, []
         for k, demo in enumerate(tqdm(demos, desc="segmenting", unit="demo", disable=not progress)):
             try:
@@ -205,7 +171,8 @@ class Adding:
 
     def add_files(self, paths, *, index=None, group: str = "normalized", segment: bool = True,
                   segmentation=None, label=None, assign: str = "incremental", keep_going: bool = False,
-                  progress: bool = False, repair_time=None, reader_options=None) -> dict:
+                  progress: bool = False, repair_time=None, reader_options=None, workers=None,
+                  scheduler=None, batch_size: int = BATCH_SIZE) -> dict:
         """Read demonstration files and add every demonstration in them as one batch.
 
         By default all or nothing: every file is read and every
@@ -215,6 +182,15 @@ class Adding:
         aside with its reason (a file counts as bad when it cannot be read or
         any of its demonstrations cannot be cut) and the others are added, in
         one transaction.
+
+        With ``workers`` or ``scheduler`` (the ``dask`` extra), files are read
+        and cut in parallel on a Dask cluster and written here, in the order
+        of ``paths`` (the same ids as without): all or nothing still writes
+        everything in one transaction at the end; ``keep_going`` writes every
+        ``batch_size`` demonstrations (whole files) in one transaction as
+        they come, so memory stays bounded and a stopped add keeps the
+        batches written (see ``skillbank.pipeline._parallel`` and
+        ``docs/scaling.md``).
 
         Parameters
         ----------
@@ -237,13 +213,23 @@ class Adding:
             tqdm bars while reading and cutting.
         segment, segmentation, label, assign
             As in :meth:`add`.
+        workers : int, optional
+            Prepare the files on a new local Dask cluster of this many
+            single-threaded worker processes, closed at the end.
+        scheduler : str or distributed.Client, optional
+            Or on an existing Dask cluster: its scheduler's address
+            (``"tcp://host:8786"``) or a client of it. The workers read the
+            files, so they must see the same paths.
+        batch_size : int, default=50
+            Demonstrations per transaction of a parallel add with ``keep_going``.
 
         Returns
         -------
         dict
             ``{"demonstrations": [ids], "primitives": [[ids] per demonstration],
             "failed": {file: reason}, "unclustered": {demonstration id: reason},
-            "version": the new clustering version (assign="recluster") or None}``.
+            "version": the new clustering version (assign="recluster") or None}``;
+            a parallel add adds ``"scheduler"``, the address of the cluster used.
 
         Examples
         --------
@@ -254,26 +240,31 @@ class Adding:
         if isinstance(paths, (str, Path)) or not isinstance(paths, (list, tuple)):
             raise ValueError(f"paths: expected a list of files, got {type(paths).__name__}")
         self._check_writable("add demonstrations")
+        if workers is not None or scheduler is not None:
+            report = add_in_parallel(
+                self, paths, read={"index": index, "group": group, "repair_time": repair_time,
+                                   "reader_options": reader_options},
+                options={"segment": segment, "segmentation": segmentation, "label": label, "assign": assign},
+                keep_going=keep_going, progress=progress, workers=workers, scheduler=scheduler,
+                batch_size=batch_size)
+            if assign == "recluster" and report["demonstrations"]:
+                report["version"] = self._recluster(progress)
+            return report
         failed, read = {}, []
 
         def fail(path, what, exc):
-            reason = what + _file_reason(exc, path)
+            reason = what + file_reason(exc, path)
             if not keep_going:
                 raise ValueError(f"{path}: {reason}; nothing was added") from None
             failed[str(path)] = reason
 
         for path in tqdm(paths, desc="reading", unit="file", disable=not progress):
             try:
-                demos = [load(path, index=index, group=group, repair_time=repair_time,
-                              reader_options=reader_options)] if index is not None \
-                    else load_all(path, group=group, repair_time=repair_time, reader_options=reader_options)
-                for k, demo in enumerate(demos):
-                    _check_demo(demo, "demonstration" if len(demos) == 1 else f"demonstration {k}")
+                demos = read_file(path, index=index, group=group, repair_time=repair_time,
+                                  reader_options=reader_options)
             except (ValueError, OSError) as exc:
                 fail(path, "", exc)
                 continue
-            for demo in demos:
-                demo.metadata.setdefault("source", str(path))
             read.append((path, demos))
         cache, prepared = {}, []
         for path, demos in tqdm(read, desc="segmenting", unit="file", disable=not progress):

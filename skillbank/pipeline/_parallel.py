@@ -1,0 +1,348 @@
+"""Preparing inputs for a library, here or on Dask workers, and writing them in batches.
+
+Preparing a file is everything an add does but the write: read it, check
+every demonstration, cut it (:class:`~skillbank.segmentation.MultimodalSegmenter`)
+and, with ``assign="incremental"``, featurise its primitives with the current
+clustering's stored featuriser and find their nearest centres. It needs no
+store: the clustering it assigns to travels as a *snapshot* (the version's
+parameters, centres and PCA arrays), so the same function runs in this
+process (:meth:`Library.add_files`) and in a Dask worker (:func:`add_in_parallel`).
+
+:func:`add_in_parallel` sends tasks of a few consecutive files (at most 16,
+:func:`files_per_task`) to a Dask cluster, a local one (``workers=N``:
+``distributed.LocalCluster``, one single-threaded process per worker) or an
+existing one (``scheduler``: its address or a ``distributed.Client``), at most
+twice as many tasks as the cluster has threads in flight, and writes the
+results in this process, through the store, in the order of the inputs (so
+the ids are those an add without workers gives):
+
+- ``keep_going=True``: as results arrive, every ``batch_size`` demonstrations
+  (whole files) are written in one transaction. Memory stays bounded (the
+  files in flight and one batch); a worker that dies loses nothing committed
+  and leaves nothing partial, since workers never write; a failed file is
+  set aside with its reason, as without workers.
+- ``keep_going=False`` (all or nothing, as without workers): every file is
+  prepared first and everything is written in one transaction at the end;
+  the first bad file cancels the rest and nothing is added. The prepared
+  demonstrations are held until then, as without workers.
+
+A task whose worker dies (a crash, or the nanny killing it for memory) is
+rescheduled by Dask on another worker, up to the scheduler's
+``distributed.scheduler.allowed-failures`` times (default 3). A task of
+several files that still fails (``KilledWorker``) is sent again one file per
+task, so that only the file that kills workers fails: with ``keep_going`` it
+is set aside, else nothing is added. Files are read by the workers: on a
+cluster of several machines they must see the same paths (a shared file
+system).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..clustering import nearest_centre, primitive_features
+from ..core import Demonstration, __version__
+from ..core._validation import check_positive
+from ..io import FormatError, load, load_all
+from ..segmentation import MultimodalSegmenter
+
+__all__ = ["INSTALL", "check_demo", "file_reason", "read_file", "bounds", "assignment", "prepare",
+           "prepare_file", "prepare_files", "files_per_task", "distributed", "add_in_parallel", "BATCH_SIZE"]
+
+INSTALL = "pip install 'skillbank[dask]'"
+#: Demonstrations written per transaction by a parallel add with keep_going (whole files).
+BATCH_SIZE = 50
+
+
+def check_demo(demo, name):
+    if not isinstance(demo, Demonstration):
+        raise ValueError(f"{name}: expected a Demonstration, got {type(demo).__name__}")
+    if "position" not in demo.streams:
+        raise ValueError(f"{name}: expected a 'position' stream, got streams {demo.stream_names}")
+
+
+def file_reason(exc, path) -> str:
+    """What went wrong with a file, without repeating its name (the caller gives it).
+
+    Examples
+    --------
+    >>> file_reason(FormatError("a.csv", "no time column"), "a.csv")
+    'cannot read it: no time column'
+    """
+    if isinstance(exc, FormatError) and Path(exc.path) == Path(path):
+        return f"cannot read it: {exc.reason}"
+    return " ".join(str(exc).split())
+
+
+def read_file(path, *, source=None, index=None, group="normalized", repair_time=None, reader_options=None):
+    """Every demonstration of a file (only ``index`` if given), checked, with ``source`` (default: path)."""
+    demos = [load(path, index=index, group=group, repair_time=repair_time, reader_options=reader_options)] \
+        if index is not None else load_all(path, group=group, repair_time=repair_time,
+                                           reader_options=reader_options)
+    for k, demo in enumerate(demos):
+        check_demo(demo, "demonstration" if len(demos) == 1 else f"demonstration {k}")
+        demo.metadata.setdefault("source", str(path if source is None else source))
+    return demos
+
+
+def bounds(demo, segment, segmentation):
+    """``(bounds, provenance)``: the segmenter's cut of ``demo``, or the whole of it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 30)
+    >>> bounds(Demonstration.from_array(np.column_stack([t, t]), t), False, None)
+    ([(0, 30)], {'segment': False})
+    """
+    if not segment:
+        return [(0, demo.n_steps)], {"segment": False}
+    params = dict(segmentation or {})
+    streams = params.pop("streams", None)
+    result = MultimodalSegmenter(**params).fit(demo, streams).result_
+    return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
+                           "streams": streams, "requested": params, "resolved": result.params,
+                           "mode": result.mode, "skillbank_version": __version__}
+
+
+def assignment(parts, snapshot):
+    """``(members, None)`` in the clustering ``snapshot`` for primitive samples ``parts``, or ``(None, why)``.
+
+    ``snapshot`` is a clustering version as the store gives it
+    (:meth:`~skillbank.store.Store.version`), or None before any (then ``why``
+    is None too).
+
+    Examples
+    --------
+    >>> assignment([], None)
+    (None, None)
+    """
+    if snapshot is None:
+        return None, None
+    version, p = snapshot["version"], snapshot["params"]
+    dims = sorted({part["position"].shape[1] for part in parts})
+    fitted = p.get("n_dims")  # recorded by cluster() from this release on; older: the width check below
+    if fitted is not None and dims != [fitted]:
+        return None, (f"its positions have {', '.join(map(str, dims))} dimension(s), clustering version "
+                      f"{version} was fitted on {fitted}-D positions")
+    try:
+        F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
+    except ValueError as exc:
+        return None, f"clustering version {version} cannot featurise it: {exc}"
+    width = snapshot["pca_mean"].shape[0]
+    if F.shape[1] != width:
+        return None, (f"its {F.shape[1]} features do not match the {width} of clustering version "
+                      f"{version} (fitted on positions of another number of dimensions)")
+    X = (F - snapshot["pca_mean"]) @ snapshot["pca_components"].T
+    clusters = nearest_centre(X, snapshot["centers"]).tolist()
+    return {"version": version, "clusters": clusters, "features": X}, None
+
+
+def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> tuple:
+    """``(store item, why it stays unclustered or None)``: everything but the write."""
+    cuts, provenance = bounds(demo, segment, segmentation)
+    src = source if source is not None else demo.metadata.get("source")
+    members, why = None, None
+    if assign == "incremental":
+        members, why = assignment([demo.slice(a, b) for a, b in cuts], snapshot)
+    if why is not None:
+        provenance["assignment"] = {"version": snapshot["version"], "clustered": False, "reason": why}
+    item = {"demo": demo, "bounds": cuts, "source": None if src is None else str(src), "label": label,
+            "provenance": provenance, "members": members}
+    return item, why
+
+
+def prepare_file(path, source, read: dict, options: dict, snapshot):
+    """A Dask task: ``([(item, why) per demonstration], None)``, or ``(None, reason)`` for a bad file.
+
+    A file is bad when it cannot be read or one of its demonstrations cannot
+    be cut: the reason is what :meth:`Library.add_files` reports for it.
+    """
+    try:
+        demos = read_file(path, source=source, **read)
+    except (ValueError, OSError) as exc:
+        return None, file_reason(exc, path)
+    items = []
+    try:
+        for demo in demos:
+            items.append(prepare(demo, source=None, snapshot=snapshot, **options))
+    except ValueError as exc:  # raised by the demonstration after the last one prepared
+        return None, ("" if len(demos) == 1 else f"demonstration {len(items)}: ") + file_reason(exc, path)
+    return items, None
+
+
+def prepare_files(files, read: dict, options: dict, snapshot) -> list:
+    """A Dask task: :func:`prepare_file` of each ``(path, source)`` of ``files``, in order.
+
+    Several files per task: each task costs a few round trips between the
+    client, the scheduler and a worker, much more than cutting one short
+    demonstration when a worker's event loop waits for the lock its
+    computation holds.
+    """
+    return [prepare_file(path, source, read, options, snapshot) for path, source in files]
+
+
+def files_per_task(n_files: int, n_threads: int) -> int:
+    """Files in one task: at most 16, and at least 8 tasks per worker thread for an even load.
+
+    Examples
+    --------
+    >>> files_per_task(10_000, 8), files_per_task(100, 2), files_per_task(5, 2)
+    (16, 6, 1)
+    """
+    return int(min(16, max(1, n_files // (8 * max(1, n_threads)))))
+
+
+def distributed():
+    """The ``distributed`` module; a one-line ImportError saying what to install when it is missing."""
+    try:
+        import distributed as module  # optional: the dask extra, only for parallel adds
+    except ImportError:
+        raise ImportError(f"parallel adds (workers, scheduler) need Dask: {INSTALL}") from None
+    return module
+
+
+@contextlib.contextmanager
+def _client(dist, workers, scheduler):
+    """A ``distributed.Client`` on a new local cluster of ``workers`` processes, or on ``scheduler``."""
+    if isinstance(scheduler, dist.Client):
+        yield scheduler
+        return
+    if scheduler is not None:
+        try:
+            client = dist.Client(scheduler, set_as_default=False)  # waits distributed.comm.timeouts.connect
+        except (OSError, ValueError, TypeError) as exc:
+            raise OSError(f"scheduler: cannot reach the Dask scheduler at {scheduler!r}: "
+                          f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
+        with client:
+            yield client
+        return
+    # One single-threaded process per worker: segmenting holds the GIL, so threads would not help.
+    # A worker holds one task at a time, so one that dies takes no other file down with it.
+    with dask_config().set({"distributed.scheduler.worker-saturation": 1.0}):
+        cluster = dist.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                    dashboard_address=":0", silence_logs=logging.ERROR)
+    with cluster, dist.Client(cluster, set_as_default=False) as client:
+        yield client
+
+
+def dask_config():
+    """``dask.config`` (installed with ``distributed``)."""
+    import dask.config  # optional: the dask extra, only for parallel adds
+
+    return dask.config
+
+
+def add_in_parallel(lib, paths, *, read: dict, options: dict, keep_going: bool, progress: bool,
+                    workers=None, scheduler=None, batch_size: int = BATCH_SIZE, chunk=None) -> dict:
+    """Prepare ``paths`` on Dask and write them into ``lib``'s store (see the module docstring).
+
+    ``read`` and ``options`` are :func:`read_file`'s and :func:`prepare`'s
+    keyword arguments; ``chunk`` is the number of files per task (default
+    :func:`files_per_task`). At most twice as many tasks as the cluster has
+    threads (at least 4) are in flight. Returns the report of
+    :meth:`Library.add_files`, with ``"scheduler"``: the cluster's address.
+    """
+    if workers is not None and scheduler is not None:
+        raise ValueError(f"workers: give workers (a new local cluster) or scheduler (an existing one), not "
+                         f"both; got workers={workers!r} and scheduler={scheduler!r}")
+    if workers is not None:
+        workers = check_positive(workers, name="workers", integer=True)
+    batch_size = check_positive(batch_size, name="batch_size", integer=True)
+    if chunk is not None:
+        chunk = check_positive(chunk, name="chunk", integer=True)
+    dist = distributed()
+    snapshot = lib._snapshot() if options["assign"] == "incremental" else None
+    # the absolute path for a worker in another folder; the source recorded is the path as given
+    files = [(str(Path(p).absolute()), str(p)) for p in paths]
+    with _client(dist, workers, scheduler) as client:
+        threads = sum(client.nthreads().values())
+        job = _Job(lib, client, dist, files, (read, options, snapshot), keep_going=keep_going,
+                   batch_size=batch_size, chunk=chunk or files_per_task(len(files), threads),
+                   window=max(4, 2 * threads))
+        return job.run(progress)
+
+
+class _Job:
+    """One parallel add: tasks of consecutive files in flight, results written in the order of the files."""
+
+    def __init__(self, lib, client, dist, files, args, *, keep_going, batch_size, chunk, window):
+        self.lib, self.client, self.dist, self.files, self.args = lib, client, dist, files, args
+        self.keep_going, self.batch_size, self.chunk, self.window = keep_going, batch_size, chunk, window
+        self.report = {"demonstrations": [], "primitives": [], "failed": {}, "unclustered": {},
+                       "version": None, "scheduler": client.scheduler.address}
+        self.pending, self.done, self.inflight = [], {}, {}
+        self.queue = dist.as_completed(loop=client.loop)
+        self.submitted = self.consumed = 0
+
+    def submit(self, first: int, count: int) -> None:
+        future = self.client.submit(prepare_files, self.files[first:first + count], *self.args, pure=False)
+        self.inflight[future.key] = (first, count, future)
+        self.queue.add(future)
+
+    def top_up(self) -> None:
+        while self.submitted < len(self.files) and len(self.inflight) < self.window:
+            count = min(self.chunk, len(self.files) - self.submitted)
+            self.submit(self.submitted, count)
+            self.submitted += count
+
+    def flush(self) -> None:
+        if self.pending:
+            written = self.lib.store.add_demonstrations([item for item, _ in self.pending])
+            self.report["demonstrations"] += [did for did, _ in written]
+            self.report["primitives"] += [pids for _, pids in written]
+            self.report["unclustered"].update({did: why for (did, _), (_, why)
+                                               in zip(written, self.pending, strict=True) if why is not None})
+            self.pending.clear()
+
+    def collect(self, future, bar) -> None:
+        """Take a finished task's results; a task whose workers all died is retried one file per task."""
+        first, count, _ = self.inflight.pop(future.key)
+        try:
+            results = future.result()
+        except self.dist.KilledWorker:
+            if count > 1:  # find the file that kills workers: the others in its task are innocent
+                for k in range(first, first + count):
+                    self.submit(k, 1)
+                return
+            results = [(None, "the Dask worker preparing it died, and again on every retry (a crash, or "
+                              "more memory than a worker has)")]
+        finally:
+            future.release()
+        self.done.update(zip(range(first, first + count), results, strict=True))
+        bar.update(count)
+
+    def write_ready(self, bar) -> None:
+        """Results of the next files, in order: set aside the failed ones, write a batch when it is full."""
+        while self.consumed in self.done:
+            items, reason = self.done.pop(self.consumed)
+            path = self.files[self.consumed][1]
+            self.consumed += 1
+            if reason is not None:
+                if not self.keep_going:
+                    raise ValueError(f"{path}: {reason}; nothing was added")
+                self.report["failed"][path] = reason
+                continue
+            self.pending.extend(items)
+            if self.keep_going and len(self.pending) >= self.batch_size:
+                self.flush()
+                bar.set_postfix_str(f"{len(self.report['demonstrations'])} demonstration(s) written")
+
+    def run(self, progress: bool) -> dict:
+        try:
+            self.top_up()
+            with tqdm(total=len(self.files), desc="adding", unit="file", disable=not progress) as bar:
+                for future in self.queue:
+                    self.collect(future, bar)
+                    self.write_ready(bar)
+                    self.top_up()
+                self.flush()  # keep_going: the last batch; all or nothing: everything, in one transaction
+        finally:
+            self.queue.clear()
+            if self.inflight:  # stopped early: the files still being prepared are not wanted
+                self.client.cancel([future for _, _, future in self.inflight.values()])
+        return self.report
