@@ -52,15 +52,32 @@ def _smooth(v: np.ndarray, half_width: int) -> np.ndarray:
     return v
 
 
+def chord_angles(Y: np.ndarray, at, h: int) -> np.ndarray:
+    """Angles (degrees) between the chords over the ``h`` samples before and after each index ``at``.
+
+    A chord of zero length (no motion on one side) gives 0.
+
+    Examples
+    --------
+    >>> Y = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    >>> chord_angles(Y, [1], 1).tolist()
+    [90.0]
+    """
+    Y = np.asarray(Y, dtype=float).reshape(Y.shape[0], -1)
+    at = np.asarray(at, dtype=int)
+    n = Y.shape[0]
+    a = Y[at] - Y[np.maximum(at - h, 0)]
+    b = Y[np.minimum(at + h, n - 1)] - Y[at]
+    na, nb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
+    ok = (na > 0) & (nb > 0)
+    cos = np.ones(at.shape[0])
+    cos[ok] = np.einsum("ij,ij->i", a[ok], b[ok]) / (na[ok] * nb[ok])
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
 def _turn_degrees(Y: np.ndarray, c: int, h: int) -> float:
     """Angle between the chords over the ``h`` samples before and after ``c``."""
-    n = Y.shape[0]
-    a = Y[c] - Y[max(c - h, 0)]
-    b = Y[min(c + h, n - 1)] - Y[c]
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    if na == 0.0 or nb == 0.0:
-        return 0.0
-    return float(np.degrees(np.arccos(np.clip(a @ b / (na * nb), -1.0, 1.0))))
+    return float(chord_angles(Y, [c], h)[0])
 
 
 def _argmin_near(x: np.ndarray, centre: int) -> int:

@@ -12,7 +12,7 @@ from ..core._params import Params
 from ..core._validation import check_fraction, check_positive, numerical_errors
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
 from ._events import contact_events, discrete_events, rest_events, rest_speed, stream_kind
-from ._gate import _gate_changepoints
+from ._gate import _gate_changepoints, chord_angles
 from ._keypoints import (
     changepoint_probability,
     combine_evidence,
@@ -414,14 +414,7 @@ def _turning(Y, events, *, window: int, min_turn: float) -> np.ndarray:
 
     Y = np.asarray(Y, dtype=float).reshape(Y.shape[0], -1)
     n = Y.shape[0]
-    i = np.arange(n)
-    a = Y - Y[np.maximum(i - window, 0)]
-    b = Y[np.minimum(i + window, n - 1)] - Y
-    na, nb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
-    ok = (na > 0) & (nb > 0)
-    cos = np.ones(n)
-    cos[ok] = np.einsum("ij,ij->i", a[ok], b[ok]) / (na[ok] * nb[ok])
-    angle = maximum_filter1d(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))), 2 * window + 1, mode="nearest")
+    angle = maximum_filter1d(chord_angles(Y, np.arange(n), window), 2 * window + 1, mode="nearest")
     return angle[np.asarray(events, dtype=int)] >= min_turn
 
 
