@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sqlite3
 from pathlib import Path
 
@@ -16,8 +17,13 @@ def run(cli):
     return cli
 
 
-def test_end_to_end_on_rail(run, tmp_path, data_dir):
-    db, rail = tmp_path / "skills.db", data_dir / "rail"
+def shown(db) -> str:
+    """How the CLI names the library at ``db``: a URL's password masked."""
+    return re.sub(r"^(postgresql://[^:/@]+:)[^@]*@", r"\1***@", str(db))
+
+
+def test_end_to_end_on_rail(run, tmp_path, new_library, data_dir):
+    db, rail = new_library("skills"), data_dir / "rail"
     assert run("library", "init", db)[0] == 0
     code, out, err = run("library", "add", db, rail / "REACHING" / "1.mat", rail / "REACHING" / "2.mat",
                          "--whole", "--label", "reaching", "--json")
@@ -59,14 +65,14 @@ def test_end_to_end_on_rail(run, tmp_path, data_dir):
     assert (tmp_path / "reuse.png").stat().st_size > 0 and (tmp_path / "reuse.npz").exists()
 
 
-def test_export_import_remove_and_text_output(run, tmp_path):
+def test_export_import_remove_and_text_output(run, tmp_path, new_library):
     from skillbank import Demonstration
     from skillbank.io import write_npz
 
     t = np.linspace(0.0, 1.0, 40)
     for k in range(3):
         write_npz(Demonstration.from_array(np.column_stack([t, k * t]), t), tmp_path / f"d{k}.npz")
-    db = tmp_path / "a.db"
+    db, copy = new_library("a"), new_library("b")
     files = [tmp_path / f"d{k}.npz" for k in range(3)]
     code, out, err = run("library", "add", db, *files, "--whole")
     assert code == 2 and "does not exist" in err  # no implicit creation outside init
@@ -76,9 +82,9 @@ def test_export_import_remove_and_text_output(run, tmp_path):
     assert run("library", "label", db, "--primitive", "2", "slope")[0] == 0
     code, out, _ = run("library", "export", db, tmp_path / "exp")
     assert code == 0 and (tmp_path / "exp" / "manifest.json").exists()
-    code, out, _ = run("library", "import", tmp_path / "b.db", tmp_path / "exp", "--json")
+    code, out, _ = run("library", "import", copy, tmp_path / "exp", "--json")
     assert code == 0 and json.loads(out)["demonstrations"] == {"1": 1, "2": 2, "3": 3}
-    assert json.loads(run("library", "list", tmp_path / "b.db", "--json")[1]) == \
+    assert json.loads(run("library", "list", copy, "--json")[1]) == \
         json.loads(run("library", "list", db, "--json")[1])
     assert run("library", "remove", db, "1")[0] == 0
     assert json.loads(run("library", "list", db, "--json")[1])["n_demonstrations"] == 2
@@ -97,12 +103,17 @@ def test_errors_exit_2_with_one_line(run, tmp_path):
         (("library", "init", junk), "not a SQLite file"),
         (("library", "list", future), "newer skillbank"),
         (("library", "reuse", future, "--skill", "x", "--start", "0,0"), "newer skillbank"),
-        (("library", "list", tmp_path / "none.db"), "does not exist"),
     ]:
         code, out, err = run(*argv)
         assert code == 2 and match in err and err.count("\n") == 1, (argv, err)
         assert err.startswith(f"skillbank library {argv[1]}: error:")
-    db = tmp_path / "ok.db"
+
+
+def test_usage_errors_exit_2_with_one_line(run, new_library):
+    db = new_library("ok")
+    code, out, err = run("library", "list", db)  # a missing file, or a database without a library
+    assert code == 2 and "does not exist" in err and err.count("\n") == 1, err
+    assert err.startswith("skillbank library list: error:")
     run("library", "init", db)
     code, _, err = run("library", "label", db, "--cluster", "0", "x")
     assert code == 2 and "no clusters yet" in err
@@ -112,7 +123,7 @@ def test_errors_exit_2_with_one_line(run, tmp_path):
     assert code == 2 and "no primitive has label 'x'" in err
 
 
-def test_reuse_accepts_negative_coordinates(run, tmp_path):
+def test_reuse_accepts_negative_coordinates(run, tmp_path, new_library):
     from skillbank import Demonstration
     from skillbank.io import write_npz
 
@@ -122,7 +133,7 @@ def test_reuse_accepts_negative_coordinates(run, tmp_path):
         path = tmp_path / f"arc{k}.npz"
         write_npz(Demonstration.from_array(np.column_stack([t, np.sin(np.pi * t) * (1 + 0.1 * k)]), t), path)
         files.append(path)
-    db = tmp_path / "neg.db"
+    db = new_library("neg")
     run("library", "init", db)
     run("library", "add", db, *files, "--whole", "--label", "arc")
     code, out, err = run("library", "reuse", db, "--skill", "arc", "--start", "-0.5,-0.25",
@@ -159,8 +170,8 @@ def _wave_files(folder, specs):
 BATCH = {"good": (200, 3, 1.0), "g0": (200, 3, 1.5), "four_rows": (4, 3, 1.0), "g1": (200, 3, 2.0)}
 
 
-def test_add_is_all_or_nothing_and_names_the_bad_file(run, tmp_path):
-    db = tmp_path / "p.sqlite"
+def test_add_is_all_or_nothing_and_names_the_bad_file(run, tmp_path, new_library):
+    db = new_library()
     files = _wave_files(tmp_path, BATCH)
     run("library", "init", db)
     for _ in range(2):  # again: still nothing added, nothing duplicated
@@ -171,8 +182,8 @@ def test_add_is_all_or_nothing_and_names_the_bad_file(run, tmp_path):
         assert json.loads(run("library", "list", db, "--json")[1])["n_demonstrations"] == 0
 
 
-def test_keep_going_adds_the_good_files_and_lists_the_bad_ones(run, tmp_path):
-    db = tmp_path / "p.sqlite"
+def test_keep_going_adds_the_good_files_and_lists_the_bad_ones(run, tmp_path, new_library):
+    db = new_library()
     files = _wave_files(tmp_path, BATCH)
     junk = tmp_path / "junk.npz"
     junk.write_bytes(b"\x00" * 64)
@@ -186,7 +197,7 @@ def test_keep_going_adds_the_good_files_and_lists_the_bad_ones(run, tmp_path):
     assert lines[2] == "skillbank library add: error: 2 of 5 file(s) failed and were skipped; the other 3 " \
                        "were added"
     assert len(lines) == 3
-    assert out.startswith(f"{db}: added 3 demonstration(s) with ")
+    assert out.startswith(f"{shown(db)}: added 3 demonstration(s) with ")
     assert json.loads(run("library", "list", db, "--json")[1])["n_demonstrations"] == 3
     code, out, err = run("library", "add", db, files[0], files[2], "--keep-going", "--json")
     doc = json.loads(out)
@@ -194,9 +205,9 @@ def test_keep_going_adds_the_good_files_and_lists_the_bad_ones(run, tmp_path):
     assert err.splitlines()[-1].startswith("skillbank library add: error: 1 of 2 file(s) failed")
 
 
-def _clustered(run, folder):
-    """A library of six 3-D waves, clustered, and a 2-D wave file."""
-    db = folder / "c.db"
+def _clustered(run, folder, db=None):
+    """A library of six 3-D waves, clustered (at ``db``, else a file in ``folder``), and a 2-D wave file."""
+    db = folder / "c.db" if db is None else db
     specs = {f"w{k}": (200, 3, 1.0 + 0.5 * (k % 2)) for k in range(6)}
     run("library", "init", db)
     assert run("library", "add", db, *_wave_files(folder, specs), "--whole")[0] == 0
@@ -204,8 +215,8 @@ def _clustered(run, folder):
     return db, _wave_files(folder, {"flat": (200, 2, 1.0)})[0]
 
 
-def test_list_shows_unassigned_primitives_and_cluster_assigns_them(run, tmp_path):
-    db, flat = _clustered(run, tmp_path)
+def test_list_shows_unassigned_primitives_and_cluster_assigns_them(run, tmp_path, new_library):
+    db, flat = _clustered(run, tmp_path, new_library())
     more = _wave_files(tmp_path, {"m0": (200, 3, 1.0), "m1": (200, 3, 1.5)})
     assert run("library", "add", db, *more, "--whole", "--assign", "none")[0] == 0
     doc = json.loads(run("library", "list", db, "--json")[1])
@@ -220,8 +231,8 @@ def test_list_shows_unassigned_primitives_and_cluster_assigns_them(run, tmp_path
     assert not [line for line in run("library", "list", db)[1].splitlines() if line.startswith("unassigned")]
 
 
-def test_a_demonstration_that_cannot_join_is_reported(run, tmp_path):
-    db, flat = _clustered(run, tmp_path)
+def test_a_demonstration_that_cannot_join_is_reported(run, tmp_path, new_library):
+    db, flat = _clustered(run, tmp_path, new_library())
     code, out, err = run("library", "add", db, flat, "--whole")
     assert code == 0, err
     assert "demonstration 7: 1 primitive(s) left unclustered: its positions have 2 dimension(s), " \
@@ -232,10 +243,10 @@ def test_a_demonstration_that_cannot_join_is_reported(run, tmp_path):
     assert json.loads(run("library", "list", db, "--json")[1])["unassigned"] == {"count": 2, "ids": [7, 8]}
 
 
-def test_every_library_command_prints_json_and_cluster_ids_agree(run, tmp_path):
-    db = tmp_path / "j.db"
+def test_every_library_command_prints_json_and_cluster_ids_agree(run, tmp_path, new_library):
+    db = new_library("j")
     code, out, _ = run("library", "init", db, "--json")
-    assert code == 0 and json.loads(out) == {"library": str(db), "created": True, "schema_version": 3}
+    assert code == 0 and json.loads(out) == {"library": shown(db), "created": True, "schema_version": 3}
     assert json.loads(run("library", "init", db, "--json")[1])["created"] is False
     specs = {f"w{k}": (200, 3, 1.0 + 2.0 * (k % 2)) for k in range(6)}
     run("library", "add", db, *_wave_files(tmp_path, specs), "--whole")
@@ -259,8 +270,8 @@ def test_every_library_command_prints_json_and_cluster_ids_agree(run, tmp_path):
     assert code == 0 and json.loads(out) == {"removed": 2, "primitives": [2]}
 
 
-def test_cluster_plot(run, tmp_path):
-    db, _ = _clustered(run, tmp_path)
+def test_cluster_plot(run, tmp_path, new_library):
+    db, _ = _clustered(run, tmp_path, new_library())
     code, out, err = run("library", "cluster", db, "--plot", tmp_path / "clusters.png")
     assert code == 0, err
     assert (tmp_path / "clusters.png").stat().st_size > 0 and f"wrote {tmp_path / 'clusters.png'}" in out
@@ -269,10 +280,10 @@ def test_cluster_plot(run, tmp_path):
 
 
 @pytest.mark.parametrize("json_flag", [[], ["--json"]])
-def test_long_commands_show_progress_on_a_terminal_only(run, tmp_path, monkeypatch, json_flag):
+def test_long_commands_show_progress_on_a_terminal_only(run, tmp_path, new_library, monkeypatch, json_flag):
     import sys
 
-    db, _ = _clustered(run, tmp_path)
+    db, _ = _clustered(run, tmp_path, new_library())
     goal = "0.15,-0.4,1.05"
     commands = [("cluster", db), ("reuse", db, "--skill", "0", "--goal", goal, "--method", "lte"),
                 ("export", db, tmp_path / f"exp{len(json_flag)}")]

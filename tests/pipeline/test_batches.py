@@ -30,27 +30,29 @@ def files(tmp_path):
     return paths
 
 
-def _counts(lib) -> dict:
-    return {table: lib.store.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0]  # noqa: S608
-            for table in ("demonstrations", "streams", "primitives", "provenance")}
+@pytest.fixture
+def counts(table_count):
+    """``counts(lib)``: rows of the tables a batch writes, on either backend."""
+    return lambda lib: {table: table_count(lib, table)
+                        for table in ("demonstrations", "streams", "primitives", "provenance")}
 
 
-def test_a_bad_file_adds_nothing_and_is_named(tmp_path, files):
-    with Library(tmp_path / "p.sqlite") as lib:
-        before = _counts(lib)
+def test_a_bad_file_adds_nothing_and_is_named(new_library, files, counts):
+    with Library(new_library()) as lib:
+        before = counts(lib)
         for _ in range(2):  # running it again neither adds nor duplicates anything
             with pytest.raises(ValueError, match=r"four_rows\.csv: .*expected at least 16 samples.*"
                                                  r"nothing was added") as info:
                 lib.add_files(files)
             assert "\n" not in str(info.value)
-            assert _counts(lib) == before
+            assert counts(lib) == before
 
 
-def test_keep_going_adds_every_good_file_and_lists_each_bad_one(tmp_path, files):
+def test_keep_going_adds_every_good_file_and_lists_each_bad_one(tmp_path, new_library, files):
     junk = tmp_path / "junk.csv"
     junk.write_text("t,x\n0,1\n1,oops\n")
     missing = tmp_path / "missing.csv"
-    with Library(tmp_path / "p.sqlite") as lib:
+    with Library(new_library()) as lib:
         report = lib.add_files([*files, junk, missing], keep_going=True)
         good = [files[0], files[1], files[3]]
         assert list(report["failed"]) == [str(files[2]), str(junk), str(missing)]
@@ -66,20 +68,20 @@ def test_keep_going_adds_every_good_file_and_lists_each_bad_one(tmp_path, files)
         assert report["unclustered"] == {}
 
 
-def test_add_many_writes_the_batch_in_one_transaction(tmp_path):
-    with Library(tmp_path / "one.db") as lib:
+def test_add_many_writes_the_batch_in_one_transaction(new_library, counts):
+    with Library(new_library()) as lib:
         lib.add(_wave(), segment=False)
-        before = _counts(lib)
+        before = counts(lib)
         batch = [_wave(k=1.1), _wave(k=1.2), _wave(k=1.3)]
         batch[2].metadata["handle"] = object()  # fails to serialise inside the write, after the first two
         with pytest.raises(TypeError, match="cannot convert object to JSON"):
             lib.add_many(batch, segment=False)
-        assert _counts(lib) == before
+        assert counts(lib) == before
         too_short = _wave(n=4)
         with pytest.raises(ValueError, match=r"demos\[1\] \(source 'short'\): .*expected at least 16 "
                                              r"samples.*nothing was added"):
             lib.add_many([_wave(), Demonstration(too_short.t, too_short.streams, {"source": "short"})])
-        assert _counts(lib) == before
+        assert counts(lib) == before
         assert lib.add_many(batch[:2], segment=False) == [2, 3]
 
 
@@ -92,8 +94,8 @@ def _kill_before_recluster(path, demos):
         lib.add_many(demos, segment=False, assign="recluster")
 
 
-def test_primitives_left_by_an_interrupted_recluster_are_listed_and_clustered(tmp_path, make_skills):
-    path = tmp_path / "kill.db"
+def test_primitives_left_by_an_interrupted_recluster_are_listed_and_clustered(new_library, make_skills):
+    path = new_library("kill")
     demos = make_skills()
     with Library(path) as lib:
         lib.add_many(demos[:4] + demos[6:10], segment=False)
@@ -114,8 +116,8 @@ def test_primitives_left_by_an_interrupted_recluster_are_listed_and_clustered(tm
         assert sum(s["count"] for s in lib.summary()["skills"]) == 12
 
 
-def test_a_primitive_that_cannot_join_is_reported_and_recorded(tmp_path, make_skills):
-    with Library(tmp_path / "dims.db") as lib:
+def test_a_primitive_that_cannot_join_is_reported_and_recorded(tmp_path, new_library, make_skills):
+    with Library(new_library()) as lib:
         lib.add_many(make_skills(), segment=False)
         version = lib.cluster()
         t = np.linspace(0.0, 1.0, 60)

@@ -188,6 +188,46 @@ def test_process_killed_in_the_middle_of_an_add(tmp_path):
     assert sum(n > 0 for n in in_flight) >= 1, in_flight
 
 
+def test_process_killed_in_the_middle_of_an_add_on_postgres(postgres_server, postgres_url):
+    """The kills again, on PostgreSQL: what was committed stays, the add in flight leaves nothing.
+
+    A write transaction is seen in flight from the server's own view of its sessions: a session of
+    the test's database that holds a transaction id has written rows not yet committed. Every other
+    kill waits for one; the rest fall wherever their random delay ends.
+    """
+    db = postgres_url.rsplit("/", 1)[1]
+    Library(postgres_url).close()
+    writing = ("SELECT COUNT(*) FROM pg_stat_activity WHERE datname = %s AND backend_xid IS NOT NULL "
+               "AND pid <> pg_backend_pid()")
+    rng = np.random.default_rng(11)
+    committed, in_flight = {}, []
+    with postgres_server.admin(db) as admin:
+        def transactions_open() -> int:
+            return admin.execute(writing, (db,)).fetchone()[0]
+
+        for trial in range(6):
+            proc = _CTX.Process(target=_add_forever, args=(postgres_url, trial))
+            proc.start()
+            try:
+                assert _wait_for(lambda: transactions_open() > 0, 30), "the child never started writing"
+                time.sleep(rng.uniform(0.0, 0.2))
+                if trial % 2:
+                    assert _wait_for(lambda: transactions_open() > 0, 10), "no transaction seen in flight"
+                in_flight.append(transactions_open())
+            finally:
+                os.kill(proc.pid, signal.SIGKILL)
+                proc.join(10)
+            assert proc.exitcode == -signal.SIGKILL
+            with Library(postgres_url) as lib:
+                seen = _whole_demonstrations(lib)
+                committed[trial] = seen.pop(trial, 0)
+                assert seen == {k: n for k, n in committed.items() if n and k != trial}
+                did = lib.add(_demo(trial, 0, "parent", n_steps=200), segment=False, source="parent")
+                assert np.array_equal(lib.demonstration(did)["force"],
+                                      _demo(trial, 0, "parent", 200)["force"])
+    assert sum(committed.values()) > 0 and sum(n > 0 for n in committed.values()) >= 2, committed
+    assert sum(n > 0 for n in in_flight) >= 3, in_flight
+
 def _one_line_error(path, match):
     with pytest.raises(ValueError, match=match) as info:
         with Library(path) as lib:

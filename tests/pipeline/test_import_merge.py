@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 
 import numpy as np
 import pytest
@@ -11,26 +10,35 @@ import pytest
 from skillbank import Demonstration
 from skillbank.cli import _main
 from skillbank.pipeline import Library
+from skillbank.store import copy_library, open_store
 
 
 @pytest.fixture
-def source(tmp_path, make_skills):
-    """Library A: straight reaches 1-4, bowed ones 5-8, clustered, primitive 6 labelled; exported."""
-    with Library(tmp_path / "a.db") as lib:
+def library_a(new_library, make_skills):
+    """Library A: straight reaches 1-4, bowed ones 5-8, clustered, primitive 6 labelled."""
+    location = new_library("a")
+    with Library(location) as lib:
         lib.add_many(make_skills(4, seed=0), segment=False)
         lib.cluster()
         lib.label("straight-in-a", cluster=lib.primitives(demonstration=1)[0].cluster)
         lib.label("odd", primitive=6)
+    return location
+
+
+@pytest.fixture
+def source(library_a, tmp_path):
+    """Library A exported to a folder."""
+    with Library(library_a) as lib:
         lib.export(tmp_path / "a")
     return tmp_path / "a"
 
 
 @pytest.fixture
-def target(tmp_path, make_skills):
+def target(new_library, make_skills):
     """Library B: A's first two demonstrations, then 4 straight and 4 bowed of its own; labelled."""
     shared = make_skills(4, seed=0)[:2]
     own = make_skills(4, seed=1)
-    path = tmp_path / "b.db"
+    path = new_library("b")
     with Library(path) as lib:
         lib.add_many(shared + own, segment=False)
         lib.cluster()
@@ -41,31 +49,35 @@ def target(tmp_path, make_skills):
     return path
 
 
-def test_into_an_empty_library_a_copy_then_a_second_import_changes_nothing(source, tmp_path, table_rows):
-    with Library(tmp_path / "a.db") as a:
-        original = table_rows(a.path)
+def test_into_an_empty_library_a_copy_then_a_second_import_changes_nothing(library_a, source, new_library,
+                                                                            library_content):
+    original = library_content(library_a)
+    with Library(library_a) as a:
         n_prims = len(a.primitives(load=False))
-    with Library(tmp_path / "c.db") as c:
+    copy = new_library("c")
+    with Library(copy) as c:
         first = c.import_folder(source)
         assert first["mode"] == "copy" and first["skipped"] == {} and first["assigned"] == {}
         assert first["demonstrations"] == {i: i for i in range(1, 9)} and first["versions"] == {1: 1}
-    copied = table_rows(tmp_path / "c.db")
+    copied = library_content(copy)
     for table in ("demonstrations", "streams", "primitives", "cluster_versions", "cluster_members",
                   "cluster_labels"):
         assert copied[table] == original[table], table
-    with Library(tmp_path / "c.db") as c:
+    with Library(copy) as c:
         again = c.import_folder(source)
         assert again["mode"] == "merge" and again["skipped"] == {i: i for i in range(1, 9)}
         assert again["demonstrations"] == again["primitives"] == again["versions"] == again["assigned"] == {}
         assert len(c.primitives(load=False)) == n_prims and [v["version"] for v in c.versions()] == [1]
-    assert table_rows(tmp_path / "c.db") == copied
+    assert library_content(copy) == copied
 
 
-def test_into_a_non_empty_library_a_merge_that_keeps_its_clusters_and_labels(source, target, tmp_path,
-                                                                              make_skills, table_rows):
+def test_into_a_non_empty_library_a_merge_that_keeps_its_clusters_and_labels(source, target, new_library,
+                                                                              make_skills, library_content):
     # What Library.add would do with A's demonstrations 3-8: the known answer for their clusters.
-    shutil.copy(target, tmp_path / "added.db")
-    with Library(tmp_path / "added.db") as added:
+    added_location = new_library("added")
+    with open_store(target, readonly=True) as src, open_store(added_location) as dst:
+        copy_library(src, dst)
+    with Library(added_location) as added:
         ids = added.add_many(make_skills(4, seed=0)[2:], segment=False)
         expected = [added.primitives(demonstration=i)[0].cluster for i in ids]
     with Library(target) as b:
@@ -97,15 +109,16 @@ def test_into_a_non_empty_library_a_merge_that_keeps_its_clusters_and_labels(sou
         # reuse --skill finds the old primitives and the new ones of that skill.
         assert [p.id for p in b.skill("straight")] == sorted(
             [i for i, lab in old.items() if lab == "straight"] + [new[3].id, new[4].id])
-    rows = table_rows(target)
+    rows = library_content(target)
     with Library(target) as b:
         again = b.import_folder(source)
         assert again["demonstrations"] == {} and len(again["skipped"]) == 8
-    assert table_rows(target) == rows
+    assert library_content(target) == rows
 
 
-def test_merge_into_an_unclustered_library_leaves_new_primitives_unclustered(source, tmp_path, make_reach):
-    with Library(tmp_path / "d.db") as d:
+def test_merge_into_an_unclustered_library_leaves_new_primitives_unclustered(source, new_library,
+                                                                             make_reach):
+    with Library(new_library("d")) as d:
         d.add(make_reach([0, 0, 0], [1, 1, 0]), segment=False)
         res = d.import_folder(source)
         assert res["mode"] == "merge" and len(res["demonstrations"]) == 8 and res["assigned"] == {}
@@ -113,18 +126,18 @@ def test_merge_into_an_unclustered_library_leaves_new_primitives_unclustered(sou
         assert [p.id for p in d.primitives(label="odd")] == [res["primitives"][6]]
 
 
-def test_same_samples_with_other_metadata_or_streams_are_not_duplicates(source, tmp_path, make_skills):
+def test_same_samples_with_other_metadata_or_streams_are_not_duplicates(source, new_library, make_skills):
     first = make_skills(4, seed=0)[0]
     other_meta = Demonstration(first.t, first.streams, {**first.metadata, "user": 2})
     extra = Demonstration(first.t, {**first.streams, "gripper": np.zeros(first.n_steps)}, first.metadata)
-    with Library(tmp_path / "e.db") as e:
+    with Library(new_library("e")) as e:
         e.add_many([first, other_meta, extra], segment=False)
         res = e.import_folder(source)
         assert res["skipped"] == {1: 1} and len(res["demonstrations"]) == 7
 
 
-def test_cli_reports_added_and_skipped(source, tmp_path, capsys):
-    db = tmp_path / "f.db"
+def test_cli_reports_added_and_skipped(source, new_library, capsys):
+    db = new_library("f")
     capsys.readouterr()
     assert _main.main(["library", "import", str(db), str(source), "--json"]) == 0
     first = json.loads(capsys.readouterr().out)

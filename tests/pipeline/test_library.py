@@ -13,8 +13,9 @@ from skillbank.store._arrays import from_npy, to_npy
 
 
 @pytest.fixture
-def lib(tmp_path):
-    with Library(tmp_path / "lib.db") as library:
+def lib(new_library):
+    """An empty library, once on each store backend."""
+    with Library(new_library()) as library:
         yield library
 
 
@@ -146,7 +147,7 @@ def test_add_is_all_or_nothing(lib, reach):
         assert lib.store.conn.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0] == 1, table  # noqa: S608
 
 
-def test_errors(lib, reach, two_skills):
+def test_errors(lib, reach, two_skills, new_library):
     with pytest.raises(ValueError, match="expected a Demonstration"):
         lib.add(np.zeros((5, 2)))
     with pytest.raises(ValueError, match="'position' stream"):
@@ -174,11 +175,11 @@ def test_errors(lib, reach, two_skills):
     with pytest.raises(ValueError, match="skill: expected a label"):
         lib.skill(1.5)
     with pytest.raises(ValueError, match="does not exist"):
-        Library(lib.path.parent / "missing.db", create=False)
+        Library(new_library("missing"), create=False)  # a missing file, or a database without a library
 
 
-def test_closed_library(tmp_path):
-    lib = Library(tmp_path / "c.db")
+def test_closed_library(new_library):
+    lib = Library(new_library())
     lib.close()
     lib.close()
     with pytest.raises(ValueError, match="is closed"):
@@ -206,29 +207,30 @@ def test_reuse_is_selection_on_the_skill_primitives(lib, two_skills):
     assert lib.reuse(cluster, task, method="ja").used == mine.used  # by cluster id too
 
 
-def test_primitives_added_while_clustering_join_the_new_version(tmp_path, two_skills):
+def test_primitives_added_while_clustering_join_the_new_version(new_library, backend, two_skills):
     """Another process adds a demonstration between the fit and the write of a clustering version."""
-    from skillbank.store import SQLiteStore
-
-    path = tmp_path / "race.db"
-
-    class Racing(SQLiteStore):
-        def add_version(self, **kwargs):
-            with Library(path) as other:  # a second writer, as another process would be
-                other.add(late, segment=False, assign="none")
-            return super().add_version(**kwargs)
-
+    location = new_library()
     demos = two_skills()
     late = demos.pop()
-    with Library(Racing(path)) as lib:
+    with Library(location) as lib:
+        write_version = lib.store.add_version
+
+        def racing(**kwargs):
+            with Library(location) as other:  # a second writer, as another process would be
+                other.add(late, segment=False, assign="none")
+            return write_version(**kwargs)
+
+        lib.store.add_version = racing
         lib.add_many(demos, segment=False)
         version = lib.cluster()
         prims = lib.primitives()
         assert len(prims) == len(demos) + 1 and all(p.cluster is not None for p in prims)
         members = lib.store.members(version)
         assert set(members) == {p.id for p in prims}
+        mark = "?" if backend == "sqlite" else "%s"
         assigned = dict(lib.store.conn.execute(
-            "SELECT primitive_id, assigned FROM cluster_members WHERE version = ?", (version,)).fetchall())
+            f"SELECT primitive_id, assigned FROM cluster_members WHERE version = {mark}",  # noqa: S608
+            (version,)).fetchall())
         assert assigned[prims[-1].id] == "incremental" and list(assigned.values()).count("fit") == len(demos)
         # the late one, a bowed reach, joins the bowed reaches' cluster, not the straight ones'
         assert prims[-1].cluster == prims[-2].cluster != prims[0].cluster

@@ -109,15 +109,16 @@ def check_clean(path, n_demos):
 # -- the same library as without workers -----------------------------------------------------------
 
 @pytest.mark.parametrize("keep_going", [False, True])
-def test_parallel_add_gives_the_library_a_sequential_add_gives(tmp_path, dask_cluster, keep_going):
+def test_parallel_add_gives_the_library_a_sequential_add_gives(tmp_path, new_library, dask_cluster,
+                                                               keep_going):
     seed = write_files(tmp_path / "seed", 6)
     bad = (13,) if keep_going else ()
     new = write_files(tmp_path / "new", 8, first=10, bad=bad, flat=(12,))
     options = {"segmentation": {"window": 16}, "keep_going": keep_going}
-    with library(tmp_path / "seq.db", seed) as lib:
+    with library(new_library("seq"), seed) as lib:
         expected = lib.add_files(new, **options)
         want = content(lib)
-    with library(tmp_path / "par.db", seed) as lib:
+    with library(new_library("par"), seed) as lib:
         got = lib.add_files(new, scheduler=dask_cluster.scheduler_address, batch_size=3, **options)
         have = content(lib)
     assert got.pop("scheduler") == dask_cluster.scheduler_address
@@ -137,17 +138,19 @@ def test_workers_start_a_local_cluster_and_recluster(tmp_path):
         assert all(p.cluster is not None for p in lib.primitives())
 
 
-def test_all_or_nothing_with_workers_adds_nothing_when_a_file_is_bad(tmp_path, dask_cluster):
+def test_all_or_nothing_with_workers_adds_nothing_when_a_file_is_bad(tmp_path, new_library, dask_cluster):
+    db = new_library()
     files = write_files(tmp_path / "in", 6, bad=(4,))
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         with pytest.raises(ValueError, match=r"004\.csv: cannot read it: .*; nothing was added"):
             lib.add_files(files, scheduler=dask_cluster.scheduler_address)
-    check_clean(tmp_path / "lib.db", 0)
+    check_clean(db, 0)
 
 
-def test_progress_covers_the_whole_batch(tmp_path, dask_cluster, capsys):
+def test_progress_covers_the_whole_batch(tmp_path, new_library, dask_cluster, capsys):
+    db = new_library()
     files = write_files(tmp_path / "in", 5)
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         lib.add_files(files, scheduler=dask_cluster.scheduler_address, progress=True, keep_going=True,
                       batch_size=2)
     err = capsys.readouterr().err
@@ -203,36 +206,40 @@ def planted(client):
     client.wait_for_workers(2, timeout=60)  # the killed ones are back for the next test
 
 
-def test_a_worker_that_dies_once_is_retried_and_nothing_is_lost(tmp_path, dask_cluster, planted):
+def test_a_worker_that_dies_once_is_retried_and_nothing_is_lost(tmp_path, new_library,
+        dask_cluster, planted):
+    db = new_library()
     files = write_files(tmp_path / "in", 6)
     planted("003.npz", "once", marker=str(tmp_path / "died"))
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         report = lib.add_files(files, scheduler=dask_cluster.scheduler_address, keep_going=True, batch_size=2,
                                segmentation={"window": 16})
     assert (tmp_path / "died").exists()  # a worker did die on it
     assert report["failed"] == {} and report["demonstrations"] == [1, 2, 3, 4, 5, 6]
-    check_clean(tmp_path / "lib.db", 6)
+    check_clean(db, 6)
 
 
 def test_a_file_that_kills_every_worker_is_reported_and_the_rest_committed(tmp_path, dask_cluster, planted):
+    db = tmp_path / "lib.db"  # the scheduler's retries, the same on any store
     files = write_files(tmp_path / "in", 6)
     planted("003.npz", "always")
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         report = lib.add_files(files, scheduler=dask_cluster.scheduler_address, keep_going=True, batch_size=2,
                                segmentation={"window": 16})
     assert list(report["failed"]) == [str(files[3])]
     assert "worker preparing it died" in report["failed"][str(files[3])]
     assert report["demonstrations"] == [1, 2, 3, 4, 5]  # in the order of the files, none lost
-    check_clean(tmp_path / "lib.db", 5)
-    with Library(tmp_path / "lib.db", readonly=True) as lib:
+    check_clean(db, 5)
+    with Library(db, readonly=True) as lib:
         sources = [lib.demonstration(d).metadata["source"] for d in lib.store.demonstration_ids()]
     assert sources == [str(files[k]) for k in (0, 1, 2, 4, 5)]
 
 
 def test_a_task_of_several_files_that_kills_workers_is_retried_file_by_file(tmp_path, dask_cluster, planted):
+    db = tmp_path / "lib.db"  # the scheduler's retries, the same on any store
     files = write_files(tmp_path / "in", 6)
     planted("004.npz", "always")
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         # tasks of files {0, 1, 2} and {3, 4, 5}: the second dies, then 3 and 5 alone succeed
         report = add_in_parallel(lib, files, read={}, options={"segment": False, "segmentation": None,
                                                                "label": None, "assign": "none"},
@@ -240,54 +247,59 @@ def test_a_task_of_several_files_that_kills_workers_is_retried_file_by_file(tmp_
                                  chunk=3)
     assert list(report["failed"]) == [str(files[4])]
     assert report["demonstrations"] == [1, 2, 3, 4, 5]
-    check_clean(tmp_path / "lib.db", 5)
+    check_clean(db, 5)
 
 
 def test_all_or_nothing_adds_nothing_when_workers_die(tmp_path, dask_cluster, planted):
+    db = tmp_path / "lib.db"  # the scheduler's retries, the same on any store
     files = write_files(tmp_path / "in", 4)
     planted("002.npz", "always")
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         with pytest.raises(ValueError, match=r"002\.npz: the Dask worker preparing it died.*nothing was add"):
             lib.add_files(files, scheduler=dask_cluster.scheduler_address)
-    check_clean(tmp_path / "lib.db", 0)
+    check_clean(db, 0)
 
 
-def test_an_add_stopped_midway_keeps_its_committed_batches_whole(tmp_path, dask_cluster, planted):
+def test_an_add_stopped_midway_keeps_its_committed_batches_whole(tmp_path, new_library,
+        dask_cluster, planted):
+    db = new_library()
     files = write_files(tmp_path / "in", 8)
     planted("005.npz", "raise")
-    with Library(tmp_path / "lib.db") as lib:
+    with Library(db) as lib:
         with pytest.raises(RuntimeError, match="planted bug"):
             lib.add_files(files, scheduler=dask_cluster.scheduler_address, keep_going=True, batch_size=2)
     # batches {0, 1} and {2, 3} were committed; file 4 waited for its batch, which never came
-    check_clean(tmp_path / "lib.db", 4)
+    check_clean(db, 4)
 
 
 # -- the command line ------------------------------------------------------------------------------
 
-def test_scheduler_variable_is_honoured(tmp_path, dask_cluster, client, monkeypatch, capsys):
+def test_scheduler_variable_is_honoured(tmp_path, new_library, dask_cluster, client, monkeypatch, capsys):
+    db = new_library()
     files = [str(p) for p in write_files(tmp_path / "in", 3)]
-    Library(tmp_path / "lib.db").close()
+    Library(db).close()
     monkeypatch.setenv("SKILLBANK_SCHEDULER", dask_cluster.scheduler_address)
     with distributed.get_task_stream(client=client) as ran:
-        assert main(["library", "add", str(tmp_path / "lib.db"), *files, "--window", "16", "--json"]) == 0
+        assert main(["library", "add", str(db), *files, "--window", "16", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["scheduler"] == dask_cluster.scheduler_address and report["demonstrations"] == [1, 2, 3]
     assert sum(str(task["key"]).startswith("prepare_file") for task in ran.data) == 3  # one per file, there
     # --workers 0 adds in this process, whatever the variable says
-    assert main(["library", "add", str(tmp_path / "lib.db"), *files, "--workers", "0", "--json"]) == 0
+    assert main(["library", "add", str(db), *files, "--workers", "0", "--json"]) == 0
     assert "scheduler" not in json.loads(capsys.readouterr().out)
 
 
-def test_unreachable_scheduler_is_one_line(tmp_path, monkeypatch, capsys):
+def test_unreachable_scheduler_is_one_line(tmp_path, new_library, monkeypatch, capsys):
+    db = new_library()
     files = [str(p) for p in write_files(tmp_path / "in", 1)]
-    Library(tmp_path / "lib.db").close()
+    Library(db).close()
     monkeypatch.setenv("SKILLBANK_SCHEDULER", "tcp://127.0.0.1:9")  # discard port: nothing listens
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
-        assert main(["library", "add", str(tmp_path / "lib.db"), *files]) == 2
+        assert main(["library", "add", str(db), *files]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "scheduler: cannot reach the Dask scheduler at 'tcp://127.0.0.1:9'" in err
-    check_clean(tmp_path / "lib.db", 0)
+    check_clean(db, 0)
 
 
 def test_missing_extra_is_one_line(tmp_path, monkeypatch, capsys):

@@ -8,9 +8,9 @@ from skillbank import Constraints, Demonstration
 from skillbank.pipeline import Library
 
 
-def test_reuse_progress_does_not_change_the_result(tmp_path, make_skills, capsys):
+def test_reuse_progress_does_not_change_the_result(new_library, make_skills, capsys):
     """reuse with progress reports each adapted candidate; the ranking and result are unchanged."""
-    with Library(tmp_path / "p.db") as lib:
+    with Library(new_library()) as lib:
         demos = make_skills()
         # ties in every criterion: two copies of each of the first three demonstrations
         lib.add_many(demos + [Demonstration(d.t, d.streams) for d in demos[:3]], segment=False, label="all")
@@ -25,8 +25,8 @@ def test_reuse_progress_does_not_change_the_result(tmp_path, make_skills, capsys
         assert "adapting" in err and "15/15" in err
 
 
-def test_cluster_and_export_show_progress(tmp_path, make_skills, capsys):
-    with Library(tmp_path / "p.db") as lib:
+def test_cluster_and_export_show_progress(tmp_path, new_library, make_skills, capsys):
+    with Library(new_library()) as lib:
         lib.add_many(make_skills(), segment=False)
         capsys.readouterr()
         quiet = lib.cluster()

@@ -28,8 +28,8 @@ def _everything(lib):
 
 
 @pytest.fixture
-def full(tmp_path, make_skills):
-    lib = Library(tmp_path / "src.db")
+def full(new_library, make_skills):
+    lib = Library(new_library("src"))
     skills = make_skills()
     skills[0] = Demonstration(skills[0].t, {**skills[0].streams, "force": np.arange(120.0).reshape(60, 2)},
                               {"source": "robot.h5", "user": 3})
@@ -46,12 +46,12 @@ def full(tmp_path, make_skills):
     lib.close()
 
 
-def test_round_trip_keeps_everything(full, tmp_path):
+def test_round_trip_keeps_everything(full, tmp_path, new_library):
     manifest = full.export(tmp_path / "out")
     doc = json.loads(manifest.read_text())
     assert doc["format"] == "skillbank-library" and len(doc["demonstrations"]) == 14
     assert len(doc["versions"]) == 2
-    with Library(tmp_path / "copy.db") as copy:
+    with Library(new_library("copy")) as copy:
         maps = copy.import_folder(tmp_path / "out")
         assert maps["demonstrations"] == {i: i for i in full.demonstration_ids()}
         assert _everything(copy) == _everything(full)
@@ -63,9 +63,9 @@ def test_round_trip_keeps_everything(full, tmp_path):
         assert copy.primitives(demonstration=new)[0].cluster == full.primitives(demonstration=5)[0].cluster
 
 
-def test_import_into_a_non_empty_library_merges_and_renumbers(full, tmp_path, make_reach):
+def test_import_into_a_non_empty_library_merges_and_renumbers(full, tmp_path, new_library, make_reach):
     full.export(tmp_path / "out")
-    with Library(tmp_path / "other.db") as other:
+    with Library(new_library("other")) as other:
         other.add(make_reach([0, 0, 0], [1, 1, 0]), segment=False)
         maps = other.import_folder(tmp_path / "out")
         assert maps["mode"] == "merge" and maps["skipped"] == {}

@@ -29,9 +29,15 @@ def press_motion(travel, lift=0.05, n=60, duration=2.0) -> Demonstration:
 
 
 @pytest.fixture
-def synthetic_library(tmp_path):
+def synthetic_db(new_library):
+    """Where :func:`synthetic_library` is (a file or a URL: the tests run on every store backend)."""
+    return new_library("synthetic")
+
+
+@pytest.fixture
+def synthetic_library(synthetic_db):
     """Three press primitives labelled 'press' (no description yet)."""
-    lib = Library(tmp_path / "synthetic.db")
+    lib = Library(synthetic_db)
     for travel in ([0.2, 0.0, 0.0], [0.0, 0.2, 0.0], [0.15, 0.1, 0.0]):
         lib.add(press_motion(np.array(travel)), segment=False, label="press")
     yield lib

@@ -38,15 +38,16 @@ def test_bad_descriptions_are_refused_and_nothing_is_stored(synthetic_library, l
     assert synthetic_library.descriptions(history=True) == []
 
 
-def test_descriptions_travel_with_an_export_as_a_copy_and_as_a_merge(synthetic_library, tmp_path):
+def test_descriptions_travel_with_an_export_as_a_copy_and_as_a_merge(synthetic_library, tmp_path,
+                                                                     new_library):
     lib = synthetic_library
     lib.describe("press", PRESS)
     lib.describe("press", PRESS, {"offset": [0, 0, 0.01]})
     lib.export(tmp_path / "out")
-    with Library(tmp_path / "copy.db") as copy:
+    with Library(new_library("copy")) as copy:
         copy.import_folder(tmp_path / "out")
         assert copy.descriptions(history=True) == lib.descriptions(history=True)
-    with Library(tmp_path / "other.db") as other:
+    with Library(new_library("other")) as other:
         other.describe("press", PRESS)
         result = other.import_folder(tmp_path / "out")
         assert result["descriptions"] == {"press": 2}  # the export's current one, as a new revision
@@ -77,9 +78,9 @@ def test_the_manifest_refuses_a_malformed_description(synthetic_library, tmp_pat
         lib.import_folder(tmp_path / "out")
 
 
-def test_cli_describe_then_plan_prints_the_json_contract_and_writes_every_file(synthetic_library, tmp_path,
-                                                                            cli):
-    db = synthetic_library.path
+def test_cli_describe_then_plan_prints_the_json_contract_and_writes_every_file(synthetic_library,
+                                                                            synthetic_db, tmp_path, cli):
+    db = synthetic_db
     synthetic_library.close()
     (tmp_path / "press.pddl").write_text(PRESS)
     code, out, err = cli("library", "describe", db, "press", "--action", tmp_path / "press.pddl", "--binding",
@@ -105,9 +106,9 @@ def test_cli_describe_then_plan_prints_the_json_contract_and_writes_every_file(s
                                                  r"obstacle obstacles\[0\]"),
     ({"objects": {"b1": {"type": "button", "position": [0, 0]}}}, r"objects\['b1'\].position: expected 3"),
 ])
-def test_cli_failures_are_one_line_exit_2_and_write_nothing(described_library, tmp_path, cli, change,
-                                                           message):
-    db = described_library.path
+def test_cli_failures_are_one_line_exit_2_and_write_nothing(described_library, synthetic_db, tmp_path, cli,
+                                                           change, message):
+    db = synthetic_db
     described_library.close()
     folder = tmp_path / "task"
     folder.mkdir()
@@ -119,10 +120,10 @@ def test_cli_failures_are_one_line_exit_2_and_write_nothing(described_library, t
     assert sorted(p.name for p in folder.iterdir()) == ["scene.json"]
 
 
-def test_cli_plan_with_a_skill_missing_names_the_step(synthetic_library, tmp_path, cli):
+def test_cli_plan_with_a_skill_missing_names_the_step(synthetic_library, synthetic_db, tmp_path, cli):
     synthetic_library.describe("press", PRESS)
     synthetic_library.describe("push", PUSH)
-    db = synthetic_library.path
+    db = synthetic_db
     synthetic_library.close()
     scene = write_scene(tmp_path, dict(BUTTONS_DOC, goal=["(pushed b1)"]))
     code, _, err = cli("plan", db, "--scene", scene)

@@ -7,50 +7,12 @@ id counters, byte for byte.
 
 from __future__ import annotations
 
-import sqlite3
-
 import numpy as np
 import pytest
 
 from skillbank import Demonstration
 from skillbank.pipeline import Library
 from skillbank.store import copy_library, open_store
-
-# The same SELECTs on both databases.
-_CONTENT = {
-    "demonstrations": "SELECT d.id, d.source, d.n_steps, d.t, d.metadata, d.created, p.kind, p.params, "
-                      "p.created FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
-                      "ORDER BY d.id",
-    "streams": "SELECT demonstration_id, name, position, data FROM streams "
-               "ORDER BY demonstration_id, position",
-    "primitives": "SELECT id, demonstration_id, start, stop, label FROM primitives ORDER BY id",
-    "cluster_versions": "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
-                        "FROM cluster_versions ORDER BY version",
-    "cluster_members": "SELECT version, primitive_id, cluster, features, assigned FROM cluster_members "
-                       "ORDER BY version, primitive_id",
-    "cluster_labels": "SELECT version, cluster, label FROM cluster_labels ORDER BY version, cluster",
-    "skill_descriptions": "SELECT label, revision, created, action, binding FROM skill_descriptions "
-                          "ORDER BY label, revision",
-}
-_COUNTERS = {"sqlite": "SELECT name, seq FROM sqlite_sequence WHERE name IN ('demonstrations', 'primitives', "
-                       "'cluster_versions') ORDER BY name",
-             "postgresql": "SELECT name, last FROM sequences WHERE name IN ('demonstrations', 'primitives', "
-                           "'cluster_versions') ORDER BY name"}
-
-
-def _content(location, server=None) -> dict:
-    """Every row that makes up the library at ``location`` (a SQLite path, or a database of ``server``)."""
-    if server is None:
-        conn, kind = sqlite3.connect(location), "sqlite"
-    else:
-        conn, kind = server.admin(str(location).rsplit("/", 1)[1]), "postgresql"
-    try:
-        out = {name: [tuple(bytes(v) if isinstance(v, memoryview) else v for v in row)
-                      for row in conn.execute(sql).fetchall()] for name, sql in _CONTENT.items()}
-        out["counters"] = [tuple(r) for r in conn.execute(_COUNTERS[kind]).fetchall()]
-    finally:
-        conn.close()
-    return out
 
 
 def _curve(k, n=80):
@@ -78,10 +40,11 @@ def _build(location) -> None:
         lib.store.set_description("straight", "(:action straight :parameters (?g))", {})
 
 
-def test_sqlite_to_postgres_to_sqlite_is_identical(tmp_path, postgres_server, postgres_url, table_rows):
+def test_sqlite_to_postgres_to_sqlite_is_identical(tmp_path, postgres_server, postgres_url, table_rows,
+                                                   library_content):
     a, b = tmp_path / "a.db", tmp_path / "b.db"
     _build(a)
-    original = _content(a)
+    original = library_content(a)
     assert len(original["cluster_versions"]) == 2 and original["counters"][0] == ("cluster_versions", 2)
     assert {r[4] for r in original["cluster_members"]} == {"fit", "incremental"}
     before = table_rows(a)
@@ -89,10 +52,10 @@ def test_sqlite_to_postgres_to_sqlite_is_identical(tmp_path, postgres_server, po
         assert copy_library(src, dst) == {"demonstrations": 8, "primitives": 8, "versions": 2}
         assert dst.check() == "ok"
     assert table_rows(a) == before  # the source is only read
-    assert _content(postgres_url, postgres_server) == original
+    assert library_content(postgres_url) == original
     with open_store(postgres_url, readonly=True) as src, open_store(b) as dst:
         copy_library(src, dst)
-    assert _content(b) == original
+    assert library_content(b) == original
     with Library(a) as la, Library(b) as lb, Library(postgres_url) as lp:
         assert la.summary() == lb.summary() == lp.summary()
         # the counters came along: the next demonstration gets the same id everywhere (not the removed 9)
@@ -100,37 +63,37 @@ def test_sqlite_to_postgres_to_sqlite_is_identical(tmp_path, postgres_server, po
             lp.add(_curve(9), segment=False) == 10
 
 
-def test_postgres_to_sqlite_to_postgres_is_identical(tmp_path, postgres_server, postgres_url):
+def test_postgres_to_sqlite_to_postgres_is_identical(tmp_path, postgres_server, postgres_url,
+                                                     library_content):
     _build(postgres_url)
-    original = _content(postgres_url, postgres_server)
+    original = library_content(postgres_url)
     second = postgres_server.url("copy_" + postgres_url.rsplit("/", 1)[1])
     postgres_server.create_database(second.rsplit("/", 1)[1])
     try:
         with open_store(postgres_url, readonly=True) as src, open_store(tmp_path / "mid.db") as dst:
             copy_library(src, dst)
-        assert _content(tmp_path / "mid.db") == original
+        assert library_content(tmp_path / "mid.db") == original
         with open_store(tmp_path / "mid.db", readonly=True) as src, open_store(second) as dst:
             copy_library(src, dst)
-        assert _content(second, postgres_server) == original
+        assert library_content(second) == original
     finally:
         postgres_server.drop_database(second.rsplit("/", 1)[1])
 
 
 @pytest.mark.parametrize("into", ["sqlite", "postgresql"])
-def test_a_non_empty_destination_is_refused_unchanged(tmp_path, postgres_server, postgres_url, into):
+def test_a_non_empty_destination_is_refused_unchanged(tmp_path, postgres_url, into, library_content):
     source, target = tmp_path / "src.db", (tmp_path / "dst.db" if into == "sqlite" else postgres_url)
     _build(source)
     with open_store(target) as dst:
         dst.add_demonstration(_curve(0), [(0, 80)])
-    server = None if into == "sqlite" else postgres_server
-    before = _content(target, server)
+    before = library_content(target)
     with open_store(source, readonly=True) as src, open_store(target) as dst:
         with pytest.raises(ValueError, match=r"^destination: expected an empty library, '.*' holds 1 "
                                              r"demonstration\(s\) and 0 clustering version\(s\); 'library "
                                              r"copy' writes only into an empty library \(to merge, 'library "
                                              r"export' then 'library import'\)$"):
             copy_library(src, dst)
-    assert _content(target, server) == before
+    assert library_content(target) == before
 
 
 def test_a_failed_copy_leaves_the_destination_empty(tmp_path, postgres_url, monkeypatch):
@@ -157,7 +120,7 @@ def test_a_failed_copy_leaves_the_destination_empty(tmp_path, postgres_url, monk
         assert seen == [(k, 8) for k in range(9)] and len(dst.demonstration_ids()) == 8
 
 
-def test_export_and_import_through_postgres(tmp_path, postgres_server, postgres_url):
+def test_export_and_import_through_postgres(tmp_path, postgres_server, postgres_url, library_content):
     _build(tmp_path / "a.db")
     with Library(tmp_path / "a.db") as lib:
         lib.export(tmp_path / "exp")
@@ -167,9 +130,10 @@ def test_export_and_import_through_postgres(tmp_path, postgres_server, postgres_
         lib.export(tmp_path / "exp2")
         again = lib.import_folder(tmp_path / "exp2")  # a merge: everything is already there
         assert again["mode"] == "merge" and len(again["skipped"]) == 8 and again["demonstrations"] == {}
-    without_counters = {k: v for k, v in _content(tmp_path / "a.db").items() if k != "counters"}
-    assert {k: v for k, v in _content(postgres_url, postgres_server).items() if k != "counters"} == \
+    without_counters = {k: v for k, v in library_content(tmp_path / "a.db").items() if k != "counters"}
+    assert {k: v for k, v in library_content(postgres_url).items() if k != "counters"} == \
         without_counters
     with Library(tmp_path / "b.db") as lib:
         lib.import_folder(tmp_path / "exp2")
-    assert {k: v for k, v in _content(tmp_path / "b.db").items() if k != "counters"} == without_counters
+    assert {k: v for k, v in library_content(tmp_path / "b.db").items() if k != "counters"} == \
+        without_counters
