@@ -12,12 +12,10 @@ from ..core._validation import check_array, check_finite_result, check_positive,
 from ._em import (
     assign,
     closest_separation,
-    cluster_sums,
+    em_nodes,
     local_splits,
     pairwise_separation,
     selection_energy,
-    solve_capped,
-    solve_paper,
 )
 from ._hierarchy import MIN_MEMBERS, hierarchy_seeds
 from ._incremental import grow, point_stats, pooled, sample_of, separation
@@ -210,32 +208,9 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
 
     # -- EM for a fixed number of nodes -----------------------------------------------------------
     def _em(self, X, nodes, p, tol_abs, x_sq):
-        nodes = nodes.copy()
+        nodes, n_iter = em_nodes(X, nodes, stretch=p["stretch"], max_iter=p["max_iter"], tol=tol_abs,
+                                 paper=self.criterion == "paper", x_sq=x_sq)
         n = nodes.shape[0]
-        n_iter = 0
-        for _ in range(p["max_iter"]):
-            n_iter += 1
-            labels, d2 = assign(X, nodes, x_sq)
-            counts, sums = cluster_sums(X, labels, n)
-            if self.criterion == "paper":
-                new = solve_paper(counts, sums, p["stretch"])
-            else:
-                empty = np.flatnonzero(counts == 0)
-                if empty.size:
-                    # Move emptied nodes to the worst-represented points, as k-means does.
-                    far = np.argsort(-d2, kind="stable")[:empty.size]
-                    if d2[far[-1]] == 0.0:
-                        break
-                    nodes[empty] = X[far]
-                    continue
-                new, _ = solve_capped(counts, sums, p["stretch"])
-            if not np.all(np.isfinite(new)):
-                raise ValueError(f"stretch: the node equations have no finite solution with stretch="
-                                 f"{p['stretch']!r}; use a smaller stretching constant")
-            moved = float(np.sum((new - nodes) ** 2))
-            nodes = new
-            if moved <= tol_abs:
-                break
         labels, d2 = assign(X, nodes, x_sq)
         counts = np.bincount(labels, minlength=n)
         energy = selection_energy(float(d2.sum()), nodes, p["stretch"])
@@ -305,28 +280,37 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
                     break
         return (*best, path)
 
-    def _store(self, X, nodes, labels, energy, n_iter, path):
+    def _record(self, nodes, labels, keep, energy, n_iter, path, pair_delta):
+        """Set the fitted map from the search's result, keeping only the nodes ``keep``.
+
+        The other nodes have no points (only in paper mode) and carry no
+        cluster; ``labels`` are renumbered. ``pair_delta()`` is the ``delta``
+        of every pair of kept clusters (it may read the renumbered ``labels_``),
+        asked for only when there are two or more.
+        """
         check_finite_result(nodes, name="ElasticClustering (cluster centres)")
         check_finite_result(energy, name="ElasticClustering (energy)")
-        # Nodes without points (only in paper mode) carry no cluster; drop them and relabel.
-        used = np.unique(labels)
         remap = np.full(nodes.shape[0], -1)
-        remap[used] = np.arange(used.size)
-        self.cluster_centers_ = nodes[used]
+        remap[keep] = np.arange(keep.size)
+        self.cluster_centers_ = nodes[keep]
         self.labels_ = remap[labels].astype(np.intp)
-        self.n_clusters_ = int(used.size)
+        self.n_clusters_ = int(keep.size)
         self.energy_ = float(energy)
         self.n_iter_ = int(n_iter)
         self.n_clusters_tried_ = np.array([q[0] for q in path], dtype=np.intp)
         self.energy_path_ = np.array([q[1] for q in path], dtype=float)
         self.separation_path_ = np.array([q[2] for q in path], dtype=float)
-        self.cluster_sizes_ = np.bincount(self.labels_, minlength=self.n_clusters_).astype(np.intp)
         if self.n_clusters_ > 1:
-            delta = pairwise_separation(X - X.mean(axis=0), self.labels_, self.n_clusters_)
+            delta = pair_delta()
             np.fill_diagonal(delta, np.inf)
             self.separation_ = delta.min(axis=1)
         else:
             self.separation_ = np.full(1, np.inf)
+
+    def _store(self, X, nodes, labels, energy, n_iter, path):
+        self._record(nodes, labels, np.unique(labels), energy, n_iter, path,
+                     lambda: pairwise_separation(X - X.mean(axis=0), self.labels_, self.n_clusters_))
+        self.cluster_sizes_ = np.bincount(self.labels_, minlength=self.n_clusters_).astype(np.intp)
         # What partial_fit needs, of a size independent of the number of points: each cluster's
         # statistics and the bounding box of the data (for the round-off floor of a spread).
         self._stats = point_stats(X, self.labels_, self.n_clusters_)
@@ -421,28 +405,17 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             nodes, labels, stats, samples, energy, n_iter, path = grow(
                 X, self._keys.random(X.shape[0]), self._stats, self._samples, self.cluster_centers_, p,
                 criterion=self.criterion, scale_of=scale_of)
-            check_finite_result(nodes, name="ElasticClustering (cluster centres)")
-            check_finite_result(energy, name="ElasticClustering (energy)")
             keep = np.flatnonzero(stats.counts > 0)  # a node left without points (paper mode) is dropped
-            remap = np.full(nodes.shape[0], -1)
-            remap[keep] = np.arange(keep.size)
-            self._stats = stats.take(keep)
+            kept = stats.take(keep)
+
+            def pair_delta():
+                centre = pooled(kept).means[0]
+                return separation(kept.shifted(centre), scale_of(centre))
+
+            self._record(nodes, labels, keep, energy, n_iter, path, pair_delta)
+            self._stats = kept
             self._samples = [samples[i] for i in keep]
-            self.cluster_centers_ = nodes[keep]
-            self.labels_ = remap[labels].astype(np.intp)
-            self.n_clusters_ = int(keep.size)
-            self.energy_, self.n_iter_ = float(energy), int(n_iter)
-            self.n_clusters_tried_ = np.array([q[0] for q in path], dtype=np.intp)
-            self.energy_path_ = np.array([q[1] for q in path], dtype=float)
-            self.separation_path_ = np.array([q[2] for q in path], dtype=float)
-            self.cluster_sizes_ = np.rint(self._stats.counts).astype(np.intp)  # estimates after some splits
-            if self.n_clusters_ > 1:
-                centre = pooled(self._stats).means[0]
-                delta = separation(self._stats.shifted(centre), scale_of(centre))
-                np.fill_diagonal(delta, np.inf)
-                self.separation_ = delta.min(axis=1)
-            else:
-                self.separation_ = np.full(1, np.inf)
+            self.cluster_sizes_ = np.rint(kept.counts).astype(np.intp)  # estimates after some splits
             self._lo, self._hi = lo, hi
             self.n_samples_seen_ += int(X.shape[0])
         return self

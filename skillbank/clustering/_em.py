@@ -15,7 +15,7 @@ import scipy.sparse
 PRIOR_COUNT = 5.0
 
 __all__ = [
-    "assign", "cluster_sums", "solve_paper", "solve_capped", "stretch_energy", "selection_energy",
+    "assign", "cluster_sums", "solve_paper", "solve_capped", "em_nodes", "stretch_energy", "selection_energy",
     "pairwise_separation", "closest_separation", "local_splits",
 ]
 
@@ -95,6 +95,70 @@ def solve_capped(counts: np.ndarray, sums: np.ndarray, stretch: float,
     lam = min(float(stretch), softening / mu)
     A = np.diag(counts) - lam * _laplacian(n)
     return scipy.linalg.solve(A, sums, assume_a="pos"), lam
+
+
+def em_nodes(X: np.ndarray, nodes: np.ndarray, *, stretch: float, max_iter: int, tol: float, paper: bool,
+             x_sq: np.ndarray | None = None, prior_counts: np.ndarray | None = None,
+             prior_sums: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """EM for a fixed number of nodes, Algorithm 1's inner loop: the nodes after at most ``max_iter`` rounds.
+
+    Each round assigns every point of ``X`` to its nearest node and solves
+    the node equations from each cluster's count and sum, by
+    :func:`solve_paper` (``paper``) or :func:`solve_capped`. ``prior_counts``
+    ``(N,)`` and ``prior_sums`` ``(N, n_features)``, when given, are added to
+    them: points of each cluster that are not in ``X`` and are never
+    reassigned (the earlier members ``partial_fit`` keeps as statistics).
+    Without ``paper`` nodes left with no point are moved to the points
+    farthest from their nodes, as k-means does (EM stops instead when ``X``
+    has fewer points than empty nodes, or the farthest of those points lie
+    on their nodes). EM also stops when the squared node displacement is at
+    most ``tol``.
+
+    Returns
+    -------
+    nodes : ndarray of shape (N, n_features)
+    n_iter : int
+        Rounds run.
+
+    Examples
+    --------
+    >>> X = np.array([[0.0], [1.0], [10.0], [11.0]])
+    >>> nodes, n_iter = em_nodes(X, np.array([[0.0], [1.0]]), stretch=0.0, max_iter=20, tol=0.0, paper=False)
+    >>> nodes.ravel().tolist(), n_iter
+    ([0.5, 10.5], 3)
+    >>> em_nodes(X, nodes, stretch=0.0, max_iter=20, tol=0.0, paper=False, prior_counts=np.array([2.0, 0.0]),
+    ...          prior_sums=np.array([[5.0], [0.0]]))[0].ravel().tolist()
+    [1.5, 10.5]
+    """
+    nodes = nodes.copy()
+    n = nodes.shape[0]
+    n_iter = 0
+    for _ in range(max_iter):
+        n_iter += 1
+        labels, d2 = assign(X, nodes, x_sq)
+        counts, sums = cluster_sums(X, labels, n)
+        if prior_counts is not None:
+            counts, sums = prior_counts + counts, prior_sums + sums
+        if paper:
+            new = solve_paper(counts, sums, stretch)
+        else:
+            empty = np.flatnonzero(counts == 0)
+            if empty.size:
+                far = np.argsort(-d2, kind="stable")[:empty.size]
+                # With prior counts the nodes may outnumber the points of X.
+                if far.size < empty.size or d2[far[-1]] == 0.0:
+                    break
+                nodes[empty] = X[far]
+                continue
+            new, _ = solve_capped(counts, sums, stretch)
+        if not np.all(np.isfinite(new)):
+            raise ValueError(f"stretch: the node equations have no finite solution with stretch={stretch!r}; "
+                             "use a smaller stretching constant")
+        moved = float(np.sum((new - nodes) ** 2))
+        nodes = new
+        if moved <= tol:
+            break
+    return nodes, n_iter
 
 
 def stretch_energy(nodes: np.ndarray) -> float:

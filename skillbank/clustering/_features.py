@@ -148,6 +148,8 @@ class FlatPCAMixin:
 
     #: Cut a count of components larger than the data allows (else it is an error).
     _clip_components = False
+    #: What the training trajectories have in common when PCA finds no variance (the error says it).
+    _no_variance = "the same features (to float64 precision)"
 
     def fit(self, X, y=None):
         """Fit the PCA on the training trajectories."""
@@ -183,8 +185,8 @@ class FlatPCAMixin:
     def _check_variance(self, F):
         """Raise a ValueError when the flattened features leave PCA no variance to keep."""
         if not np.any(F != F[0]) or not F.var(axis=0).sum() > 0.0:  # differences too small to square
-            raise ValueError("X: every trajectory has the same features (to float64 precision), so PCA has "
-                             "no variance to keep; pass n_components=None")
+            raise ValueError(f"X: every trajectory has {self._no_variance}, so PCA has no variance to keep; "
+                             "pass n_components=None")
 
 
 def pca_components(value, shape, *, clip: bool):
@@ -244,6 +246,8 @@ class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
     (4, 2)
     """
 
+    _no_variance = "the same shape once resampled and moved to a common start"
+
     def __init__(self, *, n_points=32, by="arc_length", scale="none", n_components=0.99,
                  random_state=None):
         self.n_points = n_points
@@ -263,9 +267,4 @@ class TrajectoryFeatures(FlatPCAMixin, TransformerMixin, BaseEstimator):
             length = np.linalg.norm(np.diff(R, axis=1), axis=2).sum(axis=1)
             R /= np.where(length > 0, length, 1.0)[:, None, None]
         return R.reshape(R.shape[0], -1)
-
-    def _check_variance(self, F):
-        if not np.any(F != F[0]) or not F.var(axis=0).sum() > 0.0:  # differences too small to square
-            raise ValueError("X: every trajectory has the same shape once resampled and moved to a common "
-                             "start, so PCA has no variance to keep; pass n_components=None")
 

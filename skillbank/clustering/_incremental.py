@@ -40,9 +40,8 @@ from ._em import (
     _shrink,
     assign,
     cluster_sums,
+    em_nodes,
     selection_energy,
-    solve_capped,
-    solve_paper,
 )
 
 __all__ = ["Stats", "Sample", "point_stats", "merge", "pooled", "separation", "energy", "sample_of", "grow",
@@ -197,33 +196,9 @@ def _blank(n: int, d: int) -> Stats:
 
 def _em(X, x_sq, old: Stats, nodes, p, tol_abs, paper: bool):
     """EM on the batch ``X`` with the frozen statistics ``old`` of each cluster counted in each update."""
-    nodes = nodes.copy()
+    nodes, n_iter = em_nodes(X, nodes, stretch=p["stretch"], max_iter=p["max_iter"], tol=tol_abs, paper=paper,
+                             x_sq=x_sq, prior_counts=old.counts, prior_sums=old.counts[:, None] * old.means)
     n = nodes.shape[0]
-    c0, s0 = old.counts, old.counts[:, None] * old.means
-    n_iter = 0
-    for _ in range(p["max_iter"]):
-        n_iter += 1
-        labels, d2 = assign(X, nodes, x_sq)
-        cb, sb = cluster_sums(X, labels, n)
-        counts, sums = c0 + cb, s0 + sb
-        if paper:
-            new = solve_paper(counts, sums, p["stretch"])
-        else:
-            empty = np.flatnonzero(counts == 0)
-            if empty.size:  # only a node without earlier members can be empty: move it to the worst points
-                far = np.argsort(-d2, kind="stable")[:empty.size]
-                if far.size < empty.size or d2[far[-1]] == 0.0:
-                    break
-                nodes[empty] = X[far]
-                continue
-            new, _ = solve_capped(counts, sums, p["stretch"])
-        if not np.all(np.isfinite(new)):
-            raise ValueError(f"stretch: the node equations have no finite solution with stretch="
-                             f"{p['stretch']!r}; use a smaller stretching constant")
-        moved = float(np.sum((new - nodes) ** 2))
-        nodes = new
-        if moved <= tol_abs:
-            break
     labels, _ = assign(X, nodes, x_sq)
     stats = merge(old, point_stats(X, labels, n))
     return nodes, labels, stats, selection_energy(energy(stats, nodes), nodes, p["stretch"]), \

@@ -91,10 +91,14 @@ def test_component_count_is_capped_by_the_data():
         ({"n_points": 2.5}, None, r"n_points: expected an integer > 0, got 2.5"),
         ({}, "single", r"X: expected at least 2 trajectories to fit the PCA, got 1"),
         ({}, [], r"X: expected at least one trajectory, got none"),
+        ({}, "same", r"X: every trajectory has the same features \(to float64 precision\), so PCA has no "
+                     r"variance to keep; pass n_components=None"),
     ],
 )
 def test_errors(kwargs, X, match):
-    data = [_curve(), _curve() * 2] if X is None else ([_curve()] if X == "single" else X)
+    line = np.outer(np.linspace(0.0, 1.0, 30), [1.0, 0.0, 0.0])  # every unit step is exactly (1, 0, 0)
+    named = {None: [_curve(), _curve() * 2], "single": [_curve()], "same": [line, 2.0 * line]}
+    data = X if isinstance(X, list) else named[X]
     with pytest.raises(ValueError, match=match):
         HeadingFeatures(**kwargs).fit_transform(data)
 

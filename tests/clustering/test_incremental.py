@@ -7,8 +7,17 @@ import pytest
 from sklearn.metrics import adjusted_rand_score
 
 from skillbank.clustering import ElasticClustering
-from skillbank.clustering._em import pairwise_separation
-from skillbank.clustering._incremental import SAMPLE_SIZE, Sample, merge, point_stats, pooled, separation
+from skillbank.clustering._em import em_nodes, pairwise_separation
+from skillbank.clustering._incremental import (
+    SAMPLE_SIZE,
+    Sample,
+    _blank,
+    _em,
+    merge,
+    point_stats,
+    pooled,
+    separation,
+)
 
 CENTRES = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [10.0, 10.0, 5.0]])
 
@@ -73,6 +82,46 @@ def test_merged_and_pooled_statistics_are_exact(seed):
     Z = X - X.mean(axis=0)
     np.testing.assert_allclose(one.means[0], X.mean(axis=0), rtol=1e-12)
     np.testing.assert_allclose(one.scatter[0], Z.T @ Z, rtol=1e-8)
+
+
+# -- one EM loop for fit and partial_fit -----------------------------------------------------------
+
+@pytest.mark.parametrize("criterion", ["auto", "paper"])
+@pytest.mark.parametrize("seed", range(3))
+def test_em_from_an_empty_prior_is_the_em_of_fit(criterion, seed):
+    # partial_fit's EM counts earlier members through their statistics; with none it must be fit's EM
+    # to the bit: the same nodes, labels and rounds (its energy is summed from statistics: to round-off).
+    X, _ = blobs(400, seed=seed)
+    X -= X.mean(axis=0)
+    start = X[np.random.default_rng(seed).choice(X.shape[0], 6, replace=False)]
+    start[4:] = start[3]  # ties go to node 3: nodes 4 and 5 start empty, so the empty-node rule runs too
+    # A tolerance that stops "auto" while the nodes still move a little: the stopping rule counts too.
+    model = ElasticClustering(criterion=criterion, stretch=0.4, tol=1e-3)
+    p = model._params()
+    tol = p["tol"] * float(np.mean(np.var(X, axis=0)))
+    x_sq = np.einsum("ij,ij->i", X, X)
+    nodes, labels, e, ok, n_iter = model._em(X, start, p, tol, x_sq)
+    paper = criterion == "paper"
+    i_nodes, i_labels, stats, i_e, i_ok, i_iter = _em(X, x_sq, _blank(6, 3), start, p, tol, paper)
+    assert n_iter > 1 and (i_iter, i_ok) == (n_iter, ok)
+    np.testing.assert_array_equal(i_nodes, nodes)
+    np.testing.assert_array_equal(i_labels, labels)
+    np.testing.assert_array_equal(stats.counts, np.bincount(labels, minlength=6))
+    assert i_e == pytest.approx(e, rel=1e-12)
+
+
+def test_em_counts_earlier_members_and_stops_when_empty_nodes_outnumber_the_points():
+    X = np.array([[0.0], [1.0], [10.0], [11.0]])
+    # No stretch: a node is the mean of its members, two earlier ones summing to 5 included.
+    nodes, n_iter = em_nodes(X, np.array([[0.0], [10.0]]), stretch=0.0, max_iter=20, tol=0.0, paper=False,
+                             prior_counts=np.array([2.0, 0.0]), prior_sums=np.array([[5.0], [0.0]]))
+    assert nodes.ravel().tolist() == [1.5, 10.5] and n_iter == 2
+    # One point for two nodes with no members: nowhere to move both, so they stay where they are.
+    start = np.array([[0.0], [1.0], [2.0], [2.5]])
+    nodes, n_iter = em_nodes(np.array([[3.0]]), start, stretch=0.0, max_iter=20, tol=0.0, paper=False,
+                             prior_counts=np.array([4.0, 0.0, 0.0, 0.0]), prior_sums=np.zeros((4, 1)))
+    np.testing.assert_array_equal(nodes, start)
+    assert n_iter == 1
 
 
 def test_sample_is_uniform_and_bounded():
