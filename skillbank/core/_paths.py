@@ -58,20 +58,33 @@ def resample_many(trajs, times, n_points: int, by: str = "time") -> np.ndarray:
         step = np.zeros(Y.shape[0])
         step[1:] = np.linalg.norm(np.diff(Y, axis=0), axis=1)
         step[first] = 0.0
-        cum = np.cumsum(step)
-        cum -= cum[first][owner]
+        # Each trajectory's own running sum: one over the whole batch, less the sum before the
+        # trajectory, would lose the low bits of a short path after long ones.
+        cum = np.concatenate([np.cumsum(step[f:f + n]) for f, n in zip(first, lengths, strict=True)])
         total = cum[first + lengths - 1]
         progress = np.where((total > 0)[owner], cum / np.where(total > 0, total, 1.0)[owner], by_time)
     else:
         progress = by_time
-    # One global monotone key: trajectory index + progress; query n_points per trajectory.
+    # One global monotone key, trajectory index + progress, finds every query's sample in one
+    # searchsorted. Adding 2k rounds away the low bits of a progress, so the index is then corrected
+    # on the trajectory's own progress, and the weight taken from it: a trajectory resamples to the
+    # same bits wherever it stands in the batch.
     key = 2.0 * owner + progress
-    q = (2.0 * np.arange(len(trajs))[:, None] + np.linspace(0.0, 1.0, n_points)[None, :]).ravel()
+    query = np.linspace(0.0, 1.0, n_points)
+    q = np.tile(query, len(trajs))
     start_of = np.repeat(first, n_points)
-    hi = np.minimum(np.searchsorted(key, q, side="left"), start_of + np.repeat(lengths, n_points) - 1)
+    end_of = start_of + np.repeat(lengths, n_points) - 1
+    hi = np.searchsorted(key, (2.0 * np.arange(len(trajs))[:, None] + query[None, :]).ravel(), side="left")
+    hi = np.clip(hi, start_of, end_of)
+    while True:  # hi: the first sample of the trajectory whose progress is >= q (else its last)
+        up = (progress[hi] < q) & (hi < end_of)
+        down = (hi > start_of) & (progress[np.maximum(hi - 1, 0)] >= q)
+        if not (up.any() or down.any()):
+            break
+        hi = hi + up - down
     lo = np.maximum(hi - 1, start_of)
-    gap = key[hi] - key[lo]
-    w = np.where(gap > 0, (q - key[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
+    gap = progress[hi] - progress[lo]
+    w = np.where(gap > 0, (q - progress[lo]) / np.where(gap > 0, gap, 1.0), 0.0)
     out = Y[lo] + np.clip(w, 0.0, 1.0)[:, None] * (Y[hi] - Y[lo])
     return out.reshape(len(trajs), n_points, Y.shape[1])
 

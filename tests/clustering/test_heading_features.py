@@ -104,6 +104,6 @@ def test_errors(kwargs, X, match):
 
 
 def test_transform_checks_dimensions():
-    model = HeadingFeatures(n_points=5, n_components=2).fit([_curve(), 2 * _curve()])
+    model = HeadingFeatures(n_points=5, n_components=2).fit([_curve(), _curve() ** 2])
     with pytest.raises(ValueError, match=r"X: expected trajectories with 3 dimensions, got 2"):
         model.transform([_curve()[:, :2]])
