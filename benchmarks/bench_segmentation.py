@@ -2,7 +2,8 @@
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/bench_segmentation.py [--quick] [--json PATH]
+    .venv/bin/python benchmarks/bench_segmentation.py [--quick] [--json PATH] [--roundoff]
+    .venv/bin/python benchmarks/bench_segmentation.py --sweep [--sweep-seeds 80] [--json PATH]
 
 Cases
 -----
@@ -32,6 +33,13 @@ and time stamp rounded to 12 significant digits (what a CSV written with
 they agree within one window, the stride the jerk was taken over, the time,
 and how much of each copy's single-sample jerk is round-off (median of
 |jerk(copy) - jerk(exact)| over the median |jerk(exact)|).
+
+With ``--sweep`` (and nothing timed): the same comparison over seeds 0 to
+``--sweep-seeds`` - 1 of the same motion, with 7 corners (the motion of
+``tests/segmentation/test_roundoff_cuts.py``), for 12 digits at 10^4 and
+10^5 samples and 8 digits at 10^4: in how many seeds the keypoints agree
+within one window (and there are at least 3), which seeds differ, and in how
+many the two copies' jerk was taken over the same stride.
 
 Every figure is the best of several repeats (``time.perf_counter``). The loop
 baseline is timed in the same run; at 10^5 and 10^6 samples it runs once, and
@@ -122,6 +130,40 @@ def roundoff_rows(sizes=(10_000, 100_000, 1_000_000), seeds=(0, 1, 2)) -> list:
                          "seconds_full": full_s, "seconds_12_digits": copy_s,
                          "jerk_roundoff": float(np.median(np.abs(noisy - exact)) / np.median(exact))})
     return rows
+
+
+#: The sweep's cases: (samples, significant digits of the copy).
+SWEEP_CASES = ((10_000, 12), (100_000, 12), (10_000, 8))
+
+
+def roundoff_sweep(n_seeds: int = 80, cases=SWEEP_CASES) -> list:
+    """Per case, over seeds ``0 .. n_seeds - 1``: full precision against a copy at so many digits."""
+    rows = []
+    for n, digits in cases:
+        differ, same_stride = [], 0
+        for seed in range(n_seeds):
+            demo = synthetic_demo(n, seed=seed)
+            copy = Demonstration(written(demo.t, digits), {"position": written(demo["position"], digits)})
+            full, cut = segment(demo), segment(copy)
+            window = full.streams["position"].params["window"]
+            agree = full.keypoints.size >= 3 and full.keypoints.size == cut.keypoints.size and bool(
+                np.abs(full.keypoints - cut.keypoints).max() <= window)
+            if not agree:
+                differ.append(seed)
+            same_stride += full.streams["position"].jerk_step == cut.streams["position"].jerk_step
+        rows.append({"n_samples": n, "digits": digits, "seeds": n_seeds, "agree": n_seeds - len(differ),
+                     "differ": differ, "same_stride": int(same_stride)})
+    return rows
+
+
+def sweep_report(rows: list) -> str:
+    lines = ["full precision against copies with fewer significant digits, keypoints within one window "
+             "(default parameters, 7 corners):",
+             f"{'n':>8} {'digits':>6} {'agree':>9} {'same stride':>12}  seeds that differ"]
+    for r in rows:
+        lines.append(f"{r['n_samples']:>8} {r['digits']:>6} {r['agree']:>4} / {r['seeds']:<3} "
+                     f"{r['same_stride']:>5} / {r['seeds']:<4}  {r['differ'] or '-'}")
+    return "\n".join(lines)
 
 
 def roundoff_report(rows: list) -> str:
@@ -238,7 +280,16 @@ def main(argv=None) -> None:
     parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
     parser.add_argument("--roundoff", action="store_true",
                         help="also compare full precision with a 12-digit copy (10^4 to 10^6 samples)")
+    parser.add_argument("--sweep", action="store_true",
+                        help="only the agreement of full precision and copies, over many seeds (no timing)")
+    parser.add_argument("--sweep-seeds", type=int, default=80, help="seeds of --sweep (default 80)")
     args = parser.parse_args(argv)
+    if args.sweep:
+        results = {"sweep": roundoff_sweep(args.sweep_seeds)}
+        print(sweep_report(results["sweep"]))
+        if args.json:
+            Path(args.json).write_text(json.dumps(results, indent=2))
+        return
     results = run(args.quick)
     print(report(results))
     if args.roundoff:

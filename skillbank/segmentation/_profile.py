@@ -44,8 +44,9 @@ RIPPLE_RATIO = 1e-6
 #: round-off could add more than this fraction of a typical event to the
 #: profile (a fortieth of the default threshold, 0.4: it can neither make nor
 #: hide an event), or could pick the peaks that set the robust scale. The seed
-#: data stay below it: ~1e-9 for the R demos, 0.4 % for the three-button
-#: joints, two of which are stored as float32.
+#: data stay below it: 0.02-0.08 % for the R demos (their round-off is the
+#: floor, a 32-bit step of each range), 0.4 % for the three-button joints, two
+#: of which are stored as float32.
 ROUNDOFF_SHARE = 1e-2
 
 #: Once the round-off matters, the stride grows until the round-off adds at
@@ -280,9 +281,13 @@ def jerk_profile(t, Y, *, window: int, scale: str = "relative", normalize: str =
     out of the robust scale. The round-off is the half step of the grid the
     values and the time stamps lie on (a time stamp off by ``e`` acts as a
     value off by ``speed * e``), or less where the values' third differences
-    show less (exact values on a coarse grid, such as a gripper at 0 or 1).
-    Data at full precision on a grid coarse enough for the jerk (all the seed
-    data) are left exactly as they were.
+    show less (exact values on a coarse grid, such as a gripper at 0 or 1),
+    but never less than half a 32-bit step of the stream's (or the clock's)
+    range: digits finer than that are arithmetic, not measurement, so that a
+    full-precision original and its copy written with 12 significant digits
+    are differentiated over the same stride and cut at the same places. Data
+    sampled coarsely enough for the jerk (all the seed data) are left exactly
+    as they were; a slow motion sampled at 1 kHz is not.
 
     Parameters
     ----------
@@ -411,8 +416,9 @@ def _stream_jerk(t, Y, speed, *, window: int, scale: str, normalize: str, grace:
     levels = (roundoff_level(Y), roundoff_level(t)[0])
     if matters(levels):
         # the grid's half step bounds the round-off; exact values on a coarse grid have none
-        levels = (roundoff_level(Y, empirical=True), roundoff_level(t, empirical=True)[0])
-        if matters(levels):
+        # (above the floor: a full-precision stream's levels are the floor either way)
+        grid, levels = levels, (roundoff_level(Y, empirical=True), roundoff_level(t, empirical=True)[0])
+        if (np.array_equal(grid[0], levels[0]) and grid[1] == levels[1]) or matters(levels):
             cap = max(1, min(window // MAX_STEP_DIVISOR, (n - 1) // STENCIL_REACH))
             while True:
                 noise = noise_of(levels, step)

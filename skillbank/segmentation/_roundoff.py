@@ -8,13 +8,20 @@ kept at full precision does not, so two copies of one trajectory were cut at
 different places. This module estimates the round-off per value, from the
 grid the values lie on, so that the segmenter can differentiate over a wider
 stride where the round-off would otherwise dominate.
+
+The estimate has a floor, shared by every copy of a stream: half a step of a
+32-bit count over the stream's range. Otherwise the stride would follow the
+digits a file happened to keep: a full-precision original (differentiated
+over single samples) and its 12-digit copy (over a stride) measured the jerk
+at different scales, which moved an event at the detection threshold by a few
+per cent, enough to cut one and not the other.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["value_resolution", "roundoff_level", "empirical_level"]
+__all__ = ["value_resolution", "roundoff_level", "empirical_level", "resolution_floor"]
 
 #: The representation is read off this many values spread over the array (and
 #: its largest one): a file's precision is the same throughout, and formatting
@@ -35,6 +42,15 @@ DECIMAL_DIGITS = 15
 THIRD_DIFFERENCE_GAIN = np.sqrt(20.0)
 MAD_PER_SIGMA = 0.6745
 HALF_STEP_PER_SIGMA = np.sqrt(3.0)
+
+#: No recorded stream resolves its values, or its time stamps, more finely
+#: than a count of this many bits over its range (encoders and converters
+#: have at most 24; a controller clock jitters by microseconds, 2^-32 of an hour).
+#: Digits beyond that are arithmetic, not measurement: a full-precision
+#: original and a copy written with 12 significant digits then share one
+#: level, and the jerk is measured at one scale, set by the motion and the
+#: sampling rather than by how many digits a file happened to keep.
+RANGE_BITS = 32
 
 
 def _sample(x: np.ndarray, biggest: int) -> np.ndarray:
@@ -134,23 +150,49 @@ def empirical_level(x) -> np.ndarray:
     return HALF_STEP_PER_SIGMA * mad / (MAD_PER_SIGMA * THIRD_DIFFERENCE_GAIN)
 
 
+def resolution_floor(x) -> np.ndarray:
+    """Per-column least round-off of ``x``: half a step of a ``RANGE_BITS``-bit count over the column's range.
+
+    Examples
+    --------
+    >>> resolution_floor(np.column_stack([np.linspace(0.0, 2.0**33, 5), np.ones(5)])).tolist()
+    [1.0, 0.0]
+    """
+    x = np.asarray(x, dtype=float)
+    x = x.reshape(x.shape[0], -1)
+    if x.shape[0] == 0:
+        return np.zeros(x.shape[1])
+    # column by column: a reduction over the rows of a narrow array is ten times slower
+    spans = np.array([x[:, k].max() - x[:, k].min() for k in range(x.shape[1])])
+    return spans * 2.0 ** -(RANGE_BITS + 1)
+
+
 def roundoff_level(x, *, empirical: bool = False) -> np.ndarray:
-    """Per-column round-off of ``x``: :func:`value_resolution`, or less where the data show less.
+    """Per-column round-off of ``x``: :func:`value_resolution`, less where the data show less, above a floor.
 
     With ``empirical=True``, each column's level is the smaller of its grid's
     half step and :func:`empirical_level`: exact values on a coarse grid (a
-    held signal) then count as exact.
+    held signal) then count as exact, to within the floor. The floor is
+    :func:`resolution_floor`, half a ``RANGE_BITS``-bit step of the column's
+    range: a value known more finely than that was computed, not measured, and
+    a copy that keeps fewer digits but still more than that is the same data.
 
     Examples
     --------
     >>> roundoff_level(np.column_stack([np.repeat([0.0, 1.0], 50), np.zeros(100)])).tolist()
     [0.5, 0.0]
-    >>> roundoff_level(np.repeat([0.0, 1.0], 50), empirical=True).tolist()
-    [0.0]
+    >>> roundoff_level(np.repeat([0.0, 1.0], 50), empirical=True).tolist() == [2.0**-33]  # the floor
+    True
+    >>> bool(roundoff_level(np.linspace(1, 2, 50) ** 0.5)[0] == (2**0.5 - 1) * 2.0**-33)  # float64: the floor
+    True
     """
     x = np.asarray(x, dtype=float)
     x = x.reshape(x.shape[0], -1)
     level = np.array([value_resolution(x[:, k]) for k in range(x.shape[1])])
-    if empirical:
-        level = np.minimum(level, empirical_level(x))
-    return level
+    floor = resolution_floor(x)
+    # the data can show a grid too coarse only where it is coarser than the floor (which
+    # spares the median of every third difference of a full-precision stream)
+    coarse = level > floor
+    if empirical and coarse.any():
+        level[coarse] = np.minimum(level[coarse], empirical_level(x[:, coarse]))
+    return np.maximum(level, floor)

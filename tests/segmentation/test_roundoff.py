@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import skillbank.io as sio
@@ -10,7 +10,12 @@ from skillbank import Demonstration
 from skillbank.experiments import synthetic_multistream
 from skillbank.segmentation import jerk, jerk_profile, segment
 from skillbank.segmentation._profile import normalize_profile
-from skillbank.segmentation._roundoff import empirical_level, roundoff_level, value_resolution
+from skillbank.segmentation._roundoff import (
+    empirical_level,
+    resolution_floor,
+    roundoff_level,
+    value_resolution,
+)
 
 
 def _digits(x, p):
@@ -55,7 +60,43 @@ def test_empirical_level_sees_rounding_and_ignores_held_values():
     held = np.repeat([0.0, 1.0, 0.0], 100)
     assert empirical_level(held).tolist() == [0.0]
     assert roundoff_level(held).tolist() == [0.5]  # on a grid of step 1 ...
-    assert roundoff_level(held, empirical=True).tolist() == [0.0]  # ... but exact
+    assert roundoff_level(held, empirical=True).tolist() == [2.0**-33]  # ... but exact, to within the floor
+
+
+# ------------------------------------------------------------------ the floor
+
+
+def test_floor_is_half_a_32_bit_step_of_the_range():
+    assert resolution_floor(np.linspace(-2.0**31, 2.0**31, 7)).tolist() == [0.5]
+    t = np.linspace(5.0, 105.0, 1001)  # a clock: its range is the duration, wherever it starts
+    assert resolution_floor(t).tolist() == [100.0 * 2.0**-33]
+    assert resolution_floor(np.full((4, 2), 3.0)).tolist() == [0.0, 0.0]
+    # full-precision values: the floor is the level (float64's own half step is 1e-16 of them)
+    x = np.sin(np.linspace(0.0, 3.0, 500))
+    assert roundoff_level(x).tolist() == resolution_floor(x).tolist()
+    # values whose grid is coarser than the floor keep their grid
+    assert roundoff_level(_digits(x, 8))[0] == pytest.approx(5e-9)
+
+
+def test_original_and_12_digit_copy_share_one_level_but_not_an_8_digit_one():
+    i = np.arange(100_000)
+    t = np.cumsum(1e-3 * (1.0 + 0.2 * np.sin(i / 5e3)))  # an uneven clock (a regular one is a short decimal)
+    Y = np.column_stack([np.sin(t / 7.0), 0.5 * np.cos(t / 3.0) + 0.2])
+    for x in (Y, t):
+        assert roundoff_level(_digits(x, 12)) == pytest.approx(roundoff_level(x), rel=1e-9)
+        assert np.all(roundoff_level(_digits(x, 8)) > 2 * roundoff_level(x))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1e3, 1e3), min_size=2, max_size=200))
+def test_property_a_12_digit_copy_has_the_originals_level(values):
+    # the floor, half a 32-bit step of the range (1.2e-10 of it), is above 12 digits' half step
+    # (at most 5e-12 of the largest value) unless the values sit far from zero next to their range
+    x = np.array(values)
+    assume(np.ptp(x) > 0 and np.abs(x).max() <= np.ptp(x))
+    level = roundoff_level(x)
+    assert level[0] >= resolution_floor(x)[0]
+    assert roundoff_level(_digits(x, 12)) == pytest.approx(level, rel=1e-9)
 
 
 # ------------------------------------------------------------------ strided jerk
@@ -108,12 +149,12 @@ def test_noisy_copy_is_strided_and_public_building_blocks_agree():
     s = np.clip(np.abs(((t / 25.0) % 2.0) - 1.0) * 1.6 - 0.3, 0.0, 1.0)
     Y = np.column_stack([10 * s**3 - 15 * s**4 + 6 * s**5, np.sin(t / 9.0)])
     full = segment(Demonstration(t, {"position": Y}))
-    copy = segment(Demonstration(t, {"position": _digits(Y, 10)}))
-    assert full.streams["position"].jerk_step == 1
+    copy = segment(Demonstration(t, {"position": _digits(Y, 8)}))
+    # at 1 kHz even the floor (a 32-bit step of each range) swamps this slow motion's jerk; 8 digits more
     stream = copy.streams["position"]
-    assert stream.jerk_step > 1
+    assert stream.jerk_step > full.streams["position"].jerk_step > 1
     p = stream.params
-    raw, profile = jerk_profile(t, _digits(Y, 10), window=p["window"], grace=p["grace"])
+    raw, profile = jerk_profile(t, _digits(Y, 8), window=p["window"], grace=p["grace"])
     np.testing.assert_array_equal(raw, stream.jerk)
     np.testing.assert_array_equal(profile, stream.profile)
 
