@@ -172,3 +172,26 @@ def test_the_three_button_skill_presses_four_new_buttons_with_one_continuous_joi
     peak = np.abs(np.diff(J, axis=0) / np.diff(traj.t)[:, None]).max()
     assert peak <= 1.0 + 1e-9
     assert set(res.to_dict()) >= {"plan", "steps", "t", "streams", "collision", "constraint_error"}
+
+
+@pytest.mark.parametrize("branch", [1, 4, 7])  # wrist down; shoulder right; both, with the elbow down
+def test_a_start_on_another_ik_branch_is_followed_through_every_step(button_library, branch):
+    """The recorded presses are shoulder-left/elbow-up/wrist-up; a robot that starts on another branch
+    stays on it: each step's inverse kinematics is seeded with the joints the last one ended on."""
+    from skillbank.robots import robot_model
+
+    robot = robot_model("ur5e")
+    q = [0.0, 0.94, -0.33, 0.08]
+    buttons = [[-0.3, -0.45, 0.12], [0.0, -0.6, 0.1], [0.25, -0.55, 0.11], [0.35, -0.4, 0.13]]
+    recorded = {robot.branch_of(p.demo["joints"])[0] for p in button_library.skill("press")}
+    assert recorded == {0} and branch not in recorded
+    start_q = np.array([0.038, 0.955, -0.283, 0.078]) / np.linalg.norm([0.038, 0.955, -0.283, 0.078])
+    start = robot.ik_all(np.array([[-0.356, -0.416, 0.176]]), start_q[None])[0, branch]
+    doc = button_scene(buttons, goal=["b4", "b2", "b1", "b3"], orientation=q,
+                       obstacles={"post": "sphere:0.12,-0.58,0.16,0.03"})
+    doc["start"] = {"joints": start.tolist()}
+    res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e", limits={"joint_velocity": 1.0})
+    J = res.trajectory["joints"]
+    np.testing.assert_allclose(J[0], start, atol=1e-12)
+    assert res.join_error["joints"] < 1e-9 and np.abs(np.diff(J, axis=0)).max() < 0.05
+    assert set(robot.branch_of(J).tolist()) == {branch}
