@@ -65,7 +65,8 @@ def run(args) -> int:
     representation(args.method)  # an unknown name fails first, listing the registry's
     constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle,
                                         start_orientation=args.start_orientation,
-                                        goal_orientation=args.goal_orientation)
+                                        goal_orientation=args.goal_orientation,
+                                        via_orientation=args.via_orientation)
     execution = execution_params(args)
     check_robot(args)
     kind = output_format(args)

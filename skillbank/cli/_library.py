@@ -415,7 +415,8 @@ def _reuse(args) -> int:
 
     constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle,
                                         start_orientation=args.start_orientation,
-                                        goal_orientation=args.goal_orientation)
+                                        goal_orientation=args.goal_orientation,
+                                        via_orientation=args.via_orientation)
     options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
     execution = execution_params(args)
     check_robot(args)

@@ -28,7 +28,7 @@ SCHEDULER_VARIABLE = "SKILLBANK_SCHEDULER"
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
 CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity",
-                      "--start-orientation", "--goal-orientation")
+                      "--start-orientation", "--goal-orientation", "--via-orientation")
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
 _SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "combine",
                   "stream_kinds", "mode")
@@ -275,6 +275,8 @@ def add_constraint_options(p) -> None:
                    help="orientation at the start: a unit quaternion, scalar-last (as ROS and scipy)")
     p.add_argument("--goal-orientation", default=None, metavar="QX,QY,QZ,QW",
                    help="orientation at the goal: a unit quaternion, scalar-last")
+    p.add_argument("--via-orientation", action="append", default=[], metavar="PHASE:QX,QY,QZ,QW",
+                   help="orientation at a phase in [0, 1]: a unit quaternion, scalar-last (repeatable)")
 
 
 def add_execution_options(p) -> None:
@@ -326,7 +328,8 @@ def _numbers(text: str, name: str, whole) -> list[float]:
 
 
 def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_velocity=None,
-                          end_velocity=None, start_orientation=None, goal_orientation=None):
+                          end_velocity=None, start_orientation=None, goal_orientation=None,
+                          via_orientation=()):
     """Build :class:`~skillbank.core.Constraints` from command-line strings.
 
     Parameters
@@ -335,6 +338,10 @@ def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_v
         ``"X,Y[,Z...]"``.
     via : sequence of str
         ``"PHASE:X,Y[,Z...]"`` with PHASE in [0, 1].
+    start_orientation, goal_orientation : str, optional
+        ``"QX,QY,QZ,QW"``: a unit quaternion, scalar-last.
+    via_orientation : sequence of str
+        ``"PHASE:QX,QY,QZ,QW"`` with PHASE in [0, 1].
     obstacle : sequence of str
         Obstacle specs, see :func:`skillbank.core.parse_obstacle`.
 
@@ -344,16 +351,23 @@ def constraints_from_args(start=None, goal=None, via=(), obstacle=(), *, start_v
     ...                           obstacle=["sphere:0.5,0.5,0.1"])
     >>> c.n_dims, len(c.via), c.obstacles[0].radius
     (2, 1, 0.1)
+    >>> constraints_from_args(via_orientation=["0.5:0,0,1,0"]).via_orientation[0].position.tolist()
+    [0.0, 0.0, 1.0, 0.0]
     """
-    via, obstacle = ([v] if isinstance(v, str) else v for v in (via, obstacle))
-    vias = []
-    for text in via or ():
-        phase, sep, coords = str(text).partition(":")
-        if not sep:
-            raise ValueError(f"via: expected 'PHASE:X,Y[,Z]', got {text!r}")
-        vias.append(ViaPoint(_numbers(coords, "via", text), phase=_number(phase, "via phase", text)))
+    via, obstacle, via_orientation = ([v] if isinstance(v, str) else v
+                                      for v in (via, obstacle, via_orientation))
+    vias = [_via(text, "via", "X,Y[,Z]") for text in via or ()]
+    turns = [_via(text, "via-orientation", "QX,QY,QZ,QW") for text in via_orientation or ()]
     obstacles = [parse_obstacle(str(text)) for text in (obstacle or ())]
     given = dict(start=start, goal=goal, start_velocity=start_velocity, end_velocity=end_velocity,
                  start_orientation=start_orientation, goal_orientation=goal_orientation)
     vec = {k: None if v is None else _numbers(str(v), k, v) for k, v in given.items()}
-    return Constraints(via=vias, obstacles=obstacles, **vec)
+    return Constraints(via=vias, obstacles=obstacles, via_orientation=turns, **vec)
+
+
+def _via(text, name: str, coords: str) -> ViaPoint:
+    """``"PHASE:V1,V2,..."`` as a ViaPoint; ``name`` and ``coords`` for the message."""
+    phase, sep, values = str(text).partition(":")
+    if not sep:
+        raise ValueError(f"{name}: expected 'PHASE:{coords}', got {text!r}")
+    return ViaPoint(_numbers(values, name, text), phase=_number(phase, f"{name} phase", text))

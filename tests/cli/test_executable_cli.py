@@ -107,6 +107,30 @@ def test_edit_carries_the_streams_and_adds_joints(cli, buttons, tmp_path):
     assert np.abs(position - np.array(doc["trajectory"])).max() < 1e-9
 
 
+def test_via_orientations_are_met_where_they_are_asked_for(cli, buttons, tmp_path):
+    """``--via-orientation PHASE:Q`` (repeatable) on reuse and edit: the pose turns through them."""
+    from skillbank import Constraints
+
+    demo = load(buttons["file"]).slice(1385, 2074)
+    path = write_npz(demo, tmp_path / "move.npz")
+    mid = exp_map([0.0, 0.0, np.radians(25.0)], reference=demo["orientation"][len(demo["orientation"]) // 2])
+    late = exp_map([np.radians(-15.0), 0.0, 0.0], reference=demo["orientation"][-1])
+    vias = ["--via-orientation", f"0.5:{_q(mid)}", "--via-orientation", f"0.8:{_q(late)}"]
+    for argv in (("edit", path, "--method", "lte"),
+                 ("library", "reuse", buttons["db"], "--skill", "button", "--method", "ja", "--goal",
+                  ",".join(f"{v:.6f}" for v in buttons["goal"]))):
+        code, text, err = cli(*argv, *vias, "--json")
+        assert code == 0, err
+        doc = json.loads(text)
+        Q = np.array(doc["streams"]["orientation"])
+        idx, wanted = Constraints(via_orientation=[(0.5, mid), (0.8, late)]).resolve_orientation(len(Q))
+        assert quaternion_angle(Q[idx], wanted).max() < 1e-9 and doc["orientation_error"] < 1e-9, argv[0]
+        assert np.abs(np.diff(Q, axis=0)).max() < 0.05  # a continuous turn, not a jump at the via-points
+    code, _, err = cli("edit", path, "--via-orientation", "0.5:0,0,1")
+    assert code == 2 and "via_orientation[0]: expected" in err and err.count("\n") == 1, err
+    code, _, err = cli("edit", path, "--via-orientation", "0,0,0,1")
+    assert code == 2 and "via-orientation: expected 'PHASE:QX,QY,QZ,QW', got '0,0,0,1'" in err, err
+
 def _plain_library(tmp_path):
     from skillbank import Library
 
