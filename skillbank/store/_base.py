@@ -9,9 +9,10 @@ never segments, featurises or clusters: :class:`skillbank.pipeline.Library`
 does that and hands the store the results.
 
 Every write method is one transaction: it happens completely or not at all,
-and concurrent writers are serialised by the backend. A second backend
-(PostgreSQL, say) is one subclass of :class:`Store` and one line in
-:data:`skillbank.store.STORES`.
+and concurrent writers are serialised by the backend. A new backend is one
+subclass of :class:`Store` and one line in :data:`skillbank.store.STORES`; a
+SQL database subclasses :class:`skillbank.store._sql.SQLStore`, which writes
+every query once, and gives only its connection and dialect.
 """
 
 from __future__ import annotations

@@ -1,14 +1,26 @@
-"""Reading and writing demonstrations and primitives in an open library connection."""
+"""A library's rows, written once for every SQL backend: demonstrations, primitives, and the transfer records.
+
+Every function here takes a :class:`~skillbank.store._sql.Session` open in
+the caller's transaction: SQL written with ``?`` markers, which the session
+gives the driver in its own style, and ``db.new_ids`` for the backend's id
+counters. Arrays are ``.npy`` bytes (never pickles), JSON is text.
+:class:`SQLRecords` is the records protocol of :mod:`skillbank.store._transfer`
+(export, import, copy) over any :class:`~skillbank.store._sql.SQLStore`.
+"""
 
 from __future__ import annotations
+
+import contextlib
 
 from ..core import Demonstration
 from ._arrays import from_json, from_npy, to_json, to_npy
 from ._schema import now
+from ._transfer import COUNTED, current_descriptions, demonstration_record, version_record
 
-__all__ = ["insert_demonstration", "load_demonstrations", "primitive_demo", "chunks"]
+__all__ = ["encode", "insert", "load_demonstrations", "primitive_demo", "chunks", "placeholders",
+           "SQLRecords"]
 
-_CHUNK = 500  # ids per IN (...) query, well under SQLite's variable limit
+_CHUNK = 500  # ids per IN (...) query (well under SQLite's variable limit), and demonstrations read at a time
 
 
 def chunks(ids):
@@ -19,53 +31,92 @@ def chunks(ids):
 
 
 def placeholders(n: int) -> str:
-    """``?, ?, ...`` for ``n`` bound parameters."""
+    """``?, ?, ...`` for ``n`` bound parameters.
+
+    Examples
+    --------
+    >>> placeholders(3)
+    '?, ?, ?'
+    """
     return ", ".join("?" * n)
 
 
-def insert_demonstration(conn, demo: Demonstration, bounds, *, source, labels, provenance, created=None,
-                         demo_id=None, primitive_ids=None) -> tuple:
-    """Insert a demonstration, its streams and its primitives; returns ``(demo_id, primitive_ids)``.
+def encode(demo: Demonstration, bounds, *, source, labels, provenance, created=None) -> dict:
+    """A demonstration's rows, serialised before the transaction (so the write lock is held shorter).
+
+    ``labels`` holds one label (or None) per bound; ``provenance`` is
+    ``(kind, params, created)`` or None; ``created`` defaults to now.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> e = encode(Demonstration.from_array(np.c_[t, t], t), [(0, 5)], source=None, labels=[None],
+    ...            provenance=None)
+    >>> e["n_steps"], e["bounds"], [name for name, _, _ in e["streams"]]
+    (5, [(0, 5)], ['position'])
+    """
+    return {"source": source, "n_steps": demo.n_steps, "t": to_npy(demo.t),
+            "metadata": to_json(demo.metadata), "created": created or now(), "labels": list(labels),
+            "streams": [(name, k, to_npy(arr)) for k, (name, arr) in enumerate(demo.streams.items())],
+            "bounds": [(int(a), int(b)) for a, b in bounds],
+            "provenance": None if provenance is None else (provenance[0], to_json(provenance[1]),
+                                                           provenance[2] or now())}
+
+
+_INSERTS = (
+    ("provenance", "INSERT INTO provenance (id, kind, params, created) VALUES (?, ?, ?, ?)"),
+    ("demonstrations", "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, "
+                       "provenance_id) VALUES (?, ?, ?, ?, ?, ?, ?)"),
+    ("streams", "INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)"),
+    ("primitives", "INSERT INTO primitives (id, demonstration_id, start, stop, label) "
+                   "VALUES (?, ?, ?, ?, ?)"),
+)
+
+
+def insert(db, encoded: list, *, demo_ids=None, primitive_ids=None) -> list:
+    """Insert :func:`encode`-d demonstrations with their streams, primitives and provenance.
 
     The one place that writes these rows, for new demonstrations and for
-    imported ones. ``labels`` holds one label (or None) per bound;
-    ``provenance`` is ``(kind, params, created)`` or None; ``created`` defaults
-    to now; ``demo_id`` and ``primitive_ids`` keep given ids (an import into an
-    empty library), else the database assigns them. The caller holds the
-    transaction.
+    imported ones. Ids come from the backend's counters (``db.new_ids``), or
+    ``demo_ids`` and ``primitive_ids`` keep given ones (an import into an
+    empty library). One batched statement per table. Returns
+    ``[(demonstration id, [primitive ids])]``.
     """
-    prov_id = None
-    if provenance is not None:
-        kind, params, prov_created = provenance
-        prov_id = conn.execute("INSERT INTO provenance (kind, params, created) VALUES (?, ?, ?)",
-                               (kind, to_json(params), prov_created or now())).lastrowid
-    demo_id = conn.execute(
-        "INSERT INTO demonstrations (id, source, n_steps, t, metadata, created, provenance_id) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?)",
-        (demo_id, source, demo.n_steps, to_npy(demo.t), to_json(demo.metadata), created or now(),
-         prov_id)).lastrowid
-    conn.executemany(
-        "INSERT INTO streams (demonstration_id, name, position, data) VALUES (?, ?, ?, ?)",
-        [(demo_id, name, k, to_npy(arr)) for k, (name, arr) in enumerate(demo.streams.items())])
-    ids = [None] * len(bounds) if primitive_ids is None else primitive_ids
-    prim_ids = [conn.execute("INSERT INTO primitives (id, demonstration_id, start, stop, label) "
-                             "VALUES (?, ?, ?, ?, ?)", (i, demo_id, int(a), int(b), lab)).lastrowid
-                for i, (a, b), lab in zip(ids, bounds, labels, strict=True)]
-    return demo_id, prim_ids
+    prov = iter(db.new_ids("provenance", sum(e["provenance"] is not None for e in encoded)))
+    dids = db.new_ids("demonstrations", len(encoded), demo_ids)
+    pids = iter(db.new_ids("primitives", sum(len(e["bounds"]) for e in encoded), primitive_ids))
+    rows: dict = {table: [] for table, _ in _INSERTS}
+    out = []
+    for e, did in zip(encoded, dids, strict=True):
+        prov_id = None
+        if e["provenance"] is not None:
+            prov_id = next(prov)
+            rows["provenance"].append((prov_id, *e["provenance"]))
+        rows["demonstrations"].append((did, e["source"], e["n_steps"], e["t"], e["metadata"], e["created"],
+                                       prov_id))
+        rows["streams"] += [(did, name, k, data) for name, k, data in e["streams"]]
+        mine = [next(pids) for _ in e["bounds"]]
+        rows["primitives"] += [(p, did, a, b, lab)
+                               for p, (a, b), lab in zip(mine, e["bounds"], e["labels"], strict=True)]
+        out.append((did, mine))
+    for table, sql in _INSERTS:
+        db.executemany(sql, rows[table])
+    return out
 
 
-def load_demonstrations(conn, ids) -> dict:
-    """Demonstrations by id, streams in their stored order."""
+def load_demonstrations(db, ids) -> dict:
+    """Demonstrations by id, streams in their stored order; ValueError naming a missing one."""
     ids = sorted({int(i) for i in ids})
     rows, streams = {}, {}
     for part in chunks(ids):
         q = placeholders(len(part))
-        for did, t, meta in conn.execute(
-                f"SELECT id, t, metadata FROM demonstrations WHERE id IN ({q})", part):
+        for did, t, meta in db.execute(f"SELECT id, t, metadata FROM demonstrations WHERE id IN ({q})",
+                                       part).fetchall():
             rows[did] = (from_npy(t), from_json(meta))
-        for did, name, data in conn.execute(
+        for did, name, data in db.execute(
                 f"SELECT demonstration_id, name, data FROM streams WHERE demonstration_id IN ({q}) "
-                "ORDER BY demonstration_id, position", part):
+                "ORDER BY demonstration_id, position", part).fetchall():
             streams.setdefault(did, {})[name] = from_npy(data)
     missing = [i for i in ids if i not in rows]
     if missing:
@@ -78,3 +129,123 @@ def primitive_demo(parent: Demonstration, pid: int, did: int, start: int, stop: 
     demo = parent.slice(start, stop)
     demo.metadata.update(primitive_id=int(pid), demonstration_id=int(did))
     return demo
+
+
+class SQLRecords:
+    """The records protocol of :mod:`skillbank.store._transfer` over a SQL store (both backends).
+
+    ``store`` (a :class:`~skillbank.store._sql.SQLStore`) gives the
+    transactions: :meth:`snapshot` is its ``_read()`` (one consistent state
+    while others write), :meth:`writing` its ``_write("import")`` (one
+    transaction under the library's write lock); its id counters come in
+    through the session's ``new_ids`` and the store's ``_counters`` /
+    ``_set_counters``.
+    """
+
+    def __init__(self, store):
+        self.store = store
+        self.db = None
+
+    @contextlib.contextmanager
+    def snapshot(self):
+        """A read transaction: one consistent state while others write."""
+        with self.store._read() as self.db:
+            yield self
+
+    @contextlib.contextmanager
+    def writing(self):
+        """One write transaction (concurrent writers queue on the library's lock)."""
+        with self.store._write("import") as self.db:
+            yield self
+
+    def counts(self) -> tuple:
+        """``(demonstrations, clustering versions)`` stored."""
+        return tuple(self.db.execute("SELECT (SELECT COUNT(*) FROM demonstrations), "
+                                     "(SELECT COUNT(*) FROM cluster_versions)").fetchone())
+
+    def demonstrations(self) -> tuple:
+        """``(count, iterator of demonstration records by id)``, read one at a time."""
+        db = self.db
+        rows = db.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
+                          "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
+                          "ORDER BY d.id").fetchall()
+
+        def records():
+            for did, source, created, kind, params, p_created in rows:
+                prims = db.execute("SELECT id, start, stop, label FROM primitives "
+                                   "WHERE demonstration_id = ? ORDER BY id", (did,)).fetchall()
+                yield demonstration_record(did, source, created, (kind, params, p_created), prims,
+                                           load_demonstrations(db, [did])[did])
+
+        return len(rows), records()
+
+    def versions(self):
+        """Clustering version records, oldest first."""
+        db = self.db
+        for v, created, params, n, centers, mean, comps in db.execute(
+                "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
+                "FROM cluster_versions ORDER BY version").fetchall():
+            members = db.execute("SELECT primitive_id, cluster, features, assigned FROM cluster_members "
+                                 "WHERE version = ? ORDER BY primitive_id", (v,)).fetchall()
+            labels = db.execute("SELECT cluster, label FROM cluster_labels WHERE version = ? "
+                                "ORDER BY cluster", (v,)).fetchall()
+            yield version_record(v, created, params, n, (centers, mean, comps), members, labels)
+
+    def lengths(self, n_steps):
+        """``{id: Demonstration}`` chunks of the stored demonstrations with one of the lengths ``n_steps``."""
+        lengths = sorted({int(n) for n in n_steps})
+        ids = [r[0] for part in chunks(lengths) for r in self.db.execute(
+            f"SELECT id FROM demonstrations WHERE n_steps IN ({placeholders(len(part))})", part).fetchall()]
+        for part in chunks(sorted(ids)):  # a chunk at a time: memory stays bounded on a large library
+            yield load_demonstrations(self.db, part)
+
+    def insert_demonstration(self, d, *, keep_id: bool) -> tuple:
+        """Insert a demonstration record; returns ``(its id, {old primitive id: new})``."""
+        prov, prims = d["provenance"], d["primitives"]
+        encoded = encode(d["demo"], [(p["start"], p["stop"]) for p in prims], source=d["source"],
+                         labels=[p["label"] for p in prims], created=d["created"],
+                         provenance=None if prov is None else (prov["kind"], prov["params"], prov["created"]))
+        [(did, pids)] = insert(self.db, [encoded], demo_ids=[d["id"]] if keep_id else None,
+                               primitive_ids=[p["id"] for p in prims] if keep_id else None)
+        return did, {p["id"]: new for p, new in zip(prims, pids, strict=True)}
+
+    def insert_version(self, v, primitives: dict) -> int:
+        """Insert a version record with its number; ``primitives`` maps its member ids to stored ones."""
+        a, db = v["arrays"], self.db
+        db.new_ids("cluster_versions", 1, [v["version"]])
+        db.execute("INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
+                   "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                   (v["version"], v["created"], to_json(v["params"]), v["n_clusters"], to_npy(a["centers"]),
+                    to_npy(a["pca_mean"]), to_npy(a["pca_components"])))
+        db.executemany("INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
+                       "VALUES (?, ?, ?, ?, ?)",
+                       [(v["version"], primitives[int(i)], int(c), to_npy(f), s) for i, c, f, s in zip(
+                           a["member_ids"], a["member_clusters"], a["member_features"], a["member_assigned"],
+                           strict=True)])
+        db.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
+                       [(v["version"], int(c), lab) for c, lab in v["labels"]])
+        return v["version"]
+
+    def counters(self) -> dict:
+        """``{table: last id handed out}`` of the tables in :data:`~skillbank.store._transfer.COUNTED`."""
+        return {t: n for t, n in self.store._counters(self.db).items() if t in COUNTED}
+
+    def set_counters(self, counters: dict) -> None:
+        """Make the next ids follow ``counters`` (never lowering one)."""
+        self.store._set_counters(self.db, {t: int(counters.get(t, 0)) for t in COUNTED})
+
+    def descriptions(self, *, history: bool = True) -> list:
+        """Skill description records ``{"label", "revision", "created", "action", "binding"}`` by label,
+        revision: every revision, or (``history=False``) each label's current one unless removed."""
+        rows = self.db.execute("SELECT label, revision, created, action, binding FROM skill_descriptions "
+                               "ORDER BY label, revision").fetchall()
+        out = [{"label": lab, "revision": int(r), "created": c, "action": a, "binding": from_json(b)}
+               for lab, r, c, a, b in rows]
+        return out if history else current_descriptions(out)
+
+    def insert_descriptions(self, rows) -> None:
+        """Insert description records with their revision numbers (inside the caller's transaction)."""
+        rows = [(d["label"], int(d["revision"]), d["created"], d["action"], to_json(d["binding"]))
+                for d in rows]
+        self.db.executemany("INSERT INTO skill_descriptions (label, revision, created, action, binding) "
+                            "VALUES (?, ?, ?, ?, ?)", rows)

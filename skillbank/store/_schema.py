@@ -91,13 +91,14 @@ def database_errors(path):
 
 
 @contextlib.contextmanager
-def transaction(conn):
-    """``BEGIN IMMEDIATE`` ... ``COMMIT``; rolled back on any exception.
+def transaction(conn, *, write: bool = True):
+    """``BEGIN IMMEDIATE`` (``BEGIN`` for a read) ... ``COMMIT``; rolled back on any exception.
 
     Taking the write lock up front lets SQLite's busy timeout queue
-    concurrent writers instead of failing one with "database is locked".
+    concurrent writers instead of failing one with "database is locked". A
+    read transaction sees one consistent state (WAL mode) while others write.
     """
-    conn.execute("BEGIN IMMEDIATE")
+    conn.execute("BEGIN IMMEDIATE" if write else "BEGIN")
     try:
         yield conn
     except BaseException:

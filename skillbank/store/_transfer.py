@@ -5,166 +5,31 @@ rows as plain records, the demonstrations (id, source, created, provenance,
 primitives and the :class:`~skillbank.core.Demonstration`) and the clustering
 versions (number, created, params, labels and arrays), inside one consistent
 snapshot; and writes such records inside one transaction, keeping their ids or
-letting the library number them. :class:`SQLiteRecords` serves a SQLite
-connection; :class:`skillbank.store.PostgresStore` has its own. So export,
-import and copy are written once, for every backend and every pair of them.
+letting the library number them. A store gives its records object through
+``records()`` (:class:`skillbank.store._records.SQLRecords` serves both SQL
+backends). So export, import and copy are written once, for every backend and
+every pair of them.
 """
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
-import sqlite3
 from pathlib import Path
 
 import numpy as np
 
 from ..core import Demonstration
 from ..io import write_npz
-from ._arrays import from_json, from_npy, to_json, to_npy
-from ._manifest import FORMAT, MANIFEST, read_export
-from ._records import chunks, insert_demonstration, load_demonstrations, placeholders
-from ._schema import SCHEMA_VERSION, database_errors, now, transaction
+from ._arrays import from_json, from_npy, to_json
+from ._manifest import FORMAT, MANIFEST
+from ._schema import SCHEMA_VERSION, now
 
-__all__ = ["export_library", "import_library", "write_export", "import_records", "copy_library",
-           "records_of", "SQLiteRecords", "content_hash", "MANIFEST", "FORMAT", "COUNTED"]
+__all__ = ["write_export", "import_records", "copy_library", "records_of", "content_hash", "MANIFEST",
+           "FORMAT", "COUNTED"]
 
 #: The tables whose ids a copy keeps counting from where the source left off (its next ids are the source's).
 COUNTED = ("demonstrations", "primitives", "cluster_versions")
-
-
-class SQLiteRecords:
-    """The records protocol over an open SQLite library connection (see the module docstring).
-
-    Parameters
-    ----------
-    conn : sqlite3.Connection
-        In autocommit mode, as :func:`skillbank.store._schema.connect` opens it.
-    location : str, optional
-        Names the library in messages; SQLite errors become one-line ValueErrors.
-    """
-
-    def __init__(self, conn, location=None):
-        self.conn = conn
-        self.location = location
-
-    def _errors(self):
-        return contextlib.nullcontext() if self.location is None else database_errors(self.location)
-
-    @contextlib.contextmanager
-    def snapshot(self):
-        """A read transaction: in WAL mode it sees one consistent state while others write."""
-        with self._errors():
-            self.conn.execute("BEGIN")
-            try:
-                yield self
-            finally:
-                self.conn.execute("COMMIT")
-
-    @contextlib.contextmanager
-    def writing(self):
-        """One write transaction (``BEGIN IMMEDIATE``: concurrent writers queue on the lock)."""
-        with self._errors(), transaction(self.conn):
-            yield self
-
-    def counts(self) -> tuple:
-        """``(demonstrations, clustering versions)`` stored."""
-        return self.conn.execute("SELECT (SELECT COUNT(*) FROM demonstrations), "
-                                 "(SELECT COUNT(*) FROM cluster_versions)").fetchone()
-
-    def demonstrations(self) -> tuple:
-        """``(count, iterator of demonstration records by id)``, read one at a time."""
-        rows = self.conn.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
-                                 "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
-                                 "ORDER BY d.id").fetchall()
-
-        def records():
-            for did, source, created, kind, params, p_created in rows:
-                prims = self.conn.execute("SELECT id, start, stop, label FROM primitives "
-                                          "WHERE demonstration_id = ? ORDER BY id", (did,)).fetchall()
-                yield demonstration_record(did, source, created, (kind, params, p_created), prims,
-                                           load_demonstrations(self.conn, [did])[did])
-
-        return len(rows), records()
-
-    def versions(self):
-        """Clustering version records, oldest first."""
-        for v, created, params, n, centers, mean, comps in self.conn.execute(
-                "SELECT version, created, params, n_clusters, centers, pca_mean, pca_components "
-                "FROM cluster_versions ORDER BY version").fetchall():
-            members = self.conn.execute("SELECT primitive_id, cluster, features, assigned "
-                                        "FROM cluster_members WHERE version = ? ORDER BY primitive_id",
-                                        (v,)).fetchall()
-            labels = self.conn.execute("SELECT cluster, label FROM cluster_labels WHERE version = ? "
-                                       "ORDER BY cluster", (v,)).fetchall()
-            yield version_record(v, created, params, n, (centers, mean, comps), members, labels)
-
-    def lengths(self, n_steps):
-        """``{id: Demonstration}`` chunks of the stored demonstrations with one of the lengths ``n_steps``."""
-        lengths = sorted(set(n_steps))
-        ids = [r[0] for part in chunks(lengths) for r in self.conn.execute(
-            f"SELECT id FROM demonstrations WHERE n_steps IN ({placeholders(len(part))})", part)]
-        for part in chunks(sorted(ids)):  # a chunk at a time: memory stays bounded on a large library
-            yield load_demonstrations(self.conn, part)
-
-    def insert_demonstration(self, d, *, keep_id: bool) -> tuple:
-        """Insert a demonstration record; returns ``(its id, {old primitive id: new})``."""
-        prov, prims = d["provenance"], d["primitives"]
-        did, pids = insert_demonstration(
-            self.conn, d["demo"], [(p["start"], p["stop"]) for p in prims], source=d["source"],
-            labels=[p["label"] for p in prims],
-            provenance=None if prov is None else (prov["kind"], prov["params"], prov["created"]),
-            created=d["created"], demo_id=d["id"] if keep_id else None,
-            primitive_ids=[p["id"] for p in prims] if keep_id else None)
-        return did, {p["id"]: new for p, new in zip(prims, pids, strict=True)}
-
-    def insert_version(self, v, primitives: dict) -> int:
-        """Insert a version record with its number; ``primitives`` maps its member ids to stored ones."""
-        a = v["arrays"]
-        self.conn.execute(
-            "INSERT INTO cluster_versions (version, created, params, n_clusters, centers, pca_mean, "
-            "pca_components) VALUES (?, ?, ?, ?, ?, ?, ?)",
-            (v["version"], v["created"], to_json(v["params"]), v["n_clusters"], to_npy(a["centers"]),
-             to_npy(a["pca_mean"]), to_npy(a["pca_components"])))
-        self.conn.executemany(
-            "INSERT INTO cluster_members (version, primitive_id, cluster, features, assigned) "
-            "VALUES (?, ?, ?, ?, ?)",
-            [(v["version"], primitives[i], c, to_npy(f), s) for i, c, f, s in zip(
-                a["member_ids"], a["member_clusters"], a["member_features"], a["member_assigned"],
-                strict=True)])
-        self.conn.executemany("INSERT INTO cluster_labels (version, cluster, label) VALUES (?, ?, ?)",
-                              [(v["version"], c, lab) for c, lab in v["labels"]])
-        return v["version"]
-
-    def counters(self) -> dict:
-        """``{table: last id handed out}`` (SQLite's AUTOINCREMENT counters)."""
-        return {t: n for t, n in self.conn.execute("SELECT name, seq FROM sqlite_sequence")
-                if t in COUNTED}
-
-    def set_counters(self, counters: dict) -> None:
-        """Make the next ids follow ``counters`` (never lowering one)."""
-        for table in COUNTED:
-            last = int(counters.get(table, 0))
-            if self.conn.execute("UPDATE sqlite_sequence SET seq = MAX(seq, ?) WHERE name = ?",
-                                 (last, table)).rowcount == 0 and last:
-                self.conn.execute("INSERT INTO sqlite_sequence (name, seq) VALUES (?, ?)", (table, last))
-
-    def descriptions(self, *, history: bool = True) -> list:
-        """Skill description records ``{"label", "revision", "created", "action", "binding"}`` by label,
-        revision: every revision, or (``history=False``) each label's current one unless removed."""
-        rows = self.conn.execute("SELECT label, revision, created, action, binding FROM skill_descriptions "
-                                 "ORDER BY label, revision").fetchall()
-        out = [{"label": lab, "revision": int(r), "created": c, "action": a, "binding": from_json(b)}
-               for lab, r, c, a, b in rows]
-        return out if history else current_descriptions(out)
-
-    def insert_descriptions(self, rows) -> None:
-        """Insert description records with their revision numbers (inside the caller's transaction)."""
-        self.conn.executemany(
-            "INSERT INTO skill_descriptions (label, revision, created, action, binding) "
-            "VALUES (?, ?, ?, ?, ?)",
-            [(d["label"], d["revision"], d["created"], d["action"], to_json(d["binding"])) for d in rows])
 
 
 def current_descriptions(rows) -> list:
@@ -238,13 +103,10 @@ def version_record(version, created, params, n_clusters, arrays, members, labels
 
 
 def records_of(store):
-    """The records protocol of an open store: its own ``records()``, else a SQLite store's connection."""
+    """The records protocol of an open store (its ``records()``)."""
     own = getattr(store, "records", None)
     if callable(own):
         return own()
-    conn = getattr(store, "conn", None)
-    if isinstance(conn, sqlite3.Connection):
-        return SQLiteRecords(conn, store.location)
     raise ValueError(f"library {store.location!r}: its backend {type(store).__name__} cannot be exported, "
                      "imported or copied (it has no records())")
 
@@ -305,11 +167,6 @@ def write_export(records, folder, *, progress=None) -> Path:
     path = folder / MANIFEST
     path.write_text(json.dumps(manifest, indent=1, allow_nan=False))
     return path
-
-
-def export_library(conn, folder, *, progress=None) -> Path:
-    """:func:`write_export` of the SQLite library open on ``conn``."""
-    return write_export(SQLiteRecords(conn), folder, progress=progress)
 
 
 def content_hash(demo: Demonstration) -> str:
@@ -389,16 +246,6 @@ def import_records(records, doc) -> dict:
             maps["versions"][v["version"]] = records.insert_version(v, maps["primitives"])
         maps["descriptions"] = _merge_descriptions(records, doc.get("descriptions", []), copy=empty)
     return maps
-
-
-def import_library(conn, folder) -> dict:
-    """Import an exported folder into the SQLite library open on ``conn``, after checking all of it.
-
-    Everything is read and checked first (:func:`~skillbank.store._manifest.read_export`:
-    paths confined to the folder, the manifest validated, the files checked
-    against it), so a bad folder changes nothing; then :func:`import_records`.
-    """
-    return import_records(SQLiteRecords(conn), read_export(folder))
 
 
 def copy_library(source, destination, *, progress=None) -> dict:

@@ -98,7 +98,7 @@ def test_a_non_empty_destination_is_refused_unchanged(tmp_path, postgres_url, in
 
 def test_a_failed_copy_leaves_the_destination_empty(tmp_path, postgres_url, monkeypatch):
     _build(tmp_path / "src.db")
-    from skillbank.store import _postgres_rows
+    from skillbank.store import _records
 
     calls = []
 
@@ -108,13 +108,13 @@ def test_a_failed_copy_leaves_the_destination_empty(tmp_path, postgres_url, monk
             raise OSError("disk full")
         return real(*args, **kwargs)
 
-    real = _postgres_rows.insert
-    monkeypatch.setattr(_postgres_rows, "insert", broken)
+    real = _records.insert
+    monkeypatch.setattr(_records, "insert", broken)
     with open_store(tmp_path / "src.db", readonly=True) as src, open_store(postgres_url) as dst:
         with pytest.raises(OSError, match="disk full"):
             copy_library(src, dst, progress=lambda done, total: None)
         assert dst.demonstration_ids() == [] and dst.versions() == []
-        monkeypatch.setattr(_postgres_rows, "insert", real)
+        monkeypatch.setattr(_records, "insert", real)
         seen = []
         copy_library(src, dst, progress=lambda done, total: seen.append((done, total)))
         assert seen == [(k, 8) for k in range(9)] and len(dst.demonstration_ids()) == 8

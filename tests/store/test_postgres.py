@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from skillbank import Demonstration
 from skillbank.store import SCHEMA_VERSION, STORES, PostgresStore, SQLiteStore, mask_url, open_store
-from skillbank.store._postgres_rows import STEPS, create_tables, scrub
+from skillbank.store._postgres_schema import STEPS, create_tables, scrub
 from skillbank.store._registry import backend
 
 
