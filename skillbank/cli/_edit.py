@@ -57,7 +57,7 @@ def run(args) -> int:
     """Edit ``args.input`` under the constraints given on the command line; returns the exit status."""
     # Imported here, not at the top, so that 'skillbank --help' and the other commands start
     # without scikit-learn and scipy.
-    from ..io import load, write_trajectory
+    from ..io import load_positions, write_trajectory
     from ..metrics import comparison_metrics
     from ..representations import fit_reproduce, representation
     from ..selection import executable_dict, make_executable, retime
@@ -74,7 +74,8 @@ def run(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    sources = [retime(d, execution["duration"]) for d in _read(args.input, args.repair_time, load)]
+    read = load_positions(args.input, repair_time=args.repair_time, every_stream=True)
+    sources = [retime(d, execution["duration"]) for d in read]
     demos = [Demonstration(d.t, {"position": d["position"]}, {"source": str(p)})
              for d, p in zip(sources, args.input, strict=True)]
     constraints.check_dims(demos[0]["position"].shape[1])
@@ -120,27 +121,3 @@ def run(args) -> int:
         if path is not None:
             print(f"  wrote {path}")
     return 0
-
-
-def _read(paths, repair_time, load) -> list:
-    """Each file with every stream; edited is its ``position`` stream, or its only stream named so.
-
-    The rule and the messages are :func:`skillbank.io.load_positions`'; read here once with every
-    stream, because the orientation, gripper and other streams come along into the result.
-    """
-    demos = []
-    for path in paths:
-        path = Path(path)
-        if not path.is_file():
-            raise ValueError(f"input: no such file: {str(path)!r}")
-        demo = load(path, repair_time=repair_time)
-        if "position" not in demo.streams:
-            if len(demo.streams) != 1:
-                raise ValueError(f"input: {str(path)!r} has streams {demo.stream_names} and none is "
-                                 "'position'; write the one to edit as a single-stream file")
-            demo = Demonstration(demo.t, {"position": demo[demo.stream_names[0]]}, demo.metadata)
-        if demos and demo["position"].shape[1] != demos[0]["position"].shape[1]:
-            raise ValueError(f"input: {str(path)!r} has {demo['position'].shape[1]} dimensions, but "
-                             f"{str(paths[0])!r} has {demos[0]['position'].shape[1]}")
-        demos.append(demo)
-    return demos

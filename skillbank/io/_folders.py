@@ -42,11 +42,20 @@ def load_folder(folder, *, progress: bool = True, repair_time=None):
     return [f.name for f in files], [load(f, repair_time=repair_time) for f in bar]
 
 
-def load_positions(paths, *, repair_time=None) -> list[Demonstration]:
-    """Load each file as a Demonstration with one ``"position"`` stream.
+def load_positions(paths, *, repair_time=None, every_stream: bool = False) -> list[Demonstration]:
+    """Load each file as a Demonstration whose ``"position"`` stream is the one to work on.
 
-    The file's ``position`` stream is taken, or its only stream.
-    ``repair_time`` is :func:`~skillbank.io.load_all`'s.
+    The file's ``position`` stream is taken, or its only stream (renamed
+    ``position``). ``repair_time`` is :func:`~skillbank.io.load_all`'s.
+
+    Parameters
+    ----------
+    paths : sequence of str or path-like
+    repair_time : str, optional
+    every_stream : bool, default=False
+        Keep the file's other streams (orientation, gripper, ...) and its
+        metadata too, as an edit that carries them along needs; otherwise the
+        result holds ``position`` alone and ``{"source": path}``.
 
     Raises
     ------
@@ -76,5 +85,9 @@ def load_positions(paths, *, repair_time=None) -> list[Demonstration]:
         if demos and Y.shape[1] != demos[0]["position"].shape[1]:
             raise ValueError(f"input: {str(path)!r} has {Y.shape[1]} dimensions, but "
                              f"{str(paths[0])!r} has {demos[0]['position'].shape[1]}")
-        demos.append(Demonstration(demo.t, {"position": Y}, {"source": str(path)}))
+        if every_stream:
+            streams = {("position" if k == name else k): v for k, v in demo.streams.items()}
+            demos.append(Demonstration(demo.t, streams, demo.metadata))
+        else:
+            demos.append(Demonstration(demo.t, {"position": Y}, {"source": str(path)}))
     return demos
