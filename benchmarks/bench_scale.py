@@ -47,8 +47,9 @@ incremental model's ``predict`` against the full refit and against the
 blobs, and of the clusters points were given on arrival. Then the LASA
 features (26 shapes, 7 demonstrations each, ``trajectory_features``) in
 random order, 10 orders, in batches of 26 and 91: clusters found and ARI
-against the full refit, for ``criterion="hierarchy"`` (what ``skillbank
-cluster`` runs) and ``"auto"`` (what ``Library.cluster`` runs).
+against the full refit, the time of a stream (mean over the orders) and its
+peak traced memory (the first order), for ``criterion="hierarchy"`` (what
+``skillbank cluster`` runs) and ``"auto"`` (what ``Library.cluster`` runs).
 """
 
 from __future__ import annotations
@@ -418,26 +419,41 @@ def _lasa(args) -> list:
     F, truth = trajectory_features(demos), np.asarray(truth)
     rows = []
     for criterion in ("hierarchy", "auto"):
+        start = time.perf_counter()
         full = ElasticClustering(criterion=criterion, random_state=0).fit(F)
+        t_full = time.perf_counter() - start
         for batch in (26, 91):
-            ks, aris, truths = [], [], []
+            ks, aris, truths, seconds = [], [], [], []
             for seed in range(10):
                 order = np.random.default_rng(seed).permutation(F.shape[0])
-                model = ElasticClustering(criterion=criterion, random_state=0)
-                for i in range(0, F.shape[0], batch):
-                    model.partial_fit(F[order[i:i + batch]])
+
+                def stream(order=order, criterion=criterion, batch=batch):
+                    model = ElasticClustering(criterion=criterion, random_state=0)
+                    for i in range(0, F.shape[0], batch):
+                        model.partial_fit(F[order[i:i + batch]])
+                    return model
+
+                if seed == 0:  # the first order also under tracemalloc, for the peak
+                    model, t_inc, peak = _traced(stream)
+                else:
+                    start = time.perf_counter()
+                    model = stream()
+                    t_inc = time.perf_counter() - start
+                seconds.append(t_inc)
                 ks.append(model.n_clusters_)
                 aris.append(adjusted_rand_score(full.labels_, model.predict(F)))
                 truths.append(adjusted_rand_score(truth, model.predict(F)))
             row = {"criterion": criterion, "batch": batch, "full_k": int(full.n_clusters_),
                    "full_ari_truth": adjusted_rand_score(truth, full.labels_), "inc_k": ks,
                    "ari_inc_full_mean": float(np.mean(aris)), "ari_inc_full_min": float(np.min(aris)),
-                   "ari_inc_truth_mean": float(np.mean(truths))}
+                   "ari_inc_truth_mean": float(np.mean(truths)), "full_s": t_full,
+                   "inc_s_mean": float(np.mean(seconds)), "inc_peak_mb": peak}
             rows.append(row)
             print(f"LASA {F.shape[0]} x {F.shape[1]} {criterion:9s} batch {batch:3d}: full k={row['full_k']} "
                   f"(ARI/truth {row['full_ari_truth']:.3f}); incremental k {min(ks)}-{max(ks)}, ARI inc/full "
                   f"mean {row['ari_inc_full_mean']:.3f} min {row['ari_inc_full_min']:.3f}, inc/truth mean "
-                  f"{row['ari_inc_truth_mean']:.3f}", flush=True)
+                  f"{row['ari_inc_truth_mean']:.3f}; full {t_full:.2f} s, stream {row['inc_s_mean']:.2f} s "
+                  f"(mean), {peak:.1f} MB", flush=True)
     return rows
 
 

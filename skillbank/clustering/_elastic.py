@@ -9,6 +9,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
 from ..core._validation import check_array, check_finite_result, check_positive, numerical_errors
+from . import _incremental
 from ._em import (
     assign,
     closest_separation,
@@ -18,7 +19,7 @@ from ._em import (
     selection_energy,
 )
 from ._hierarchy import MIN_MEMBERS, hierarchy_seeds
-from ._incremental import grow, point_stats, pooled, sample_of, separation
+from ._incremental import grow, keep_indices, point_stats, pooled, sample_of, separation
 from ._primitive import nearest_centre
 
 __all__ = ["ElasticClustering"]
@@ -311,12 +312,49 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         self._record(nodes, labels, np.unique(labels), energy, n_iter, path,
                      lambda: pairwise_separation(X - X.mean(axis=0), self.labels_, self.n_clusters_))
         self.cluster_sizes_ = np.bincount(self.labels_, minlength=self.n_clusters_).astype(np.intp)
-        # What partial_fit needs, of a size independent of the number of points: each cluster's
-        # statistics and the bounding box of the data (for the round-off floor of a spread).
-        self._stats = point_stats(X, self.labels_, self.n_clusters_)
-        self._samples = sample_of(X, self.labels_, self._keys.random(X.shape[0]), self.n_clusters_)
-        self._lo, self._hi = X.min(axis=0), X.max(axis=0)
+        self._lo, self._hi = X.min(axis=0), X.max(axis=0)  # for partial_fit's round-off floor of a spread
         self.n_samples_seen_ = int(X.shape[0])
+        capacity = _incremental.SAMPLE_SIZE
+        if self.cluster_sizes_.max() <= capacity:
+            # Each cluster's sample would hold all its members: keep the points (in the order they came,
+            # which fit depends on), so that partial_fit can give exactly what fit on all of them gives.
+            self._seen, self._seen_labels, self._stats, self._samples = X, self.labels_.copy(), None, None
+        else:
+            # What the incremental partial_fit needs, of a size independent of the number of points.
+            self._seen = self._seen_labels = None
+            self._stats = point_stats(X, self.labels_, self.n_clusters_)
+            self._samples = sample_of(X, self.labels_, self._keys.random(X.shape[0]), self.n_clusters_,
+                                      size=capacity)
+        return self
+
+    def _fit_points(self, X, p, step: str):
+        """What ``fit`` does on the checked points ``X`` (kept, not copied); ``step`` names errors."""
+        rng = check_random_state(self.random_state)
+        start = X[rng.randint(X.shape[0])][None, :]
+        self._keys = np.random.default_rng(rng.randint(2 ** 31 - 1))  # partial_fit's sampling keys
+        with numerical_errors(step):
+            return self._store(X, *self._grow(X, start, p))
+
+    def _renumber(self, index):
+        """Give cluster ``i`` the index ``index[i]`` (a permutation) in every attribute and in the state."""
+        order = np.argsort(index)
+        self.cluster_centers_ = self.cluster_centers_[order]
+        self.cluster_sizes_, self.separation_ = self.cluster_sizes_[order], self.separation_[order]
+        self.labels_ = index[self.labels_]
+        if self._seen is not None:
+            self._seen_labels = self.labels_.copy()
+        else:
+            self._stats, self._samples = self._stats.take(order), [self._samples[i] for i in order]
+
+    def _refit(self, X, p):
+        """``partial_fit`` while the model holds every point seen: ``fit`` on them and ``X``, indices kept."""
+        refit = type(self)(**self.get_params(deep=False))  # the same random_state: fit's stream
+        refit._fit_points(np.vstack([self._seen, X]), p, "ElasticClustering.partial_fit")
+        n_before = self._seen.shape[0]
+        refit._renumber(keep_indices(self._seen_labels, refit.labels_[:n_before], self.n_clusters_,
+                                     refit.n_clusters_))
+        refit.labels_ = refit.labels_[n_before:].copy()
+        self.__dict__.update(vars(refit))  # only now: a refused batch changes nothing
         return self
 
     # -- public API -------------------------------------------------------------------------------
@@ -339,37 +377,42 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         """
         p = self._params()
         X = self._check_X(X, reset=True)
-        rng = check_random_state(self.random_state)
-        start = X[rng.randint(X.shape[0])][None, :]
-        self._keys = np.random.default_rng(rng.randint(2 ** 31 - 1))  # partial_fit's sampling keys
-        with numerical_errors("ElasticClustering.fit"):
-            return self._store(X.copy(), *self._grow(X, start, p))
+        return self._fit_points(X.copy(), p, "ElasticClustering.fit")
 
     def partial_fit(self, X, y=None):
-        """Add a batch of points to a fitted model in memory that does not grow with the points seen.
+        """Add a batch of points to a fitted model, in memory bounded by its clusters, not the points seen.
 
-        Each cluster is kept as sufficient statistics (count, mean, scatter
-        matrix) and a uniform sample of at most 1,000 of its members, not as
-        its points. The batch is assigned to the nearest
-        nodes and EM runs on it, each node update counting the earlier
-        members of its cluster through their statistics. Then, as in
-        ``criterion="auto"`` (also for ``"hierarchy"``), the cluster with the
-        most clearly separated split is split and EM re-run, while the new
-        cluster is at least ``min_separation`` from every other (judged on
-        the statistics, so the number of clusters does not depend on how
-        many points were seen); ``"paper"`` adds a node at the batch's last
-        point while the energy falls. A fixed ``n_clusters`` only moves the
-        nodes. An unfitted model is fitted on the batch.
+        While no cluster has more than 1,000 members the model holds every
+        point seen, in the order they came, and a call is ``fit`` on them and
+        the batch: it gives what ``fit`` on everything gives with the same
+        ``random_state`` (earlier points may change cluster, clusters may
+        merge or vanish). A cluster that persists keeps its index: refit and
+        earlier clusters are paired by the earlier points they share, most
+        first; new clusters take the indices left free, then are appended.
 
-        What this gives up against refitting all the points: earlier points
-        are never reassigned to another cluster (their statistics stay with
-        the cluster they joined, so the result depends on the order of the
-        batches); a split divides a cluster's earlier members as its sample
-        divides (estimated statistics once it has more than 1,000); clusters
-        are never merged or removed; and small batches of few points per
-        cluster in many dimensions miss splits a refit finds (see
-        ``docs/scaling.md``). Memory is ``O(n_clusters_ * (1000 +
-        n_features) * n_features)`` plus the batch.
+        Once a cluster has more members, each cluster is kept as sufficient
+        statistics (count, mean, scatter matrix) and a uniform sample of at
+        most 1,000 of its members, and calls are incremental. The batch is
+        assigned to the nearest nodes and EM runs on it, each node update
+        counting the earlier members of its cluster through their
+        statistics. Then, as in ``criterion="auto"`` (also for
+        ``"hierarchy"``), the cluster with the most clearly separated split
+        is split and EM re-run, while the new cluster is at least
+        ``min_separation`` from every other (judged on the statistics, so the
+        number of clusters does not depend on how many points were seen);
+        ``"paper"`` adds a node at the batch's last point while the energy
+        falls. A fixed ``n_clusters`` only moves the nodes. An unfitted model
+        is fitted on the batch.
+
+        What incremental calls give up against refitting all the points:
+        earlier points are never reassigned to another cluster (their
+        statistics stay with the cluster they joined, so the result depends
+        on the order of the batches); a split divides a cluster's earlier
+        members as its sample divides (estimated statistics once it has more
+        than 1,000); clusters are never merged or removed; and small batches
+        of few points per cluster in many dimensions miss splits a refit
+        finds (see ``docs/scaling.md``). Memory is ``O(n_clusters_ * (1000 +
+        n_features) * n_features)`` plus the batch, in both regimes.
 
         Parameters
         ----------
@@ -381,8 +424,9 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         self
             ``labels_`` then holds the batch's clusters, ``cluster_sizes_``
             every point seen, ``n_samples_seen_`` their number; the paths
-            describe the maps tried in this call (their separation: the
-            smallest ``delta`` of a cluster new in this call).
+            describe the maps tried in this call (a refit's as ``fit``'s; an
+            incremental call's separation: the smallest ``delta`` of a
+            cluster new in this call).
 
         Examples
         --------
@@ -396,6 +440,8 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             return self.fit(X)
         p = self._params()
         X = self._check_X(X, reset=False)
+        if self._seen is not None:
+            return self._refit(X, p)
         lo, hi = np.minimum(self._lo, X.min(axis=0)), np.maximum(self._hi, X.max(axis=0))
 
         def scale_of(offset):  # the largest absolute coordinate of every point seen, centred on offset

@@ -25,6 +25,12 @@ members it stands for) together with the batch; when the sample falls on both
 sides, the earlier members' statistics are divided in proportion, estimated
 from the sample's halves (exact while a cluster has at most ``SAMPLE_SIZE``
 members).
+
+The estimator comes here only once a cluster has more members than
+``SAMPLE_SIZE``: until then the samples would be every point, so it keeps the
+points themselves (in the order they came, which ``fit`` depends on) and
+refits them with each batch, :func:`keep_indices` carrying the indices of the
+clusters that persist over to the refit.
 """
 
 from __future__ import annotations
@@ -45,7 +51,7 @@ from ._em import (
 )
 
 __all__ = ["Stats", "Sample", "point_stats", "merge", "pooled", "separation", "energy", "sample_of", "grow",
-           "SAMPLE_SIZE"]
+           "keep_indices", "SAMPLE_SIZE"]
 
 #: Earlier members of a cluster kept as a uniform sample, to split it when new points show it is two.
 SAMPLE_SIZE = 1000
@@ -166,8 +172,9 @@ class Sample(NamedTuple):
     keys: np.ndarray
     tau: float
 
-    def add(self, points, keys, size: int = SAMPLE_SIZE) -> Sample:
-        """The sample after ``points`` (with random ``keys``) joined the cluster."""
+    def add(self, points, keys, size: int | None = None) -> Sample:
+        """The sample after ``points`` (with random ``keys``) joined the cluster (``size``: SAMPLE_SIZE)."""
+        size = SAMPLE_SIZE if size is None else size  # read at call time, so a test may lower it
         inside = keys < self.tau
         points, keys = np.vstack([self.points, points[inside]]), np.r_[self.keys, keys[inside]]
         if keys.shape[0] <= size:
@@ -176,7 +183,7 @@ class Sample(NamedTuple):
         return Sample(points[order[:size]], keys[order[:size]], float(keys[order[size]]))
 
 
-def sample_of(X, labels, keys, n_clusters: int, size: int = SAMPLE_SIZE) -> list:
+def sample_of(X, labels, keys, n_clusters: int, size: int | None = None) -> list:
     """The :class:`Sample` of each cluster of points ``X`` drawn with random ``keys`` in [0, 1).
 
     Examples
@@ -364,3 +371,45 @@ def pooled(stats: Stats) -> Stats:
     gap = stats.means - mean
     scatter = stats.scatter.sum(axis=0) + np.einsum("i,ij,ik->jk", stats.counts, gap, gap)
     return Stats(n[None], mean[None], scatter[None])
+
+
+def keep_indices(before, after, n_before: int, n_after: int) -> np.ndarray:
+    """The index each of the ``n_after`` clusters of a refit takes: clusters that persist keep theirs.
+
+    ``before`` and ``after`` are the clusters of the same earlier points
+    before and after the refit. Old and refit clusters are paired greedily
+    by the earlier points they share, most first (ties: the lower old index,
+    then the lower refit index), each in at most one pair: a paired refit
+    cluster persists and keeps its old index if that is below ``n_after``.
+    The other refit clusters take the free indices in increasing order:
+    first those that persist with an index out of range (merges or removals
+    left fewer clusters; by old index), then the new ones (in the refit's
+    order). With no cluster removed, new clusters are appended.
+
+    Examples
+    --------
+    Old cluster 0 split in two (its larger part keeps index 0), a new cluster
+    (refit cluster 3, no earlier points) appended:
+
+    >>> keep_indices([0, 0, 0, 1], [0, 1, 1, 2], 2, 4).tolist()
+    [2, 0, 1, 3]
+
+    Old clusters 1 and 2 merged: the merged cluster keeps index 1.
+
+    >>> keep_indices([0, 0, 1, 1, 2, 2], [1, 1, 0, 0, 0, 0], 3, 2).tolist()
+    [1, 0]
+    """
+    before, after = np.asarray(before, dtype=np.intp), np.asarray(after, dtype=np.intp)
+    shared = np.bincount(before * n_after + after, minlength=n_before * n_after)
+    pairs = np.flatnonzero(shared)
+    old, new = np.divmod(pairs, n_after)
+    successor_of = np.full(n_after, -1, dtype=np.intp)  # the old index of each refit cluster that persists
+    taken = np.zeros(n_before, dtype=bool)
+    for k in np.lexsort((new, old, -shared[pairs])):
+        if not taken[old[k]] and successor_of[new[k]] == -1:
+            taken[old[k]], successor_of[new[k]] = True, old[k]
+    index = np.where(successor_of < n_after, successor_of, -1)
+    moved = np.flatnonzero(successor_of >= n_after)
+    rest = np.r_[moved[np.argsort(successor_of[moved], kind="stable")], np.flatnonzero(successor_of == -1)]
+    index[rest] = np.setdiff1d(np.arange(n_after), index)
+    return index

