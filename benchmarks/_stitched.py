@@ -337,12 +337,17 @@ def _force(rng, t, clean, chosen, starts, durations, n):
     return f
 
 
-def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixed"), jitter=0.0):
+def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixed"), jitter=0.0,
+               rates=None):
     """``n`` sequences for one ``seed``, with each condition's levels balanced over them.
 
-    Factors: noise (0, 10, 20 µm), rate (100, 300, 500 Hz), gripper (off/on), force (off/on),
-    source family (``families``). Each factor's levels are repeated to length ``n`` and shuffled
-    independently; sequence ``i`` is generated from the seed ``(seed, i)``. ``jitter``: see
+    Factors: noise (0, 10, 20 µm), rate (``rates``, default ``RATES``: 100, 300, 500 Hz), gripper
+    (off/on), force (off/on), source family (``families``). Each factor's levels are repeated to
+    length ``n`` and shuffled independently; sequence ``i`` is generated from the seed ``(seed, i)``.
+    With a single rate, every other factor's levels do not depend on which rate it is: sequence
+    ``i`` of ``rates=(1000.0,)`` is sequence ``i`` of ``rates=(100.0,)`` sampled ten times as
+    finely (the same primitives, timing, poses and noise level; the gripper's and the force's
+    random draws follow the position noise's, so they differ where there is noise). ``jitter``: see
     :func:`make_sequence` (0, an even clock, in the recorded tables).
     """
     rng = np.random.default_rng(seed)
@@ -351,7 +356,7 @@ def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixe
         reps = np.resize(np.arange(len(values)), n)
         return [values[j] for j in rng.permutation(reps)]
 
-    noise, rate = levels(NOISE_LEVELS), levels(RATES)
+    noise, rate = levels(NOISE_LEVELS), levels(tuple(float(r) for r in (RATES if rates is None else rates)))
     grip, frc, fam = levels((False, True)), levels((False, True)), levels(tuple(families))
     out = []
     for i in range(n):

@@ -3,13 +3,16 @@
 Run from the repository root (``make bench`` installs ruptures, the ``bench`` extra)::
 
     .venv/bin/python benchmarks/bench_segmentation_quality.py [--quick] [--seeds 0 1 2 3 4]
-        [--n 48] [--jitter 0] [--no-ruptures] [--json PATH] [--data DIR]
+        [--n 48] [--jitter 0] [--rates 100 300 500] [--by-rate] [--no-ruptures] [--json PATH]
+        [--data DIR]
 
 The sequences come from ``benchmarks/_stitched.py`` (its docstring describes the generator):
 2 to 5 real primitives (RAIL, LASA, three-button pieces), each brought smoothly to rest, dwells of
 0 to 40/300 s, at 100, 300 and 500 Hz, with 0, 10 and 20 µm of position noise, with and without a
 gripper and a force stream. Each seed gives ``--n`` sequences with every condition's levels
-balanced over them.
+balanced over them. ``--rates`` samples at other rates (balanced over the sequences like the
+default three); ``--by-rate`` instead builds one suite per rate, the same motions at each, and
+prints skillbank's defaults per rate and noise level (how the defaults hold at 1-2 kHz).
 
 Score of one sequence (:func:`score`): predicted and true boundary times are matched one to one
 (Hungarian assignment: the most matches within ``tol`` = 0.1 s, then the smallest total error);
@@ -74,6 +77,8 @@ KERNEL_PENALTIES = (1.0, 2.0, 5.0, 10.0, 20.0)
 PELT_PENALTIES = (2.0, 5.0, 10.0, 20.0, 50.0)
 RUPTURES_RATE = 50.0
 FACTORS = ("noise", "rate", "gripper", "force", "family")
+#: ``--by-rate`` without ``--rates``: the benchmark's rates, then a Franka's 1 kHz and twice that
+BY_RATE_RATES = (100.0, 300.0, 500.0, 1000.0, 2000.0)
 
 
 # ----------------------------------------------------------------------------------------- scoring
@@ -182,9 +187,14 @@ def ruptures_method(kind, penalties, signals=("velocity", "position")):
 
 
 # -------------------------------------------------------------------------------------- evaluation
-def build_suite(seeds=(0, 1, 2, 3, 4), n=48, data=None, jitter=0.0):
-    """The cases of every seed, in order (``_stitched.make_suite(seed, n)`` for each seed)."""
-    return [case for s in seeds for case in make_suite(int(s), int(n), data=data, jitter=jitter)]
+def build_suite(seeds=(0, 1, 2, 3, 4), n=48, data=None, jitter=0.0, rates=None):
+    """The cases of every seed, in order (``_stitched.make_suite(seed, n)`` for each seed).
+
+    ``rates``: the sampling rates (Hz) balanced over each seed's sequences; default
+    ``_stitched.RATES`` (100, 300, 500).
+    """
+    return [case for s in seeds
+            for case in make_suite(int(s), int(n), data=data, jitter=jitter, rates=rates)]
 
 
 def _summarise(rows) -> dict:
@@ -265,6 +275,16 @@ def evaluate_best(multi_method, suite, tol=TOL):
     return best, reports[best], {k: v["mean_f1"] for k, v in reports.items()}
 
 
+def by_rate(seeds, n, rates=BY_RATE_RATES, *, method=None, data=None, jitter=0.0) -> dict:
+    """``{rate: report}``: ``method`` (default skillbank's defaults) on one suite per rate.
+
+    Each suite holds the same motions (see ``_stitched.make_suite``), all sampled at that rate.
+    """
+    method = skillbank_method() if method is None else method
+    return {float(r): evaluate(method, build_suite(seeds, n, data=data, jitter=jitter, rates=(float(r),)))
+            for r in rates}
+
+
 def _grid(methods):
     """``{parameter: method}`` as one multi-method."""
     return lambda demo: {param: m(demo) for param, m in methods.items()}
@@ -314,6 +334,23 @@ def table(reports) -> str:
     return "\n".join(lines)
 
 
+def rate_table(reports) -> str:
+    """The Markdown table of :func:`by_rate`: one row per rate."""
+    first = next(iter(reports.values()))["by_condition"]
+    noise, family = list(first["noise"]), list(first["family"])
+    head = ["rate", "mean F1", "per-seed min–max", "precision / recall", "error (ms)"] + \
+        [f"noise {lv}" for lv in noise] + family + ["time (s)"]
+    lines = ["| " + " | ".join(head) + " |", "| --- |" + " ---: |" * (len(head) - 1)]
+    for rate, rep in reports.items():
+        cells = [f"{rate:g} Hz", f"**{rep['mean_f1']:.3f}**",
+                 f"{rep['seed_spread']['min']:.3f}–{rep['seed_spread']['max']:.3f}",
+                 f"{rep['precision']:.2f} / {rep['recall']:.2f}", f"{1000 * rep['mean_error']:.0f}"]
+        cells += [f"{rep['by_condition']['noise'][lv]:.3f}" for lv in noise]
+        cells += [f"{rep['by_condition']['family'][lv]:.3f}" for lv in family]
+        lines.append("| " + " | ".join(cells + [f"{rep['seconds']:.1f}"]) + " |")
+    return "\n".join(lines)
+
+
 def _param(key):
     return "/".join(f"{k:g}" if isinstance(k, float) else str(k) for k in key) if isinstance(key, tuple) \
         else f"{key:g}"
@@ -341,6 +378,10 @@ def main(argv=None) -> None:
     parser.add_argument("--n", type=int, default=None, help="sequences per seed (default 48)")
     parser.add_argument("--jitter", type=float, default=0.0,
                         help="uneven clock: each stamp moved by up to jitter/2 of a period (default 0)")
+    parser.add_argument("--rates", type=float, nargs="+", default=None,
+                        help="sampling rates in Hz (default 100 300 500; with --by-rate also 1000 2000)")
+    parser.add_argument("--by-rate", action="store_true",
+                        help="skillbank's defaults on one suite per rate (the same motions at each)")
     parser.add_argument("--no-ruptures", action="store_true", help="skip the ruptures baselines")
     parser.add_argument("--data", default=None, help="shared data folder (holds seed/ and rail/)")
     parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
@@ -348,8 +389,20 @@ def main(argv=None) -> None:
     seeds = args.seeds or ([0, 1] if args.quick else [0, 1, 2, 3, 4])
     n = args.n or (24 if args.quick else 48)
 
+    if args.rates is not None and (not args.rates or min(args.rates) <= 0):
+        raise SystemExit(f"--rates: expected rates > 0 in Hz, got {args.rates}")
+    if args.by_rate:
+        rates = tuple(args.rates or BY_RATE_RATES)
+        reports = by_rate(seeds, n, rates, data=args.data, jitter=args.jitter)
+        print(f"skillbank (defaults), seeds {seeds}, {n} sequences per seed and rate, jitter "
+              f"{args.jitter:g}; tol ±{TOL} s\n")
+        print(rate_table(reports))
+        if args.json:
+            Path(args.json).write_text(json.dumps({"seeds": seeds, "n": n, "tol": TOL, "by_rate": _jsonable(
+                {f"{r:g} Hz": rep for r, rep in reports.items()})}, indent=1))
+        return
     start = time.perf_counter()
-    suite = build_suite(seeds, n, data=args.data, jitter=args.jitter)
+    suite = build_suite(seeds, n, data=args.data, jitter=args.jitter, rates=args.rates)
     gen = time.perf_counter() - start
     reports = run(suite, ruptures=not args.no_ruptures)
 

@@ -310,9 +310,16 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
 
 
 #: The speed that rests are found on is smoothed until the sensor's noise adds
-#: at most this fraction of the typical speed: a hundredth, well below the
-#: twentieth that makes a stop.
-SPEED_NOISE_SHARE = 0.01
+#: at most this fraction of the typical speed: the bottom band of a rest between
+#: the slowest movements that count (``REST_BAND`` of ``MOVEMENT_FRACTION``,
+#: 0.4 %), so that the noise neither breaks a dwell's bottom into pieces (the rest
+#: would go to whichever noise minimum is deepest, anywhere in the dwell and its
+#: slow approach) nor deepens a slow passage into a stop. The share must bind at
+#: every rate: one sample being the least smoothing there is, 20 µm of noise at
+#: 100 Hz met the former share of 1 % with room to spare (0.5 %), at 1 kHz
+#: exactly, and the same motion then left twice the noise in the speed at 1 kHz,
+#: with ten times as many valleys per second.
+SPEED_NOISE_SHARE = REST_BAND * MOVEMENT_FRACTION
 
 
 def rest_speed(t, Y, speed=None, *, max_sigma: float) -> np.ndarray:
