@@ -775,7 +775,10 @@ def test_three_button_slower_sensors_against_the_recorded_file(data_dir, tmp_pat
     assert np.abs(bag["gripper"] - h5["gripper"]).max() < 0.05 * np.ptp(h5["gripper"])
     ours, theirs = _segment(bag), _segment(h5)
     assert ours.n_segments == theirs.n_segments == 6
-    np.testing.assert_allclose(ours.keypoints, theirs.keypoints, atol=1)
+    # a rest sits in the middle of the speed's valley, which a pose interpolated from 125 Hz places to
+    # within a period or two of the pose sensor (1.3 recorder samples each)
+    pose_period = (1.0 / 125) / np.median(np.diff(h5.t))
+    np.testing.assert_allclose(ours.keypoints, theirs.keypoints, atol=2 * pose_period)
 
 
 # ---------------------------------------------------------------- the command line
