@@ -35,7 +35,6 @@ import argparse
 import json
 import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +44,7 @@ from skillbank.core import Constraints
 from skillbank.editing import lte
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import best_of  # noqa: E402
 from _dense_lte import dense_laplacian, dense_lte  # noqa: E402
 
 LTE_SIZES = (1_000, 10_000, 100_000)
@@ -61,15 +61,6 @@ def task(n: int) -> Constraints:
                        via=[(0.3, [0.3, 0.3, 0.1]), (0.7, [0.7, -0.1, 0.05])])
 
 
-def best_time(fn, repeats: int):
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def bench_lte(sizes, dense_sizes):
     rows = []
     for n in sorted(set(sizes) | set(dense_sizes)):
@@ -77,10 +68,10 @@ def bench_lte(sizes, dense_sizes):
         idx, pts = c.resolve(n)
         row = {"n": n}
         if n in sizes or n in dense_sizes:
-            t_sb, res = best_time(lambda Y=Y, c=c: lte(Y, c), 5 if n <= 10_000 else 3)
+            t_sb, res = best_of(lambda Y=Y, c=c: lte(Y, c), 5 if n <= 10_000 else 3)
             row.update(skillbank_s=t_sb, skillbank_error=res.constraint_error, success=res.success)
         if n in dense_sizes:
-            t_d, P = best_time(lambda Y=Y, idx=idx, pts=pts: dense_lte(Y, idx, pts), 2 if n <= 2000 else 1)
+            t_d, P = best_of(lambda Y=Y, idx=idx, pts=pts: dense_lte(Y, idx, pts), 2 if n <= 2000 else 1)
             L = dense_laplacian(n)
             energy = float(np.sum((L @ (P - Y)) ** 2) / np.sum((L @ (res.Y - Y)) ** 2))
             row.update(dense_s=t_d, dense_error=c.position_error(P), ratio=t_d / t_sb,
@@ -102,8 +93,8 @@ def bench_ja(sizes=(1_000, 10_000)):
         Y, c = path(n), task(n)
         demo = Demonstration(np.linspace(0.0, 1.0, n), {"position": Y})
         try:
-            t_fit, model = best_time(lambda demo=demo: JerkAccuracy().fit([demo]), 1)
-            t_rep, out = best_time(lambda model=model, c=c, n=n: model.reproduce(c, n_steps=n), 3)
+            t_fit, model = best_of(lambda demo=demo: JerkAccuracy().fit([demo]), 1)
+            t_rep, out = best_of(lambda model=model, c=c, n=n: model.reproduce(c, n_steps=n), 3)
             P = out["position"] if hasattr(out, "streams") else np.asarray(out)
             rows.append({"n": n, "fit_s": t_fit, "reproduce_s": t_rep, "error": c.position_error(P)})
         except Exception as exc:  # report, do not hide, whatever the other implementation raises

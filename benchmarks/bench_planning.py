@@ -24,7 +24,6 @@ import argparse
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +34,9 @@ from skillbank.planning import plan_task, scene_from_dict, solve
 from skillbank.planning._pddl import problem_text
 from skillbank.planning._plan import _domain
 from skillbank.selection import reuse
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import best_of  # noqa: E402
 
 ACTION = ("(:action press :parameters (?b ?n - button) :precondition (and (ready ?b) (next ?b ?n)) "
           ":effect (and (pressed ?b) (ready ?n) (not (ready ?b))))")
@@ -62,15 +64,6 @@ def _scene(n):
             "start": {"position": pts[0].tolist(), "orientation": DOWN}}
 
 
-def _best(fn, repeats):
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     parser.add_argument("--steps", type=int, default=10)
@@ -85,9 +78,9 @@ def main(argv=None):
         dom = _domain(lib.store, scene, None)
         problem = problem_text({m: o.type for m, o in scene.objects.items()}, scene.init, scene.goal,
                                domain=dom.name)
-        t_plan, steps = _best(lambda: solve(dom.text, problem), args.repeats)
-        t_chain, res = _best(lambda: plan_task(lib.store, scene), args.repeats)
-        t_robot, res_robot = _best(lambda: plan_task(lib.store, scene, robot="ur5e"), args.repeats)
+        t_plan, steps = best_of(lambda: solve(dom.text, problem), args.repeats)
+        t_chain, res = best_of(lambda: plan_task(lib.store, scene), args.repeats)
+        t_robot, res_robot = best_of(lambda: plan_task(lib.store, scene, robot="ur5e"), args.repeats)
         prims = lib.primitives(label="press")
         P = res.trajectory["position"]
         rest = np.zeros(3)
@@ -97,7 +90,7 @@ def main(argv=None):
         def baseline():
             return [reuse([p.demo for p in prims], c, method="lte", ids=[p.id for p in prims]) for c in tasks]
 
-        t_base, _ = _best(baseline, args.repeats)
+        t_base, _ = best_of(baseline, args.repeats)
     n = len(steps)
     rows = [("planning (domain + problem + A*/LM-cut)", t_plan),
             ("chained reproduction (plan_task - planning)", t_chain - t_plan),
