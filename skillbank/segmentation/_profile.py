@@ -418,7 +418,9 @@ def _stream_jerk(t, Y, speed, *, window: int, scale: str, normalize: str, grace:
         # the grid's half step bounds the round-off; exact values on a coarse grid have none
         # (above the floor: a full-precision stream's levels are the floor either way)
         grid, levels = levels, (roundoff_level(Y, empirical=True), roundoff_level(t, empirical=True)[0])
-        if (np.array_equal(grid[0], levels[0]) and grid[1] == levels[1]) or matters(levels):
+        # levels the data left as they were still matter, as just found: no second profile scale
+        unchanged = np.array_equal(grid[0], levels[0]) and grid[1] == levels[1]
+        if unchanged or matters(levels):
             cap = max(1, min(window // MAX_STEP_DIVISOR, (n - 1) // STENCIL_REACH))
             while True:
                 noise = noise_of(levels, step)
