@@ -32,8 +32,16 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from skillbank.cli import _main
+
+# Properties are deterministic in CI: the same examples on every run (derandomised) and no example
+# database carried between runs, so a property fails in a developer's run, where each run draws new
+# examples, rather than by chance in CI. SKILLBANK_HYPOTHESIS=ci selects it anywhere.
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True)
+settings.register_profile("dev", print_blob=True)
+settings.load_profile(os.environ.get("SKILLBANK_HYPOTHESIS") or ("ci" if os.environ.get("CI") else "dev"))
 
 _DEFAULT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
@@ -59,6 +67,42 @@ def data_dir() -> Path:
             pytest.fail(message)
         pytest.skip(message)
     return root
+
+
+#: What a command may take when it is run by :func:`run_limited` (address space, bytes).
+LIMITED_MEMORY = 1 << 30
+
+
+def run_limited(*argv, memory: int = LIMITED_MEMORY, timeout: float = 120.0, cwd=None, env=None):
+    """``(exit status, stdout, stderr)`` of ``skillbank argv...`` in a child process under a memory limit.
+
+    The child's address space is capped at ``memory`` bytes (``RLIMIT_AS``) and
+    it is killed after ``timeout`` seconds, so an input that would take
+    gigabytes or hang fails the test instead of the machine: a bound that is
+    checked before the work starts gives exit status 2 and one line well
+    within the limit. BLAS runs one thread (its per-thread buffers would count
+    against the limit).
+    """
+    import resource  # POSIX only, like the limit itself
+    import sys
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+
+    root = str(Path(__file__).resolve().parents[1])  # this checkout's package, wherever cwd is
+    path = os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))
+    child_env = {**os.environ, "PYTHONPATH": path, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
+                 "MKL_NUM_THREADS": "1", "PYTHONWARNINGS": "ignore", **(env or {})}
+    done = subprocess.run([sys.executable, "-m", "skillbank.cli", *map(str, argv)], cwd=cwd,
+                          env=child_env, preexec_fn=limit, capture_output=True, text=True,
+                          timeout=timeout, stdin=subprocess.DEVNULL)
+    return done.returncode, done.stdout, done.stderr
+
+
+@pytest.fixture
+def limited():
+    """:func:`run_limited` as a fixture: ``limited(*argv, memory=..., timeout=...)``."""
+    return run_limited
 
 
 @pytest.fixture
