@@ -49,6 +49,7 @@ from ..core import Demonstration, __version__
 from ..core._validation import check_positive
 from ..io import FormatError, load, load_all
 from ..segmentation import MultimodalSegmenter
+from ._cluster_address import check_workers, connect_timeout, probe_scheduler
 
 __all__ = ["INSTALL", "check_demo", "file_reason", "read_file", "bounds", "assignment", "prepare",
            "prepare_file", "prepare_files", "files_per_task", "distributed", "add_in_parallel", "BATCH_SIZE"]
@@ -213,9 +214,10 @@ def _client(dist, workers, scheduler):
         yield scheduler
         return
     if scheduler is not None:
+        probe_scheduler(scheduler)  # fails fast, before Dask's client waits or misreads another protocol
         try:
-            client = dist.Client(scheduler, set_as_default=False)  # waits distributed.comm.timeouts.connect
-        except (OSError, ValueError, TypeError) as exc:
+            client = dist.Client(scheduler, set_as_default=False, timeout=connect_timeout())
+        except Exception as exc:  # whatever the peer did: one line, never Dask's traceback
             raise OSError(f"scheduler: cannot reach the Dask scheduler at {scheduler!r}: "
                           f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
         with client:
@@ -251,7 +253,7 @@ def add_in_parallel(lib, paths, *, read: dict, options: dict, keep_going: bool, 
         raise ValueError(f"workers: give workers (a new local cluster) or scheduler (an existing one), not "
                          f"both; got workers={workers!r} and scheduler={scheduler!r}")
     if workers is not None:
-        workers = check_positive(workers, name="workers", integer=True)
+        workers = check_workers(check_positive(workers, name="workers", integer=True))
     batch_size = check_positive(batch_size, name="batch_size", integer=True)
     if chunk is not None:
         chunk = check_positive(chunk, name="chunk", integer=True)
