@@ -65,8 +65,8 @@ def _location(text: str):
 
     try:
         _, target = parse_location(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    except ValueError:  # refused by the store when the command opens it: one line, exit status 2, masked
+        return _URL(text)
     return target if isinstance(target, Path) else _URL(target)
 
 

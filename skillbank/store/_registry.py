@@ -103,12 +103,12 @@ def _file(text: str, shown: str) -> Path:
     if keyword_string(text):
         raise ValueError(f"library {shown!r}: a libpq keyword string is not a library location; write it "
                          "as a URL, postgresql://user:password@host:port/dbname?param=value, with the "
-                         f"password percent-encoded (s3c?ret as s3c%3Fret) (or {_FILE})")
+                         f"password percent-encoded ('?' as %3F, '@' as %40, ...) (or {_FILE})")
     head, colon, rest = text.partition(":")
     known = {*STORES, *(a for cls in STORES.values() for a in getattr(cls, "aliases", ()))}
     if colon and head.lower() in known:
         body = mask_url(rest.lstrip("/"))
-        fixed = f"sqlite:///{rest}" if head.lower() == "sqlite" else f"{head}://{body}"
+        fixed = f"sqlite:///{mask_url(rest)}" if head.lower() == "sqlite" else f"{head}://{body}"
         raise ValueError(f"library {shown!r}: a URL without '//' after its scheme; write {fixed} "
                          f"(or {_FILE})")
     if credential_shape(text) and not Path(text).exists():

@@ -42,8 +42,10 @@ requiressl sslcompression sslcert sslkey sslpassword sslcertmode sslrootcert ssl
 requirepeer ssl_min_protocol_version ssl_max_protocol_version krbsrvname gsslib gssdelegation service
 target_session_attrs load_balance_hosts sslnegotiation""".split())
 
-_ENCODE = ("percent-encode the password and any of these characters after the host (a password s3c?ret "
-           "as s3c%3Fret; '@' as %40, '/' as %2F, '?' as %3F, '#' as %23, '%' as %25, '&' as %26)")
+# No example password: one the user's might equal would show theirs, percent-encoded.
+_ENCODE = ("percent-encode the password and these characters anywhere after the host: '?' as %3F, "
+           "'#' as %23, '@' as %40, '/' as %2F, '%' as %25, '&' as %26 "
+           "(urllib.parse.quote(password, safe=''))")
 
 
 def keyword_string(text: str) -> bool:
@@ -197,8 +199,8 @@ def check_url(url: str) -> str:
     Traceback (most recent call last):
     ...
     ValueError: library 'postgresql://ann:***@db/skills': cannot tell the password from the rest of the URL \
-(a raw '@', '/', '?' or '#'); percent-encode the password and any of these characters after the host \
-(a password s3c?ret as s3c%3Fret; '@' as %40, '/' as %2F, '?' as %3F, '#' as %23, '%' as %25, '&' as %26)
+(a raw '@', '/', '?' or '#'); percent-encode the password and these characters anywhere after the host: \
+'?' as %3F, '#' as %23, '@' as %40, '/' as %2F, '%' as %25, '&' as %26 (urllib.parse.quote(password, safe=''))
     """
     text = str(url)
     m = SCHEME_URL.match(text)
