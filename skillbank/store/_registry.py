@@ -98,6 +98,13 @@ def _check_controls(text: str) -> None:
                          "newline, NUL or escape: a quoting slip?); remove them")
 
 
+def _exists(text: str) -> bool:
+    try:
+        return Path(text).exists()
+    except OSError:  # a name too long for the file system: no such file (and its message would show it)
+        return False
+
+
 def _file(text: str, shown: str) -> Path:
     """``text`` as a file name, unless it is a connection string written in another form."""
     if keyword_string(text):
@@ -111,7 +118,7 @@ def _file(text: str, shown: str) -> Path:
         fixed = f"sqlite:///{mask_url(rest)}" if head.lower() == "sqlite" else f"{head}://{body}"
         raise ValueError(f"library {shown!r}: a URL without '//' after its scheme; write {fixed} "
                          f"(or {_FILE})")
-    if credential_shape(text) and not Path(text).exists():
+    if credential_shape(text) and not _exists(text):
         raise ValueError(f"library {shown!r} reads as user:password@host, a URL without its scheme; write "
                          f"postgresql://{mask_url(text)} (or {_FILE})")
     return Path(text)

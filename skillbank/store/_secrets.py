@@ -23,7 +23,8 @@ __all__ = ["mask_url", "secrets", "scrub", "check_url", "keyword_string", "crede
 
 #: ``scheme://rest`` (the rest may hold anything, newlines included, so that it is masked too).
 SCHEME_URL = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*)://(.*)\Z", re.S)
-_SCHEME_ANYWHERE = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*://")
+# from the start of a run of scheme characters only: linear time on a long run without '://'
+_SCHEME_ANYWHERE = re.compile(r"(?<![A-Za-z0-9+.-])[A-Za-z][A-Za-z0-9+.-]*://")
 # A query parameter holding a secret; its value runs to the next '&key=' (a raw '&' stays masked).
 _QUERY_SECRET = re.compile(r"([?&](?:ssl)?password=)(.*?)(?=&[A-Za-z_][A-Za-z0-9_]*=|\Z)", re.I | re.S)
 # A keyword string's secret: a quoted value (an unterminated quote runs to the end) or a bare word.

@@ -157,6 +157,14 @@ def test_a_path_with_a_control_character_is_refused_as_a_path_too(tmp_path):
     assert os.listdir(tmp_path) == []
 
 
+def test_a_credential_shape_too_long_for_a_file_name_is_refused_masked(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    password = "s3cret" * 100  # longer than a file name may be: asking whether it exists fails
+    with pytest.raises(ValueError, match=r"^library 'ann:\*\*\*@db/skills' reads as user:password@host"):
+        open_store(f"ann:{password}@db/skills")
+    assert os.listdir(tmp_path) == []
+
+
 def test_forms_that_are_files_stay_files(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert parse_location("./ann:s3cret@db") == ("sqlite", Path("ann:s3cret@db"))
