@@ -20,7 +20,8 @@ class _OneLineParser(argparse.ArgumentParser):
     """Usage errors as one line on stderr with exit status 2."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        # argparse quotes arguments as given: a password, a terminal escape
+        self.exit(2, f"{self.prog}: error: {error_line(message)}\n")
 
 
 def leaf_parsers(parser) -> dict:

@@ -40,17 +40,20 @@ def escaped_stdout():
         sys.stdout = real
 
 
-def error_line(exc, args) -> str:
-    """``exc``'s message on one line, escaped, with the password of every library URL in ``args`` masked.
+def error_line(exc, args=None) -> str:
+    """``exc``'s message on one line, escaped, with the password of every library URL in ``args`` masked,
+    and of any location the message quotes.
 
-    The store masks its own messages; this is the last net, for a message that quotes a URL some other way.
+    The store masks its own messages; this is the last net, for a message that quotes a URL some other way
+    (argparse's "unrecognized arguments: ...", a reader's error naming its argument).
     """
     message = " ".join(str(exc).split())
-    urls = [getattr(value, "url", None) for value in vars(args).values()]
+    urls = [getattr(value, "url", None) for value in vars(args).values()] if args is not None else []
     urls = [url for url in urls if isinstance(url, str)]
-    if urls:
-        from ..store._secrets import scrub  # the store package, only when a URL was given
+    if urls or any(mark in message for mark in ("@", "://", "password")):
+        from ..store._secrets import mask_text, scrub  # the store package, for a message that may need it
 
         for url in urls:
             message = scrub(message, url)
+        message = mask_text(message)
     return printable(message)

@@ -18,8 +18,8 @@ from urllib.parse import unquote
 
 from ..core._text import CONTROL
 
-__all__ = ["mask_url", "secrets", "scrub", "check_url", "keyword_string", "credential_shape", "SCHEME_URL",
-           "CONTROL"]
+__all__ = ["mask_url", "mask_text", "secrets", "scrub", "check_url", "keyword_string", "credential_shape",
+           "SCHEME_URL", "CONTROL"]
 
 #: ``scheme://rest`` (the rest may hold anything, newlines included, so that it is masked too).
 SCHEME_URL = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*)://(.*)\Z", re.S)
@@ -132,6 +132,21 @@ def mask_url(url) -> str:
         prefix, password, tail = bare
         return f"{prefix}{'***' if password else ''}{tail}"
     return text
+
+
+def mask_text(text) -> str:
+    """Free text (a message quoting arguments) with the password of every location written in it masked.
+
+    Each ``password=`` value and each space-separated word that is a location
+    (a URL, ``user:password@host``) is masked as :func:`mask_url` masks it.
+
+    Examples
+    --------
+    >>> mask_text("unrecognized arguments: postgresql://ann:s3cret@db/x host=db password=s3cret ann:pw@db")
+    'unrecognized arguments: postgresql://ann:***@db/x host=db password=*** ann:***@db'
+    """
+    text = _KEYWORD_SECRET.sub(lambda k: k.group(1) + "***", str(text))
+    return " ".join(mask_url(word) for word in text.split(" "))
 
 
 def _unquote_keyword(value: str) -> str:

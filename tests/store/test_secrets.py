@@ -213,6 +213,17 @@ def test_the_error_line_escapes_and_masks_what_it_prints():
 
 
 # -- the command line ----------------------------------------------------------------------------
+def test_usage_errors_are_masked_and_escaped_on_stderr(capsys, tmp_path):
+    from skillbank.cli._main import main  # as above
+
+    with pytest.raises(SystemExit) as done:  # argparse quotes the arguments it did not expect
+        main(["library", "list", str(tmp_path / "lib.db"), "postgresql://ann:s3cret@db/skills",
+              "host=db password=s3cret", "\x1b[2J"])
+    err = capsys.readouterr().err
+    assert done.value.code == 2 and os.listdir(tmp_path) == []
+    assert err == ("skillbank: error: unrecognized arguments: postgresql://ann:***@db/skills "
+                   "host=db password=*** \\x1b[2J\n")
+
 _FORMS = [
     "postgresql://ann:s3c?ret@127.0.0.1:1/skills",
     "postgresql://ann:s3c#ret@127.0.0.1:1/skills",
