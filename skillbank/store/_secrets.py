@@ -27,8 +27,8 @@ SCHEME_URL = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*)://(.*)\Z", re.S)
 _SCHEME_ANYWHERE = re.compile(r"(?<![A-Za-z0-9+.-])[A-Za-z][A-Za-z0-9+.-]*://")
 # A query parameter holding a secret; its value runs to the next '&key=' (a raw '&' stays masked).
 _QUERY_SECRET = re.compile(r"([?&](?:ssl)?password=)(.*?)(?=&[A-Za-z_][A-Za-z0-9_]*=|\Z)", re.I | re.S)
-# A keyword string's secret: a quoted value (an unterminated quote runs to the end) or a bare word.
 _QUERY_FIRST = re.compile(r"[?&](?:ssl)?password=([^&]*)", re.I)  # libpq's reading: to the next '&'
+# A keyword string's secret: a quoted value (an unterminated quote runs to the end) or a bare word.
 _KEYWORD_SECRET = re.compile(r"(\b(?:ssl)?password\s*=\s*)('(?:[^'\\]|\\.)*'?|\S*)", re.I | re.S)
 _KEYWORD = re.compile(r"^\s*([A-Za-z_]+)\s*=")
 # user:...@ before the last '@', the user holding no '/' (so './a:b@c' stays a file name)
@@ -81,13 +81,14 @@ def credential_shape(text: str) -> bool:
 
 def _split_user(rest: str):
     """``(user, password, tail)`` of a URL's rest after ``://``: the password runs from the first ':'
-    before the last '@' to that '@' (all of what any parser could take for it); None without one."""
+    before the last '@' to that '@' (all of what any parser could take for it); None without one.
+
+    A URL in which that differs from libpq's reading (a raw '@', '/', '?' or '#') is refused by
+    :func:`check_url`, so only its refusal shows this wider mask.
+    """
     at = rest.rfind("@")
-    if at < 0:
-        return None
-    colon = rest.find(":", 0, at)
-    slash = min((i for i in (rest.find("/"), rest.find("?")) if i >= 0), default=len(rest))
-    if colon < 0 or colon > slash:
+    colon = rest.find(":", 0, max(at, 0))
+    if at < 0 or colon < 0:
         return None
     return rest[:colon], rest[colon + 1:at], rest[at:]
 

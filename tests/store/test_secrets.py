@@ -64,6 +64,7 @@ def _demo_file(folder, name="reach.npz"):
     ("postgresql://ann:s3c%3Fret@db.invalid/skills", "postgresql://ann:***@db.invalid/skills"),
     ("postgresql://ann:50%off@db.invalid/skills", "postgresql://ann:***@db.invalid/skills"),
     ("postgresql://ann@corp:s3cret@db/skills", "postgresql://ann@corp:***@db/skills"),
+    ("postgresql://ann/x:s3cret@db/skills", "postgresql://ann/x:***@db/skills"),  # what a greedy reader takes
     ("postgresql://ann@db/skills?password=s3c&ret&sslmode=disable",
      "postgresql://ann@db/skills?password=***&sslmode=disable"),
     ("postgresql://ann@db/skills?password=s3c#ret", "postgresql://ann@db/skills?password=***"),
