@@ -1,4 +1,5 @@
-"""Store backends by URL scheme, and :func:`open_store`."""
+"""Store backends by URL scheme, :func:`open_store`, and :func:`parse_location`, the one place that tells
+a library file from a database URL (and refuses a connection string in any other form)."""
 
 from __future__ import annotations
 
