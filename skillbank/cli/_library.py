@@ -51,8 +51,7 @@ class _URL:
 def _location(text: str):
     """A ``db`` argument: a URL of a store backend (``postgresql://...``), else a library file.
 
-    The store tells them apart (:func:`skillbank.store._registry.parse_location`): ``sqlite:///relative``
-    and ``sqlite:////absolute`` name a file; a connection string in any other form is refused, masked.
+    The store tells them apart (``store._registry.parse_location``); one it refuses is refused when opened.
 
     Examples
     --------

@@ -168,6 +168,15 @@ def test_a_connection_string_in_another_form_is_refused_in_one_masked_line(tmp_p
     assert os.listdir(tmp_path) == []
 
 
+def test_postgres_store_itself_takes_only_a_url(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for location in ("host=db password=s3cret dbname=skills", "ann:s3cret@db/skills"):
+        with pytest.raises(ValueError, match=r"^library '.*\*\*\*.*': expected a URL postgresql://") as err:
+            PostgresStore(location)
+        assert "s3cret" not in _chain(err.value)
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_path_with_a_control_character_is_refused_as_a_path_too(tmp_path):
     with pytest.raises(ValueError, match=r"^library '.*lib\\nx\.db': a path or URL holds no control char"):
         open_store(tmp_path / "lib\nx.db")
