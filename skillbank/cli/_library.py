@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from ..core._text import printable
 from ._options import (
     add_constraint_options,
     add_execution_options,
@@ -29,7 +29,6 @@ __all__ = ["add_parser"]
 _DB = "the library: a file (see 'library init') or a postgresql:// URL"
 _DB_READ = ("the library, a file or a postgresql:// URL; opened read-only, so a library in a folder you "
             "cannot write works")
-_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
 
 
 class _URL:
@@ -52,7 +51,7 @@ class _URL:
 def _location(text: str):
     """A ``db`` argument: a URL of a store backend (``postgresql://...``), else a library file.
 
-    ``sqlite:///relative`` and ``sqlite:////absolute`` name a file, as the store reads them.
+    The store tells them apart (``store._registry.parse_location``); one it refuses is refused when opened.
 
     Examples
     --------
@@ -61,12 +60,13 @@ def _location(text: str):
     >>> str(_location("postgresql://ann:s3cret@db.lab/skills"))
     'postgresql://ann:***@db.lab/skills'
     """
-    if not _SCHEME.match(text):
-        return Path(text)
-    scheme, rest = text.split("://", 1)
-    if scheme.lower() == "sqlite":
-        return Path(rest[1:] if rest.startswith("/") else rest)
-    return _URL(text)
+    from ..store._registry import parse_location  # the store package, when a library command is parsed
+
+    try:
+        _, target = parse_location(text)
+    except ValueError:  # refused by the store when the command opens it: one line, exit status 2, masked
+        return _URL(text)
+    return target if isinstance(target, Path) else _URL(target)
 
 
 def _target(location):
@@ -248,7 +248,7 @@ def _add(args) -> int:
                                **parallel_params(args))
     command = getattr(args, "command_name", "skillbank library add")
     for path, reason in report["failed"].items():
-        print(f"{command}: skipped {path}: {reason}", file=sys.stderr)
+        print(printable(f"{command}: skipped {path}: {reason}"), file=sys.stderr)  # a file name may hold ESC
     if args.json:
         print(json.dumps(report))
     else:

@@ -9,6 +9,7 @@ import sys
 from ..core import __version__
 from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment
 from ._options import join_negative_values
+from ._output import error_line, escaped_stdout
 
 __all__ = ["main", "build_parser", "leaf_parsers"]
 
@@ -19,7 +20,8 @@ class _OneLineParser(argparse.ArgumentParser):
     """Usage errors as one line on stderr with exit status 2."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        # argparse quotes arguments as given: a password, a terminal escape
+        self.exit(2, f"{self.prog}: error: {error_line(message)}\n")
 
 
 def leaf_parsers(parser) -> dict:
@@ -74,12 +76,12 @@ def main(argv=None) -> int:
             sys.stdout.flush()  # --help and --version: a closed pipe is handled below, not at exit
             raise
         try:
-            status = int(args.func(args) or 0)
+            with escaped_stdout():  # user-given text (labels, file names) without raw terminal escapes
+                status = int(args.func(args) or 0)
         except (ValueError, ImportError, OSError) as exc:
             if isinstance(exc, BrokenPipeError):
                 raise
-            message = " ".join(str(exc).split())
-            print(f"{args.command_name}: error: {message}", file=sys.stderr)
+            print(f"{args.command_name}: error: {error_line(exc, args)}", file=sys.stderr)
             return 2
         sys.stdout.flush()  # here, where a closed pipe can still be handled, not at exit
         return status

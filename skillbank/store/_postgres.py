@@ -31,11 +31,23 @@ from __future__ import annotations
 import contextlib
 
 from ..core._validation import check_positive
-from ._postgres_schema import create_tables, identify, mask_url, migrate, new_ids, psycopg, scrub
+from ._postgres_schema import create_tables, identify, migrate, new_ids, psycopg
 from ._schema import SCHEMA_VERSION
+from ._secrets import check_url, mask_url, scrub, secrets
 from ._sql import SQLStore
 
 __all__ = ["PostgresStore", "mask_url"]
+
+def _scrub_chain(exc, url: str) -> None:
+    """Scrub the password of ``url`` from the text of ``exc`` and of every exception it chains."""
+    words = secrets(url)
+    seen = set()
+    while exc is not None and id(exc) not in seen and words:
+        seen.add(id(exc))
+        with contextlib.suppress(AttributeError, TypeError):  # an exception whose args are read-only
+            exc.args = tuple(scrub(a, url) if isinstance(a, str) else a for a in exc.args)
+        exc = exc.__cause__ or exc.__context__
+
 
 _LOCK = 0x736B6C62  # high half of the library's advisory lock key ("sklb"); the low half is its schema's oid
 
@@ -90,7 +102,7 @@ class PostgresStore(SQLStore):
     marker = "%s"
 
     def __init__(self, url, *, create: bool = True, timeout: float = 60.0, readonly: bool = False):
-        self._url = str(url)
+        self._url = check_url(url)  # refused, masked, when libpq would read another password than written
         self.readonly = bool(readonly)
         self.created = False
         self._timeout = float(check_positive(timeout, name="timeout"))
@@ -114,7 +126,11 @@ class PostgresStore(SQLStore):
         return mask_url(self._url)
 
     def _failure(self, what: str, exc) -> ValueError:
-        """One line naming the library and what failed, the driver's words with the password scrubbed."""
+        """One line naming the library and what failed, the driver's words with the password scrubbed.
+
+        The driver's exception (and any it chains) is scrubbed too: it stays the new one's ``__context__``.
+        """
+        _scrub_chain(exc, self._url)
         text = scrub(str(exc), self._url) or type(exc).__name__
         if "does not exist" in text and "database" in text:
             text += " (create it with 'createdb' or CREATE DATABASE)"
@@ -124,18 +140,23 @@ class PostgresStore(SQLStore):
 
     def _connect(self):
         pg = psycopg()
+        # Failures are raised outside the except clauses, so they chain no driver exception at all.
+        failure = None
         try:
             params = pg.conninfo.conninfo_to_dict(self._url)
         except pg.Error as exc:
-            raise self._failure("expected a URL postgresql://[user@][host][:port][/dbname][?param=value]",
-                                exc) from None
+            failure = self._failure("expected a URL postgresql://[user@][host][:port][/dbname][?param=value]",
+                                    exc)
+        if failure is not None:
+            raise failure
         # A silent network should not hang a command; lab admins see who is connected.
         options = {k: v for k, v in (("connect_timeout", 10), ("application_name", "skillbank"))
                    if k not in params}
         try:
             return pg.connect(self._url, autocommit=True, **options)
         except pg.Error as exc:
-            raise self._failure("cannot connect", exc) from None
+            failure = self._failure("cannot connect", exc)
+        raise failure
 
     def _prepare(self, create: bool) -> None:
         cur = self.conn.cursor()

@@ -1,4 +1,4 @@
-"""What only the PostgreSQL backend has: URLs and passwords, the driver, schema, migrations, id counters.
+"""What only the PostgreSQL backend has: the driver, schema, migrations, id counters.
 
 Kept apart from :class:`skillbank.store.PostgresStore` (connections,
 transactions, the dialect of :mod:`skillbank.store._sql`, whose SQL serves
@@ -10,10 +10,9 @@ parameters. psycopg itself is imported only where a connection is made
 from __future__ import annotations
 
 import contextlib
-import re
-from urllib.parse import unquote
 
 from ._schema import APPLICATION, SCHEMA_VERSION, now
+from ._secrets import mask_url, scrub  # URLs and passwords: here before, kept for their importers
 
 __all__ = ["mask_url", "scrub", "psycopg", "identify", "create_tables", "migrate", "new_ids", "STEPS"]
 
@@ -67,62 +66,7 @@ STEPS = (_TABLES_V1, _MIGRATE_1_TO_2, _MIGRATE_2_TO_3)
 _STORAGE = tuple(f"ALTER TABLE {table} ALTER COLUMN {column} SET STORAGE EXTERNAL" for table, column in (
     ("demonstrations", "t"), ("streams", "data"), ("cluster_members", "features")))
 
-_USERINFO = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*://)([^?#]*)(.*)$", re.S)
-_QUERY_PASSWORD = re.compile(r"([?&]password=)([^&#]*)", re.I)
-
-
-# -- URLs and the driver ----------------------------------------------------------------------------
-def mask_url(url) -> str:
-    """``url`` with its password (in the user part or a ``password=`` parameter) shown as ``***``.
-
-    Examples
-    --------
-    >>> mask_url("postgresql://ann:s3cret@db.lab:5432/skills?sslmode=require")
-    'postgresql://ann:***@db.lab:5432/skills?sslmode=require'
-    >>> mask_url("postgres:///skills?host=/run/pg&password=s3cret")
-    'postgres:///skills?host=/run/pg&password=***'
-    >>> mask_url("postgresql://postgres:@/skills?host=/tmp/pg")  # an empty password hides nothing
-    'postgresql://postgres:@/skills?host=/tmp/pg'
-    >>> mask_url("lib.db")
-    'lib.db'
-    """
-    text = str(url)
-    m = _USERINFO.match(text)
-    if m is None:
-        return text
-    scheme, head, rest = m.groups()
-    if "@" in head:  # the last '@' ends the user part, whatever the password holds
-        user, hosts = head.rsplit("@", 1)
-        name, _, password = user.partition(":")
-        head = f"{name}:***@{hosts}" if password else head
-    return scheme + head + _QUERY_PASSWORD.sub(r"\1***", rest)
-
-
-def scrub(text: str, url: str) -> str:
-    """``text`` (a driver's message) on one line, with the password of ``url``, as written or decoded, masked.
-
-    libpq quotes the bad part of a malformed URL, which may be the password.
-
-    Examples
-    --------
-    >>> scrub('invalid percent-encoded token: "se%zz"', "postgresql://ann:se%zz@db/skills")
-    'invalid percent-encoded token: "***"'
-    """
-    m = _USERINFO.match(url)
-    found = []
-    if m is not None:
-        head, rest = m.group(2), m.group(3)
-        user = head.rsplit("@", 1)[0] if "@" in head else ""
-        if ":" in user:
-            found.append(user.split(":", 1)[1])
-        found += [p for _, p in _QUERY_PASSWORD.findall(rest)]
-    found += [unquote(p) for p in found]
-    text = str(text)
-    for secret in sorted({p for p in found if p}, key=len, reverse=True):
-        text = text.replace(secret, "***")
-    return " ".join(text.split())
-
-
+# -- the driver ------------------------------------------------------------------------------------
 def psycopg():
     """The psycopg 3 module; a one-line ImportError saying what to install when it is missing."""
     try:
