@@ -19,7 +19,7 @@ from ._segmentation import _save
 
 __all__ = ["draw_edit", "plot_edit"]
 
-_DEMO, _OTHER, _REPRO, _OBSTACLE = "#7f7f7f", "#c7c7c7", "#d62728", "#1f77b4"
+_DEMO, _OTHER, _REPRO, _OBSTACLE = "#7f7f7f", "#a8a8a8", "#d62728", "#1f77b4"
 
 
 def _path(Y, name: str) -> np.ndarray:
@@ -39,15 +39,19 @@ def _line(ax, Y, **kw):
     return ax.plot(*Y.T, **kw)
 
 
-def _obstacle(ax, ob, three_d: bool):
-    """Draw any obstacle from its outline: a filled polygon in 2-D, a wireframe in 3-D."""
+def _obstacle(ax, ob, three_d: bool, label: str | None = None):
+    """Draw any obstacle from its outline: a filled polygon in 2-D, a wireframe in 3-D.
+
+    ``label`` names its first piece, so the legend has one "obstacle" entry however it is drawn.
+    """
     lines = ob.outline()
     if not three_d:
-        for poly in lines:
-            ax.add_patch(Polygon(poly, closed=True, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE))
+        for k, poly in enumerate(lines):
+            ax.add_patch(Polygon(poly, closed=True, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE,
+                                 label=label if k == 0 else None))
         return
-    for line in lines:
-        ax.plot(*line.T, color=_OBSTACLE, alpha=0.5, linewidth=0.6)
+    for k, line in enumerate(lines):
+        ax.plot(*line.T, color=_OBSTACLE, alpha=0.5, linewidth=0.6, label=label if k == 0 else None)
 
 
 def _markers(ax, c: Constraints, start, points: list) -> None:
@@ -139,8 +143,8 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
     if D is not None:
         _line(ax, D, color=_DEMO, linestyle="--", linewidth=1.2, label="demonstration")
     _line(ax, R, color=_REPRO, linewidth=1.8, label="reproduction")
-    for ob in c.obstacles:
-        _obstacle(ax, ob, three_d)
+    for k, ob in enumerate(c.obstacles):
+        _obstacle(ax, ob, three_d, label="obstacle" if k == 0 else None)
         points.append(np.stack(ob.bounds()))
     # the start is marked even when the constraints leave it free: where the reproduction begins
     _markers(ax, c, R[0], points)

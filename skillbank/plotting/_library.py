@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from ..core import Constraints, Sphere, ViaPoint
 from ..core._validation import check_array
-from ._editing import _OBSTACLE, _REPRO, _extent, _markers, _obstacle, axis_labels
+from ._editing import _REPRO, _extent, _markers, _obstacle, axis_labels
 from ._segmentation import _colour, _save
 
 __all__ = ["plot_skills", "plot_reuse"]
@@ -175,11 +175,9 @@ def plot_reuse(reproduction, path, *, stored, candidates=(), constraints=None, s
         for j, Y in enumerate(paths):
             ax.plot(*Y.T, color=colour, lw=1.0, ls="--" if show_reproduction else "-", alpha=0.9,
                     label=label if j == 0 else None, zorder=3)
-        for ob in c.obstacles:
-            _obstacle(ax, ob, not flat)
+        for j, ob in enumerate(c.obstacles):
+            _obstacle(ax, ob, not flat, label="obstacle" if j == 0 else None)
             points.append(np.stack(ob.bounds()))
-        if c.obstacles:
-            ax.plot([], [], color=_OBSTACLE, lw=6, alpha=0.3, label="obstacle")
         _markers(ax, c, R[0], points)
         _extent(ax, np.concatenate(points), not flat)
         axis_labels(ax, unit)
