@@ -78,7 +78,7 @@ def _scatter(fig, spec, X, colours, axis_names, title):
     return ax
 
 
-def _trajectory_panel(fig, spec, trajs, colours, limits, title, unit):
+def _trajectory_panel(fig, spec, trajs, colours, limits, unit, title):
     segments = []
     for Y in trajs:
         step = max(1, Y.shape[0] // _MAX_POINTS)
@@ -222,7 +222,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
             if name in seps and np.isfinite(seps[name][cid]):
                 count += f", separation {seps[name][cid]:.1f}"
             _trajectory_panel(fig, grid[r, j + 1], [trajs[i] for i in members],
-                              [line_colours[i] for i in members], limits, f"{label} ({count})", unit)
+                              [line_colours[i] for i in members], limits, unit, f"{label} ({count})")
         if order.size > n_cols - 1:
             ax.set_title(ax.get_title() + f" ({order.size - n_cols + 1} not drawn)", fontsize=9)
     if cls is not None and class_names:
