@@ -30,7 +30,7 @@ plot_segment_grid(r_all, here / "r_all_defaults.png", invert_y=True,
                   titles=[f"demo {i}: cuts {r.keypoints.tolist()}" for i, r in enumerate(r_all)])
 demo = sio.read_robot_h5(data / "seed/three_button_pressing_demo.h5")
 b = segment(demo)  # the defaults: every stream, each by its kind
-plot_segments(b, here / "three_button_segmented.png", dims=3, below=("force", "gripper"))
+plot_segments(b, here / "three_button_segmented.png", dims=3, below=("force", "gripper"), unit="m")
 plot_keypoint_probability(b, here / "three_button_probabilities.png")
 cuts = (b.keypoint_times - demo.t[0]).round(2).tolist()
 print(f"R demo 3: {r.keypoints.tolist()}; three-button: {cuts} s -> {here}")

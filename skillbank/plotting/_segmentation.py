@@ -190,9 +190,9 @@ def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
     Y = np.asarray(Y, dtype=float).reshape(t.size, -1)
     if Y.shape[1] > 1:
         Y = np.linalg.norm(Y, axis=1)[:, None]
-        ax.set_ylabel(f"|{name}|", fontsize="small")
+        ax.set_ylabel(f"|{name}|\n(as recorded)", fontsize="small")
     else:
-        ax.set_ylabel(name, fontsize="small")
+        ax.set_ylabel(f"{name}\n(as recorded)", fontsize="small")
     for label, a, b in _runs(result.labels):
         stop = min(b + 1, t.size)
         ax.plot(t[a:stop], Y[a:stop, 0], color=_colour(label), lw=1.3)
@@ -207,7 +207,7 @@ def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
 
 
 def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y: bool = False,
-                  below=()) -> Path:
+                  below=(), unit: str | None = None) -> Path:
     """Plot a stream's trajectory coloured by segment, in 2-D or 3-D.
 
     Parameters
@@ -228,6 +228,10 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         magnitude. Keypoints are solid lines where that stream is among their
         main witnesses (at least half the strongest stream's evidence),
         dotted where others carried them.
+
+    unit : str, optional
+        The stream's unit, written on the path's axes (e.g. ``"m"``); not
+        given: "as recorded".
 
     Returns
     -------
@@ -287,16 +291,17 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
     if result.keypoints.size:
         handles.append(Line2D([], [], ls="none", marker="o", color="k", label="Keypoints"))
     handles.append(Line2D([], [], ls="none", marker="^", color="0.2", ms=7, label="Start"))
+    tail = f" ({unit})" if unit else " (as recorded)"
     if dims == 2:
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel(f"{stream}[0]")
-        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
+        ax.set_xlabel(f"{stream}[0]{tail}")
+        ax.set_ylabel(f"-{stream}[1]{tail}" if invert_y else f"{stream}[1]{tail}")
     else:
         span = np.ptp(P, axis=0)
         ax.set_box_aspect(np.where(span > 0, span, 1.0) / max(float(span.max()), 1e-12) + 0.05)
-        ax.set_xlabel(f"{stream}[0]")
-        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
-        ax.set_zlabel(f"{stream}[2]")
+        ax.set_xlabel(f"{stream}[0]{tail}")
+        ax.set_ylabel(f"-{stream}[1]{tail}" if invert_y else f"{stream}[1]{tail}")
+        ax.set_zlabel(f"{stream}[2]{tail}")
     ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
     ax.set_title(f"{result.n_segments} segments of {stream}")
     return _save(fig, path)

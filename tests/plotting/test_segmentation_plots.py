@@ -236,3 +236,13 @@ def test_plot_segments_below_names_an_unknown_stream(result, tmp_path):
     with pytest.raises(ValueError, match=r"below: expected streams of the demonstration .*got 'wrench'"):
         plot_segments(result, tmp_path / "x.png", below=("force", "wrench"))
     assert not (tmp_path / "x.png").exists()
+
+
+def test_plot_segments_axes_have_units(result, tmp_path, drawn):
+    plot_segments(result, tmp_path / "s.png", dims=3, unit="m", below=("force",))
+    path, force = drawn[-1].axes
+    assert [path.get_xlabel(), path.get_ylabel(), path.get_zlabel()] == [
+        "position[0] (m)", "position[1] (m)", "position[2] (m)"]
+    assert force.get_ylabel() == "|force|\n(as recorded)" and force.get_xlabel() == "Time [s]"
+    plot_segments(result, tmp_path / "flat.png", dims=2, invert_y=True)
+    assert drawn[-1].axes[0].get_ylabel() == "-position[1] (as recorded)"
