@@ -38,11 +38,15 @@ def draw_plan(ax, result, scene, *, demos=None, legend: bool = True, unit: str |
         ax.plot(*demos[pid]["position"].T, color="#a8a8a8", linewidth=0.8,
                 label="primitives used" if k == 0 else None)
     cmap = colormaps["viridis" if len(result.steps) > 10 else "tab10"]
+    colours = []
     for k, step in enumerate(result.steps):
         colour = cmap(k / max(len(result.steps) - 1, 1) if len(result.steps) > 10 else k % 10)
         part = Y[step.start:step.stop]
         name = " ".join([step.action, *step.args])
         ax.plot(*part.T, color=colour, linewidth=2.0, label=f"{k + 1}. ({name})")
+        colours.append(colour)
+    # the goals after all the steps, so the legend lists the steps together
+    for k, (step, colour) in enumerate(zip(result.steps, colours, strict=True)):
         ax.scatter(*step.goal, color=colour, marker="x", s=30, label="step goal" if k == 0 else None)
     placed = [(name, obj) for name, obj in scene.objects.items() if obj.position is not None]
     for k, (name, obj) in enumerate(placed):
