@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.backend_bases import FigureCanvasBase
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from ..segmentation import SegmentationResult
 
@@ -302,6 +303,8 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         ax.set_xlabel(f"{stream}[0]{tail}")
         ax.set_ylabel(f"-{stream}[1]{tail}" if invert_y else f"{stream}[1]{tail}")
         ax.set_zlabel(f"{stream}[2]{tail}")
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.set_major_locator(MaxNLocator(5))  # a short axis gets a few legible ticks, not a crowd
     ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
     ax.set_title(f"{result.n_segments} segments of {stream}")
     return _save(fig, path)
