@@ -1,4 +1,8 @@
-"""Regenerate the README figures: `.venv/bin/python docs/make_figures.py [DATA_DIR]`."""
+"""Regenerate the README figures and its numbers: `.venv/bin/python docs/make_figures.py [DATA_DIR]`.
+
+DATA_DIR defaults to `$SKILLBANK_DATA`, else `../shared/data` beside the checkout. Besides the
+figures in docs/figures, it rewrites the numbers the README quotes from a run (docs/readme_numbers.py).
+"""
 
 import os
 import sys
@@ -14,7 +18,7 @@ from skillbank.plotting import (
 from skillbank.segmentation import segment
 
 here = Path(__file__).resolve().parent / "figures"
-default = os.environ.get("SKILLBANK_DATA", here.parents[2] / "shared/data")
+default = os.environ.get("SKILLBANK_DATA") or here.parents[2] / "shared" / "data"
 data = Path(sys.argv[1] if len(sys.argv) > 1 else default)
 r_demo = sio.read_handwriting_h5(data / "seed/r_shape.h5", index=3)
 r = segment(r_demo, window=16, min_size=64, threshold=0.16, combine="product")  # the paper's
@@ -26,7 +30,7 @@ plot_segment_grid(r_all, here / "r_all_defaults.png", invert_y=True,
                   titles=[f"demo {i}: cuts {r.keypoints.tolist()}" for i, r in enumerate(r_all)])
 demo = sio.read_robot_h5(data / "seed/three_button_pressing_demo.h5")
 b = segment(demo)  # the defaults: every stream, each by its kind
-plot_segments(b, here / "three_button_segmented.png", dims=3, below=("force", "gripper"))
+plot_segments(b, here / "three_button_segmented.png", dims=3, below=("force", "gripper"), unit="m")
 plot_keypoint_probability(b, here / "three_button_probabilities.png")
 cuts = (b.keypoint_times - demo.t[0]).round(2).tolist()
 print(f"R demo 3: {r.keypoints.tolist()}; three-button: {cuts} s -> {here}")
@@ -68,3 +72,17 @@ with tempfile.TemporaryDirectory() as tmp:
         worst = max(s["end_error"] for s in item["steps"])
         print(f"planning {name}: {item['plan']}, largest end error {worst:.1e} m, "
               f"collision {item['collision']}, clearance {item['clearance']}")
+
+# RAIL clustering, the paper's mode and the default (skillbank.experiments._rail)
+from skillbank.experiments import plot_rail_experiment, rail_experiment  # noqa: E402
+
+for mode in ("paper", "default"):
+    plot_rail_experiment(rail_experiment(data / "rail", mode=mode), here / f"rail_{mode}.png")
+
+# the numbers the README quotes from a run, taken from one
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import readme_numbers  # noqa: E402
+
+numbers = readme_numbers.measure(data)
+readme_numbers.README.write_text(readme_numbers.rewrite(readme_numbers.README.read_text(), numbers))
+print(f"README numbers: {numbers}")

@@ -59,10 +59,10 @@ def data_dir() -> Path:
     """
     root = _data_root()
     if not (root / "seed").is_dir():
-        message = (
-            f"real data not found at {root}: set SKILLBANK_DATA to the shared data folder "
-            "(with seed/ and rail/)"
-        )
+        # one line: what is missing, where it looked and why there, and what to set
+        where = "$SKILLBANK_DATA" if os.environ.get("SKILLBANK_DATA") else "the default, beside the clone"
+        message = (f"needs the real data: no seed/ in {root} ({where}); "
+                   "export SKILLBANK_DATA=/path/to/shared/data (the folder with seed/ and rail/)")
         if os.environ.get("CI"):
             pytest.fail(message)
         pytest.skip(message)

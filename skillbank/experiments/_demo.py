@@ -114,14 +114,15 @@ def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:
     out.mkdir(parents=True, exist_ok=True)
     items = []
     lasa = load_lasa(shape, index=0)
-    cases = [(f"lasa_{shape}", lasa, None, 2), ("synthetic_multistream", synthetic_multistream(), None, 3)]
-    for name, demo, streams, dims in cases:
+    cases = [(f"lasa_{shape}", lasa, None, 2, "mm"),  # LASA is in mm, as the library demo says
+             ("synthetic_multistream", synthetic_multistream(), None, 3, "m")]
+    for name, demo, streams, dims, unit in cases:
         result = segment(demo, streams)
         figures = {
             "summary": plot_segmentation_summary(result, out / f"{name}_profiles.png"),
             "probability": plot_keypoint_probability(result, out / f"{name}_probability.png"),
             # the streams a path cannot show (contact, gripper) under it, against time
-            "segments": plot_segments(result, out / f"{name}_segments.png", dims=dims,
+            "segments": plot_segments(result, out / f"{name}_segments.png", dims=dims, unit=unit,
                                       below=[k for k, s in result.streams.items() if s.kind != "motion"]),
         }
         items.append({

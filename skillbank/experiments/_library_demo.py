@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-import textwrap
 import time
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from matplotlib.figure import Figure
 from tqdm import tqdm
 
 from ..core import Constraints, Demonstration, Sphere, exp_map
 from ..io import load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
-from ..plotting import draw_edit, plot_executable
+from ..plotting import plot_executable, plot_reuse, plot_skills
 from ._demo import fresh_library, run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._planning_demo import run_planning_demo
 
@@ -178,49 +176,18 @@ def _rail_setup(lib, data: Path, random_state, step) -> tuple:
 
 
 def _plot_clusters(lib, rows, path) -> Path:
-    fig = Figure(figsize=(7, 5.5))
-    ax = fig.add_subplot(projection="3d")
-    colours = {r["cluster"]: f"C{k % 10}" for k, r in enumerate(rows)}
-    seen = set()
-    for p in lib.primitives():
-        Y = p.demo["position"]
-        label = None if p.cluster in seen else f"{p.cluster}: {p.label}"
-        seen.add(p.cluster)
-        ax.plot(*Y.T[:3], color=colours.get(p.cluster, "grey"), linewidth=0.7, label=label)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_zlabel("z (m)")
-    ax.set_title("primitives by cluster (label)")
-    ax.legend(fontsize="small", loc="upper left")
-    fig.savefig(path, dpi=110)
-    return Path(path)
-
-
-def _planar(c: Constraints) -> Constraints:
-    """The x-y part of constraints on the plane z = 0 (the LASA drawings)."""
-    two = {k: None if getattr(c, k) is None else getattr(c, k)[:2] for k in ("start", "goal")}
-    return Constraints(**two, obstacles=[Sphere(ob.center[:2], ob.radius) for ob in c.obstacles])
+    """One panel per skill, each at its own scale: a 4 cm letter beside a 40 cm reach stays legible."""
+    skills = {}
+    for p in sorted(lib.primitives(), key=lambda q: (q.cluster, q.id)):
+        skills.setdefault(f"cluster {p.cluster}: {p.label}", []).append(p.demo["position"])
+    return plot_skills(skills, path, unit="m", title="the library's skills: primitives by cluster (label)")
 
 
 def _plot_reuse(lib, task, res, path) -> Path:
     stored = [p.demo["position"] for p in lib.primitives(label=task.skill)]
-    used = [c["position"] for c in res.candidates]
-    Y, c = res.trajectory["position"], task.constraints
-    planar = np.ptp(np.concatenate(stored)[:, 2]) < 1e-9
-    if planar:
-        stored, used, Y, c = [S[:, :2] for S in stored], [U[:, :2] for U in used], Y[:, :2], _planar(c)
-    fig = Figure(figsize=(11, 5), layout="constrained")
-    panels = [(stored, f"stored primitives of '{task.skill}'"),
-              (used, f"{len(used)} best adapted by LTE -> {task.method}")]
-    for k, (demos, title) in enumerate(panels):
-        ax = fig.add_subplot(1, 2, k + 1, projection=None if planar else "3d")
-        draw_edit(ax, Y, demos=demos, constraints=c, legend=k == 1)
-        if planar:
-            ax.set_aspect("equal")
-        ax.set_title(title, fontsize="medium")
-    fig.suptitle("\n".join(textwrap.wrap(task.description, 100)), fontsize="medium")
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return plot_reuse(res.trajectory["position"], path, stored=stored,
+                      candidates=[c["position"] for c in res.candidates], constraints=task.constraints,
+                      skill=task.skill, method=task.method, unit="m", title=task.description)
 
 
 def _markdown(result, rows, reuses, seg) -> str:

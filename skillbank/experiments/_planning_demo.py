@@ -235,7 +235,7 @@ def _task(lib, name, doc, out: Path, *, robot, limits, random_state, title) -> d
     prims = lib.primitives()
     used = {i for s in res.steps for i in s.used}
     figure = plot_plan(res, scene, out / f"{name}.png", demos={p.id: p.demo for p in prims if p.id in used},
-                       title=title)
+                       title=title, unit="m")
     traj = res.trajectory
     P = traj["position"]
     steps = [{"action": s.action, "args": list(s.args), "skill": s.skill, "used": [int(i) for i in s.used],

@@ -292,5 +292,5 @@ def plot_rail_experiment(result, path) -> Path:
         result.features, labelings, path, trajectories=result.trajectories,
         classes=result.class_index, class_names=[c.capitalize() for c in result.classes],
         max_clusters_shown=max(len(result.classes), 3),
-        title=f"RAIL clustering, {result.mode} mode ({result.n_demos} demonstrations)",
+        title=f"RAIL clustering, {result.mode} mode ({result.n_demos} demonstrations)", unit="m",
     )

@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from ..core._validation import check_array
@@ -23,6 +24,7 @@ __all__ = ["plot_cluster_comparison"]
 _PALETTE = ("#e41a1c", "#2ca02c", "#1f3fd6", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
             "#bcbd22", "#17becf")
 _MAX_POINTS = 200  # per drawn trajectory; plenty for a thumbnail
+_ZOOM = 0.82  # 3-D panels drawn a little smaller than their cell, so no axis label is cut off
 
 
 def _colour(i: int) -> str:
@@ -62,20 +64,21 @@ def _scatter(fig, spec, X, colours, axis_names, title):
     if X.shape[1] >= 3:
         ax = fig.add_subplot(spec, projection="3d")
         ax.scatter(X[:, 0], X[:, 1], X[:, 2], c=colours, s=8, depthshade=False)
-        ax.set_zlabel(axis_names[2], fontsize=7)
+        ax.set_zlabel(axis_names[2], fontsize=7, labelpad=-2)
+        ax.set_box_aspect(None, zoom=_ZOOM)  # room inside the panel for the z label
     else:
         ax = fig.add_subplot(spec)
         y = X[:, 1] if X.shape[1] == 2 else np.zeros(X.shape[0])
         ax.scatter(X[:, 0], y, c=colours, s=8)
-    ax.set_xlabel(axis_names[0], fontsize=7)
+    ax.set_xlabel(axis_names[0], fontsize=7, labelpad=-2 if X.shape[1] >= 3 else None)
     if X.shape[1] >= 2:
-        ax.set_ylabel(axis_names[1], fontsize=7)
-    ax.tick_params(labelsize=6)
+        ax.set_ylabel(axis_names[1], fontsize=7, labelpad=-2 if X.shape[1] >= 3 else None)
+    ax.tick_params(labelsize=6, pad=0)
     ax.set_title(title, fontsize=9)
     return ax
 
 
-def _trajectory_panel(fig, spec, trajs, colours, limits, title):
+def _trajectory_panel(fig, spec, trajs, colours, limits, unit, title):
     segments = []
     for Y in trajs:
         step = max(1, Y.shape[0] // _MAX_POINTS)
@@ -89,17 +92,24 @@ def _trajectory_panel(fig, spec, trajs, colours, limits, title):
             ax.add_collection(LineCollection(segments, colors=colours, linewidths=0.7))
     ax.set_xlim(*limits[0])
     ax.set_ylim(*limits[1])
+    tail = f" ({unit})" if unit else ""
+    pad = {"labelpad": -2} if three_d else {}
+    ax.set_xlabel("x" + tail, fontsize=7, **pad)
+    ax.set_ylabel("y" + tail, fontsize=7, **pad)
     if three_d:
         ax.set_zlim(*limits[2])
-        ax.set_zticklabels([])
-    ax.set_xticklabels([])
-    ax.set_yticklabels([])
+        ax.set_zlabel("z" + tail, fontsize=7, **pad)
+        ax.set_box_aspect(None, zoom=_ZOOM)
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.set_major_locator(MaxNLocator(3))  # three ticks: legible at a thumbnail's size
+    ax.tick_params(labelsize=6, pad=0)
     ax.set_title(title, fontsize=9)
     return ax
 
 
 def plot_cluster_comparison(features, labelings, path, *, trajectories=None, classes=None,
-                            class_names=None, max_clusters_shown=6, title=None, separation=None) -> Path:
+                            class_names=None, max_clusters_shown=6, title=None, separation=None,
+                            unit=None) -> Path:
     """Draw one row per clustering: the features coloured by cluster, then each cluster's trajectories.
 
     Parameters
@@ -128,6 +138,8 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
         (:attr:`ElasticClustering.separation_`), indexed like the cluster
         labels 0..k-1; written in the panel titles next to the size. An array
         is for a single clustering; a dict gives it by clustering name.
+    unit : str, optional
+        The trajectories' unit, written on their axes (e.g. ``"m"``).
 
     Returns
     -------
@@ -185,7 +197,7 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
             raise ValueError(f"trajectories: expected {n}, one per sample, got {len(trajs)}")
     shown = max(1, int(max_clusters_shown))
     n_cols = 1 + (min(shown, max(int(v.max()) + 1 for v in rows.values())) if trajs else 0)
-    fig = Figure(figsize=(2.8 * n_cols + 0.6, 3.0 * len(rows) + 0.8))
+    fig = Figure(figsize=(2.9 * n_cols + 0.6, 3.0 * len(rows) + 0.8), layout="constrained")
     grid = fig.add_gridspec(len(rows), n_cols)
     P, axis_names = _project3(X)
     if trajs:
@@ -210,12 +222,12 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
             if name in seps and np.isfinite(seps[name][cid]):
                 count += f", separation {seps[name][cid]:.1f}"
             _trajectory_panel(fig, grid[r, j + 1], [trajs[i] for i in members],
-                              [line_colours[i] for i in members], limits, f"{label} ({count})")
+                              [line_colours[i] for i in members], limits, unit, f"{label} ({count})")
         if order.size > n_cols - 1:
             ax.set_title(ax.get_title() + f" ({order.size - n_cols + 1} not drawn)", fontsize=9)
     if cls is not None and class_names:
         handles = [Line2D([], [], color=_colour(i), lw=2) for i in range(len(class_names))]
-        fig.legend(handles, class_names, loc="lower center", ncol=len(class_names), frameon=False)
+        fig.legend(handles, class_names, loc="outside lower center", ncol=len(class_names), frameon=False)
     if title:
         fig.suptitle(title)
     return _save(fig, path)

@@ -19,7 +19,7 @@ from ._segmentation import _save
 
 __all__ = ["draw_edit", "plot_edit"]
 
-_DEMO, _OTHER, _REPRO, _OBSTACLE = "#7f7f7f", "#c7c7c7", "#d62728", "#1f77b4"
+_DEMO, _OTHER, _REPRO, _OBSTACLE = "#7f7f7f", "#a8a8a8", "#d62728", "#1f77b4"
 
 
 def _path(Y, name: str) -> np.ndarray:
@@ -39,15 +39,40 @@ def _line(ax, Y, **kw):
     return ax.plot(*Y.T, **kw)
 
 
-def _obstacle(ax, ob, three_d: bool):
-    """Draw any obstacle from its outline: a filled polygon in 2-D, a wireframe in 3-D."""
+def _obstacle(ax, ob, three_d: bool, label: str | None = None):
+    """Draw any obstacle from its outline: a filled polygon in 2-D, a wireframe in 3-D.
+
+    ``label`` names its first piece, so the legend has one "obstacle" entry however it is drawn.
+    """
     lines = ob.outline()
     if not three_d:
-        for poly in lines:
-            ax.add_patch(Polygon(poly, closed=True, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE))
+        for k, poly in enumerate(lines):
+            ax.add_patch(Polygon(poly, closed=True, facecolor=_OBSTACLE, alpha=0.25, edgecolor=_OBSTACLE,
+                                 label=label if k == 0 else None))
         return
-    for line in lines:
-        ax.plot(*line.T, color=_OBSTACLE, alpha=0.5, linewidth=0.6)
+    for k, line in enumerate(lines):
+        ax.plot(*line.T, color=_OBSTACLE, alpha=0.5, linewidth=0.6, label=label if k == 0 else None)
+
+
+def _markers(ax, c: Constraints, start, points: list) -> None:
+    """Start (square; ``start`` when the constraints leave it free), goal (star), via-points (diamonds)."""
+    markers = [("start", c.start if c.start is not None else np.asarray(start, dtype=float), "s"),
+               ("goal", c.goal, "*")]
+    markers += [("via-point" if k == 0 else None, v.position, "D") for k, v in enumerate(c.via)]
+    for label, p, marker in markers:
+        if p is not None:
+            ax.plot(*p[:, None], marker=marker, color="black", markersize=7 if marker != "*" else 11,
+                    linestyle="none", label=label, zorder=5)
+            points.append(p[None])
+
+
+def axis_labels(ax, unit: str | None) -> None:
+    """Name the axes x, y (and z) with ``unit`` in brackets; "as recorded" when the unit is not known."""
+    tail = f" ({unit})" if unit else " (as recorded)"
+    ax.set_xlabel("x" + tail)
+    ax.set_ylabel("y" + tail)
+    if _is_3d(ax):
+        ax.set_zlabel("z" + tail)
 
 
 def _extent(ax, points: np.ndarray, three_d: bool):
@@ -77,7 +102,8 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
     demos : sequence of array-like or Demonstration, default=()
         Further demonstrations (e.g. all those a ProMP learned from), drawn thin.
     constraints : Constraints, optional
-        Start (square), goal (star), via-points (diamonds) and obstacles (shaded).
+        Start (square), goal (star), via-points (diamonds) and obstacles
+        (shaded). Without a start, the square marks where the reproduction begins.
     legend : bool, default=True
 
     Returns
@@ -117,23 +143,19 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
     if D is not None:
         _line(ax, D, color=_DEMO, linestyle="--", linewidth=1.2, label="demonstration")
     _line(ax, R, color=_REPRO, linewidth=1.8, label="reproduction")
-    for ob in c.obstacles:
-        _obstacle(ax, ob, three_d)
+    for k, ob in enumerate(c.obstacles):
+        _obstacle(ax, ob, three_d, label="obstacle" if k == 0 else None)
         points.append(np.stack(ob.bounds()))
-    markers = [("start", c.start, "s"), ("goal", c.goal, "*")]
-    markers += [("via-point" if k == 0 else None, v.position, "D") for k, v in enumerate(c.via)]
-    for label, p, marker in markers:
-        if p is not None:
-            ax.plot(*p[:, None], marker=marker, color="black", markersize=7 if marker != "*" else 11,
-                    linestyle="none", label=label, zorder=5)
-            points.append(p[None])
+    # the start is marked even when the constraints leave it free: where the reproduction begins
+    _markers(ax, c, R[0], points)
     _extent(ax, np.concatenate(points), three_d)
     if legend:
         ax.legend(loc="best", fontsize="small")
     return ax
 
 
-def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, title=None) -> Path:
+def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, title=None,
+              unit: str | None = None) -> Path:
     """Write a figure of a reproduction, its demonstration(s), constraints and obstacles.
 
     Parameters
@@ -145,6 +167,9 @@ def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, titl
     demo, demos, constraints
         As in :func:`draw_edit`.
     title : str, optional
+    unit : str, optional
+        The positions' unit, written on the axes (e.g. ``"m"``); when not given
+        the axes say "as recorded".
 
     Returns
     -------
@@ -160,13 +185,10 @@ def plot_edit(reproduction, path, *, demo=None, demos=(), constraints=None, titl
     '.png'
     """
     n_dims = _path(reproduction, "reproduction").shape[1]
-    fig = Figure(figsize=(6.0, 5.5))
+    fig = Figure(figsize=(6.0, 5.5), layout="constrained")
     ax = fig.add_subplot(projection="3d" if n_dims == 3 else None)
     draw_edit(ax, reproduction, demo=demo, demos=demos, constraints=constraints)
     if title:
         ax.set_title(title)
-    if n_dims == 3:
-        ax.set_zlabel("z")
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
+    axis_labels(ax, unit)
     return _save(fig, path)

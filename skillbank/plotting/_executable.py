@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from ..core import Demonstration, quaternion_to_matrix
-from ._editing import _extent, _obstacle
+from ._editing import _OBSTACLE, _extent, _obstacle
 from ._segmentation import _save
 
 __all__ = ["plot_executable"]
@@ -25,8 +26,9 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
     Left, in 3-D: the position path, the tool frame's axes (x red, y green,
     z blue) at ``n_frames`` samples evenly spaced in time, the demonstrations
     it was adapted from in grey, and the constraints' start, goal and
-    obstacles. Right: each joint angle against time (when the trajectory has a
-    ``joints`` stream) and the gripper on a second axis (when it has one).
+    obstacles, each named in the legend. Right: each joint angle against time
+    (when the trajectory has a ``joints`` stream) and the gripper on a second
+    axis when it moves (a constant gripper is named in the legend instead).
 
     Parameters
     ----------
@@ -79,15 +81,19 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
             for a, b in zip(P[at], ends, strict=True):
                 ax.plot(*np.stack([a, b]).T, color=colour, lw=1.2)
             points.append(ends)
+    markers = []
     if constraints is not None:
         for name, marker in (("start", "^"), ("goal", "*")):
             value = getattr(constraints, name, None)
             if value is not None:
                 ax.scatter(*np.asarray(value, dtype=float)[:3], marker=marker, s=80, color="tab:purple",
                            depthshade=False)
+                markers.append(Line2D([], [], ls="none", marker=marker, ms=8, color="tab:purple", label=name))
         for ob in constraints.obstacles:
             _obstacle(ax, ob, True)
             points.append(np.concatenate(ob.outline()))
+        if constraints.obstacles:
+            markers.append(Patch(facecolor="none", edgecolor=_OBSTACLE, label="obstacle"))
     _extent(ax, np.concatenate(points), True)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -97,7 +103,7 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
         handles.append(Line2D([], [], color="0.7", label="demonstrations"))
     handles += [Line2D([], [], color=c, label=f"tool {a}") for c, a in zip(_AXES, "xyz", strict=True)
                 if "orientation" in trajectory.streams]
-    ax.legend(handles=handles, fontsize="small", loc="upper left")
+    ax.legend(handles=handles + markers, fontsize="small", loc="upper left")
     ax.set_title("pose path and tool frames")
     if joints:
         jx = fig.add_subplot(1, 2, 2)
@@ -109,10 +115,14 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
         jx.set_ylabel("joint angle (rad)")
         jx.set_title("joint trajectory")
         if "gripper" in trajectory.streams:
-            gx = jx.twinx()
-            gx.plot(trajectory.t, trajectory["gripper"][:, 0], color="k", ls="--", lw=1.0, label="gripper")
-            gx.set_ylabel("gripper")
-            jx.plot([], [], color="k", ls="--", lw=1.0, label="gripper")
+            G = np.asarray(trajectory["gripper"], dtype=float)[:, 0]
+            if np.ptp(G) > 0:
+                gx = jx.twinx()
+                gx.plot(trajectory.t, G, color="k", ls="--", lw=1.0)
+                gx.set_ylabel("gripper (as recorded)")
+                jx.plot([], [], color="k", ls="--", lw=1.0, label="gripper (right axis)")
+            else:  # a constant gripper gets a line of the legend, not an axis of its own
+                jx.plot([], [], ls="none", label=f"gripper held at {G[0]:.3g}")
         jx.legend(fontsize="small", loc="best")
     if title:
         fig.suptitle(title, fontsize="medium")

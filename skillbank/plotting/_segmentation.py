@@ -12,16 +12,11 @@ import numpy as np
 from matplotlib.backend_bases import FigureCanvasBase
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from ..segmentation import SegmentationResult
 
-__all__ = [
-    "figure_path",
-    "plot_jerk_profile",
-    "plot_keypoint_probability",
-    "plot_segments",
-    "plot_segmentation_summary",
-]
+__all__ = ["figure_path", "plot_jerk_profile", "plot_segments"]
 
 _PALETTE = (
     "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
@@ -187,54 +182,6 @@ def plot_jerk_profile(result, path, *, stream=None) -> Path:
     return _save(fig, path)
 
 
-def _draw_probability(ax, result: SegmentationResult, *, legend: bool = True) -> None:
-    t = result.demonstration.t
-    for i, seg in enumerate(result.streams.values()):
-        ax.plot(t, _scaled(seg.probability), lw=1.0, alpha=0.8, color=_colour(i + 1), label=seg.name)
-    ax.plot(t, _scaled(result.probability), lw=2.6, color="k", label="combined")
-    # each keypoint says which streams supported it, so a cut can be traced to its evidence
-    for k, support in zip(result.keypoints, result.keypoint_support, strict=True):
-        ax.axvline(t[int(k)], color="crimson", ls=":", lw=1.2)
-        ax.text(t[int(k)], 1.06, ", ".join(support), rotation=90, va="top", ha="right", fontsize="x-small",
-                color="crimson")
-    ax.set_xlim(t[0], t[-1])
-    ax.set_ylim(-0.03, 1.08)
-    if legend:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
-
-
-def plot_keypoint_probability(result, path) -> Path:
-    """Plot each stream's keypoint curve and the combined keypoint probability.
-
-    Each curve is scaled to a maximum of 1. Stream curves are thin lines, the
-    combined curve is thick and black, keypoints are dotted vertical lines.
-
-    Parameters
-    ----------
-    result : SegmentationResult
-    path : str or path-like
-        Output image file; parent directories are created.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Examples
-    --------
-    >>> plot_keypoint_probability(result, "figs/probability.png")  # doctest: +SKIP
-    PosixPath('figs/probability.png')
-    """
-    result = _check_result(result)
-    fig = Figure(figsize=(7.0, 4.0))
-    ax = fig.add_subplot()
-    _draw_probability(ax, result)
-    ax.set_xlabel("Time [s]")
-    ax.set_ylabel("Keypoint probability (scaled)")
-    ax.set_title("Keypoint probability")
-    return _save(fig, path)
-
-
 def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
     """One stream against time, each column coloured by segment, with the keypoints as lines.
 
@@ -244,9 +191,9 @@ def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
     Y = np.asarray(Y, dtype=float).reshape(t.size, -1)
     if Y.shape[1] > 1:
         Y = np.linalg.norm(Y, axis=1)[:, None]
-        ax.set_ylabel(f"|{name}|", fontsize="small")
+        ax.set_ylabel(f"|{name}|\n(as recorded)", fontsize="small")
     else:
-        ax.set_ylabel(name, fontsize="small")
+        ax.set_ylabel(f"{name}\n(as recorded)", fontsize="small")
     for label, a, b in _runs(result.labels):
         stop = min(b + 1, t.size)
         ax.plot(t[a:stop], Y[a:stop, 0], color=_colour(label), lw=1.3)
@@ -261,7 +208,7 @@ def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
 
 
 def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y: bool = False,
-                  below=()) -> Path:
+                  below=(), unit: str | None = None) -> Path:
     """Plot a stream's trajectory coloured by segment, in 2-D or 3-D.
 
     Parameters
@@ -282,6 +229,10 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         magnitude. Keypoints are solid lines where that stream is among their
         main witnesses (at least half the strongest stream's evidence),
         dotted where others carried them.
+
+    unit : str, optional
+        The stream's unit, written on the path's axes (e.g. ``"m"``); not
+        given: "as recorded".
 
     Returns
     -------
@@ -341,76 +292,19 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
     if result.keypoints.size:
         handles.append(Line2D([], [], ls="none", marker="o", color="k", label="Keypoints"))
     handles.append(Line2D([], [], ls="none", marker="^", color="0.2", ms=7, label="Start"))
+    tail = f" ({unit})" if unit else " (as recorded)"
     if dims == 2:
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel(f"{stream}[0]")
-        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
+        ax.set_xlabel(f"{stream}[0]{tail}")
+        ax.set_ylabel(f"-{stream}[1]{tail}" if invert_y else f"{stream}[1]{tail}")
     else:
         span = np.ptp(P, axis=0)
         ax.set_box_aspect(np.where(span > 0, span, 1.0) / max(float(span.max()), 1e-12) + 0.05)
-        ax.set_xlabel(f"{stream}[0]")
-        ax.set_ylabel(f"-{stream}[1]" if invert_y else f"{stream}[1]")
-        ax.set_zlabel(f"{stream}[2]")
+        ax.set_xlabel(f"{stream}[0]{tail}")
+        ax.set_ylabel(f"-{stream}[1]{tail}" if invert_y else f"{stream}[1]{tail}")
+        ax.set_zlabel(f"{stream}[2]{tail}")
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.set_major_locator(MaxNLocator(5))  # a short axis gets a few legible ticks, not a crowd
     ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
     ax.set_title(f"{result.n_segments} segments of {stream}")
-    return _save(fig, path)
-
-
-def plot_segmentation_summary(result, path, *, stream=None) -> Path:
-    """Plot every segmented stream's jerk profile and the combined keypoint probability.
-
-    One panel per stream (stacked, shared time axis) shows its profile coloured
-    by its own changepoint segments, with dashed lines at its changepoints; the
-    bottom panel shows the keypoint curves. Keypoints are drawn as vertical
-    lines across all panels.
-
-    Parameters
-    ----------
-    result : SegmentationResult
-    path : str or path-like
-        Output image file; parent directories are created.
-    stream : str or list of str, optional
-        Only these segmented streams' profiles (default: all).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Examples
-    --------
-    >>> plot_segmentation_summary(result, "figs/summary.png")  # doctest: +SKIP
-    PosixPath('figs/summary.png')
-    """
-    result = _check_result(result)
-    if stream is None:
-        names = list(result.streams)
-    else:
-        names = [stream] if isinstance(stream, str) else list(stream)
-    segs = [_check_segmented_stream(result, name) for name in names]
-    t = result.demonstration.t
-    n_panels = len(segs) + 1
-    fig = Figure(figsize=(8.0, 1.7 * n_panels + 0.8))
-    axes = fig.subplots(n_panels, 1, sharex=True, squeeze=False)[:, 0]
-    for ax, seg in zip(axes[:-1], segs, strict=True):
-        _draw_profile(ax, t, np.asarray(seg.profile, dtype=float), seg.changepoints, markersize=1.5)
-        ax.set_ylabel(f"{seg.name}\njerk", fontsize="small")
-    _draw_probability(axes[-1], result, legend=False)
-    axes[-1].set_ylabel("keypoint\nprobability", fontsize="small")
-    axes[-1].set_xlabel("Time [s]")
-    for ax in axes[:-1]:
-        for k in result.keypoints:
-            ax.axvline(t[int(k)], color="crimson", ls=":", lw=1.2)
-    handles = [Line2D([], [], color=_colour(i + 1), lw=1.0, label=name)
-               for i, name in enumerate(result.streams)]
-    handles += [Line2D([], [], color="k", lw=2.6, label="combined"),
-                Line2D([], [], color="0.3", ls="--", lw=1.0, label="changepoint"),
-                Line2D([], [], color="crimson", ls=":", lw=1.2, label="keypoint")]
-    axes[-1].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
-    if result.keypoints.size:
-        times = ", ".join(f"{x:.2f}" for x in result.keypoint_times)
-        axes[0].set_title(f"Segmentation: {result.n_segments} segments, keypoints at {times} s")
-    else:
-        axes[0].set_title("Segmentation: 1 segment, no keypoints")
-    fig.align_ylabels(axes)
     return _save(fig, path)

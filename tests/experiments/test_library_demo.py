@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.figure import Figure
 
 from skillbank.experiments._library_demo import run_library_demo
 from skillbank.pipeline import Library
@@ -36,7 +37,20 @@ def check_result(res, out):
     assert Path(res["planning"]).is_file() and "planning/summary.md" in Path(res["summary"]).read_text()
 
 
-def test_lasa_library_demo(tmp_path, capsys):
+def _saved_figures(monkeypatch) -> dict:
+    """Every figure the job saves, by file name."""
+    saved, real = {}, Figure.savefig
+
+    def spy(self, path, *args, **kwargs):
+        saved[Path(path).name] = self
+        return real(self, path, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return saved
+
+
+def test_lasa_library_demo(tmp_path, capsys, monkeypatch):
+    saved = _saved_figures(monkeypatch)
     res = run_library_demo(tmp_path, segmentation=False)
     assert capsys.readouterr().err == ""  # no progress bar unless asked for
     check_result(res, tmp_path)
@@ -51,6 +65,20 @@ def test_lasa_library_demo(tmp_path, capsys):
         assert lib.summary()["n_demonstrations"] == res["n_demonstrations"] == 32
         ids = {p.id for p in lib.primitives(label="WShape", load=False)}
         assert set(wshape["used"]) <= ids
+    # one panel per skill, each at its own scale: the 5 cm letters are not squeezed beside 0.4 m moves
+    panels = {ax.get_title().split("\n")[0]: ax for ax in saved["clusters.png"].axes}
+    assert set(panels) == {f"cluster {r['cluster']}: {r['label']}" for r in res["skills"]}
+    letter, move = panels[next(k for k in panels if k.endswith("WShape"))], panels[
+        next(k for k in panels if k.endswith("place"))]
+    assert letter.name == "rectilinear" and move.name == "3d"
+    assert np.ptp(letter.get_xlim()) < 0.1 < np.ptp(move.get_xlim())
+    assert letter.get_xlabel() == "x (m)"
+    # the reuse of 'place': its stored primitives alone on the left, the reproduction on the right
+    left, right = saved["reuse_place.png"].axes
+    assert "reproduction" not in [line.get_label() for line in left.get_lines()]
+    for ax in (left, right):
+        assert ax.get_xlabel() == "x (m)" and ax.get_zlabel() == "z (m)"
+        assert {"start", "goal"} <= {t.get_text() for t in ax.get_legend().get_texts()}
     # a second run replaces the library rather than adding to it; this one shows its progress
     again = run_library_demo(tmp_path, segmentation=False, progress=True)
     assert again["n_demonstrations"] == 32 and again["n_primitives"] == res["n_primitives"]

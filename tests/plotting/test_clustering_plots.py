@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from skillbank.experiments import plot_rail_experiment, rail_experiment
 from skillbank.plotting._clustering import _display_order, plot_cluster_comparison
@@ -81,3 +82,24 @@ def test_bad_input(tmp_path, data, kwargs, match):
 def test_rail_figure_needs_a_result(tmp_path):
     with pytest.raises(ValueError, match=r"result: expected a RailExperimentResult, got dict"):
         plot_rail_experiment({}, tmp_path / "x.png")
+
+
+def test_trajectory_panels_have_ticks_units_and_no_cut_label(tmp_path, data, drawn):
+    X, trajs, classes = data
+    plot_cluster_comparison(X, np.arange(30) // 10, tmp_path / "t.png", trajectories=trajs, classes=classes,
+                            unit="m")
+    fig = drawn[-1]
+    scatter, *panels = fig.axes[:4]
+    assert scatter.get_zlabel() == "feature 3"
+    for ax in panels:
+        assert [ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()] == ["x (m)", "y (m)", "z (m)"]
+        assert all(t.get_text() for t in ax.get_xticklabels())  # tick values shown
+    # every 3-D panel's axis labels lie inside its own cell: none is drawn under a neighbour
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    for ax in fig.axes:
+        others = [o.get_window_extent(renderer) for o in fig.axes if o is not ax]
+        for label in (ax.xaxis.label, ax.yaxis.label, ax.zaxis.label):
+            box = label.get_window_extent(renderer)
+            assert not any(box.overlaps(o) for o in others), label.get_text()

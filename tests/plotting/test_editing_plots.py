@@ -49,10 +49,10 @@ def test_3d_file(tmp_path):
     assert out == tmp_path / "edit3d.png" and out.read_bytes()[:8] == PNG_MAGIC
     ax = Figure().add_subplot(projection="3d")
     draw_edit(ax, demo, constraints=c, legend=False)
-    # 1 path + 1 goal marker + the obstacles' wireframes (their outline() polylines)
+    # 1 path + the start (where the path begins) + 1 goal marker + the obstacles' wireframes
     n_wire = sum(len(ob.outline()) for ob in c.obstacles)
     assert n_wire == 19 + 12  # sphere: 7 parallels and 12 meridians; box: 12 edges
-    assert len(ax.get_lines()) == 2 + n_wire and ax.get_legend() is None
+    assert len(ax.get_lines()) == 3 + n_wire and ax.get_legend() is None
 
 
 def test_svg_and_pdf(tmp_path):
@@ -81,3 +81,19 @@ def test_errors(call, match):
     ax2, ax3 = Figure().add_subplot(), Figure().add_subplot(projection="3d")
     with pytest.raises(ValueError, match=match):
         call(ax2, ax3)
+
+
+def test_start_is_marked_when_the_constraints_leave_it_free(tmp_path, drawn):
+    rep = _curve(2)
+    plot_edit(rep, tmp_path / "e.png", constraints=Constraints(goal=rep[-1]), unit="mm")
+    ax = drawn[-1].axes[0]
+    starts = [line for line in ax.get_lines() if line.get_label() == "start"]
+    np.testing.assert_allclose(starts[0].get_xydata(), rep[:1])
+    assert "start" in [t.get_text() for t in ax.get_legend().get_texts()]
+    assert [ax.get_xlabel(), ax.get_ylabel()] == ["x (mm)", "y (mm)"]
+
+
+def test_axes_say_when_the_unit_is_not_known(tmp_path, drawn):
+    plot_edit(_curve(3), tmp_path / "e.png")
+    ax = drawn[-1].axes[0]
+    assert [ax.get_xlabel(), ax.get_zlabel()] == ["x (as recorded)", "z (as recorded)"]

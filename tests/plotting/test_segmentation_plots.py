@@ -13,6 +13,7 @@ from skillbank.plotting import (
     plot_segmentation_summary,
     plot_segments,
 )
+from skillbank.plotting._segmentation import _colour
 from skillbank.segmentation import segment
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -148,21 +149,75 @@ def test_plot_segment_grid_rejects(result, tmp_path, kwargs, match):
         plot_segment_grid(args.pop("results"), tmp_path / "g.png", **args)
 
 
-def test_probability_panel_names_each_keypoints_supporting_streams(result, tmp_path, monkeypatch):
-    import matplotlib.axes
+@pytest.fixture(scope="module")
+def multikind(result):
+    """All three kinds: motion (position), contact (force, its changepoints not the keypoints), discrete."""
+    return segment(result.demonstration, window=16)
 
-    texts = []
-    real = matplotlib.axes.Axes.text
 
-    def spy(self, x, y, s, *args, **kwargs):
-        texts.append(s)
-        return real(self, x, y, s, *args, **kwargs)
+def _data_lines(ax):
+    """The curves of a panel, without the vertical lines that mark changepoints and keypoints."""
+    return [line for line in ax.get_lines() if np.ptp(np.asarray(line.get_xdata(), dtype=float)) > 0]
 
-    monkeypatch.setattr(matplotlib.axes.Axes, "text", spy)
-    plot_keypoint_probability(result, tmp_path / "prob.png")
-    assert len(texts) == result.keypoints.size > 0
-    assert texts == [", ".join(s) for s in result.keypoint_support]
-    assert all(texts)  # every keypoint was supported by at least one stream
+
+def test_summary_panels_name_what_each_kind_was_read_from(multikind, tmp_path, drawn):
+    assert {s.kind for s in multikind.streams.values()} == {"motion", "contact", "discrete"}
+    plot_segmentation_summary(multikind, tmp_path / "s.png")
+    fig = drawn[-1]
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    # one panel per stream, then the keypoint curves and the support rows
+    assert len(labels) == len(multikind.streams) + 2
+    assert "jerk" in labels[0] and "position" in labels[0] and "typical" in labels[0]
+    assert labels[1].startswith("|force|") and "jerk" not in labels[1]
+    assert labels[2].startswith("gripper") and "jerk" not in labels[2]
+    # a contact panel shows the force's magnitude, a discrete one the gripper's value
+    force = np.linalg.norm(multikind.demonstration["force"], axis=1)
+    drawn_force = np.concatenate([line.get_ydata()[:-1] for line in _data_lines(fig.axes[1])[:-1]]
+                                 + [_data_lines(fig.axes[1])[-1].get_ydata()])
+    np.testing.assert_allclose(drawn_force, force)
+
+
+def test_summary_colours_follow_the_final_segments(multikind, tmp_path, drawn):
+    force = multikind.streams["force"]
+    assert force.changepoints.tolist() != multikind.keypoints.tolist()  # else the test could not fail
+    plot_segmentation_summary(multikind, tmp_path / "s.png")
+    fig = drawn[-1]
+    expected = [_colour(k) for k in range(multikind.n_segments)]
+    for ax in fig.axes[:len(multikind.streams)]:
+        lines = _data_lines(ax)
+        assert [line.get_color() for line in lines] == expected
+        # each run starts at its segment's first sample
+        starts = [float(line.get_xdata()[0]) for line in lines]
+        np.testing.assert_allclose(starts[1:], multikind.demonstration.t[multikind.keypoints])
+
+
+@pytest.mark.parametrize("plot", [plot_segmentation_summary, plot_keypoint_probability])
+def test_support_rows_name_each_keypoints_streams(multikind, tmp_path, drawn, plot):
+    plot(multikind, tmp_path / "p.png")
+    fig = drawn[-1]
+    support = fig.axes[-1]
+    assert [t.get_text() for t in support.get_yticklabels()] == list(multikind.streams)
+    dots = np.concatenate([c.get_offsets() for c in support.collections])
+    t = multikind.demonstration.t
+    want = sorted((float(t[k]), list(multikind.streams).index(name))
+                  for k, s in zip(multikind.keypoints, multikind.keypoint_support, strict=True) for name in s)
+    assert sorted(map(tuple, dots.tolist())) == want
+    assert not any(ax.texts for ax in fig.axes)  # no rotated labels over the curves
+    names = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    assert {*multikind.streams, "combined", "keypoint"} <= set(names)
+    assert fig.axes[-1].get_xlabel() == "Time [s]"
+
+
+def test_three_button_summary_has_no_colliding_labels(data_dir, tmp_path, drawn, collisions):
+    demo = skillbank.io.read_robot_h5(data_dir / "seed" / "three_button_pressing_demo.h5")
+    res = segment(demo)
+    plot_segmentation_summary(res, tmp_path / "s.png")
+    plot_keypoint_probability(res, tmp_path / "p.png")
+    for fig in drawn:
+        assert collisions(fig) == []
+    ylabels = [ax.get_ylabel() for ax in drawn[0].axes]
+    assert [label for label in ylabels if "jerk" in label] == [
+        f"{name} jerk\n(1 = typical)" for name in ("joints", "position", "orientation")]
 
 
 def test_plot_segments_draws_streams_below_the_path(result, tmp_path):
@@ -181,3 +236,13 @@ def test_plot_segments_below_names_an_unknown_stream(result, tmp_path):
     with pytest.raises(ValueError, match=r"below: expected streams of the demonstration .*got 'wrench'"):
         plot_segments(result, tmp_path / "x.png", below=("force", "wrench"))
     assert not (tmp_path / "x.png").exists()
+
+
+def test_plot_segments_axes_have_units(result, tmp_path, drawn):
+    plot_segments(result, tmp_path / "s.png", dims=3, unit="m", below=("force",))
+    path, force = drawn[-1].axes
+    assert [path.get_xlabel(), path.get_ylabel(), path.get_zlabel()] == [
+        "position[0] (m)", "position[1] (m)", "position[2] (m)"]
+    assert force.get_ylabel() == "|force|\n(as recorded)" and force.get_xlabel() == "Time [s]"
+    plot_segments(result, tmp_path / "flat.png", dims=2, invert_y=True)
+    assert drawn[-1].axes[0].get_ylabel() == "-position[1] (as recorded)"
