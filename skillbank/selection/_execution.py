@@ -481,8 +481,8 @@ def _check_stretch(constraints, fixed_time, scale, t, key, limit) -> None:
     duration = float(t[-1] - t[0])
     if fixed_time:
         raise ValueError(f"limits: {key} {_show(limit)} cannot be met on the {duration:.6g} s time base "
-                         f"given: it needs at least {duration * scale:.6g} s (give a duration instead of time "
-                         "stamps to slow down as needed)")
+                         f"given: it needs at least {duration * scale:.6g} s (give a duration instead of "
+                         "time stamps to slow down as needed)")
     for name in ("start_velocity", "end_velocity"):
         v = getattr(constraints, name)
         if v is not None and np.any(v != 0):
