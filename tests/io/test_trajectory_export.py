@@ -90,7 +90,8 @@ def test_rosbag_read_back_with_rosbags(executable, tmp_path):
     with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         topics = {c.topic: c.msgtype for c in reader.connections}
         assert topics == {"/joint_trajectory": "trajectory_msgs/msg/JointTrajectory",
-                          "/pose": "geometry_msgs/msg/PoseStamped"}
+                          "/pose": "geometry_msgs/msg/PoseStamped",
+                          "/gripper/joint_states": "sensor_msgs/msg/JointState"}
         msgs = {topic: [] for topic in topics}
         for conn, stamp, raw in reader.messages():
             msgs[conn.topic].append((stamp, reader.deserialize(raw, conn.msgtype)))
@@ -109,6 +110,92 @@ def test_rosbag_read_back_with_rosbags(executable, tmp_path):
     stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for _, m in poses])
     np.testing.assert_allclose(stamps - 1700000000.25, executable.t - executable.t[0], atol=1e-6)
     assert {m.header.frame_id for _, m in poses} == {"base"}
+    grips = msgs["/gripper/joint_states"]
+    assert [list(m.name) for _, m in grips] == [["gripper"]] * executable.n_steps
+    np.testing.assert_array_equal([m.position[0] for _, m in grips], executable["gripper"][:, 0])
+    assert [s for s, _ in grips] == [s for s, _ in poses]
+
+
+def _trapezoid(rate, t):
+    """The running integral of ``rate (n, k)`` over ``t`` from 0, by the trapezoidal rule."""
+    steps = 0.5 * (rate[1:] + rate[:-1]) * np.diff(t)[:, None]
+    return np.vstack([np.zeros((1, rate.shape[1])), np.cumsum(steps, axis=0)])
+
+
+def test_rosbag_points_carry_velocities_and_accelerations_that_integrate_to_the_positions(executable,
+                                                                                         tmp_path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    path = write_trajectory(executable, tmp_path / "bag", format="rosbag")
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        [(conn, _, raw)] = [m for m in reader.messages() if m[0].topic == "/joint_trajectory"]
+        traj = reader.deserialize(raw, conn.msgtype)
+    Q, V, A = (np.array([getattr(p, k) for p in traj.points]) for k in ("positions", "velocities",
+                                                                          "accelerations"))
+    t = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in traj.points])
+    assert Q.shape == V.shape == A.shape == (executable.n_steps, 6)
+    # the joints turn by up to ~1 rad over 40 uneven samples: the trapezoidal rule is good to ~1e-4 rad
+    span = np.ptp(Q, axis=0).max()
+    assert span > 0.3
+    assert np.abs(Q[0] + _trapezoid(V, t) - Q).max() < 1e-3 * span
+    assert np.abs(V[0] + _trapezoid(A, t) - V).max() < 1e-2 * np.abs(V).max()
+
+
+def test_rosbag_topics_are_configurable_and_checked(executable, tmp_path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    path = write_trajectory(executable, tmp_path / "bag", format="rosbag", joint_topic="/arm/trajectory",
+                            pose_topic="/arm/tool_pose", gripper_topic="/robotiq/joint_states")
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        assert sorted(c.topic for c in reader.connections) == ["/arm/tool_pose", "/arm/trajectory",
+                                                               "/robotiq/joint_states"]
+    for kwargs, match in [({"joint_topic": "arm"}, r"joint_topic: expected a ROS 2 topic name like"),
+                          ({"pose_topic": "/arm/"}, r"pose_topic: expected a ROS 2 topic name"),
+                          ({"gripper_topic": "/2f/state"}, r"gripper_topic: expected a ROS 2 topic name"),
+                          ({"pose_topic": "/a//b"}, r"pose_topic: expected"),
+                          ({"pose_topic": "/joint_trajectory"},
+                           r"expected three different topics, got \['/joint_trajectory', '/joint_")]:
+        with pytest.raises(ValueError, match=match):
+            write_trajectory(executable, tmp_path / "other", format="rosbag", **kwargs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bag"]
+
+
+def _servoj(path):
+    lines = [x.strip() for x in path.read_text().splitlines() if x.strip().startswith("servoj(")]
+    return np.array([x[len("servoj(["):x.index("]")].split(",") for x in lines], dtype=float)
+
+
+def test_urscript_steps_are_no_faster_than_the_trajectory(executable, tmp_path):
+    """servoj steps interpolate the samples linearly: their speed never exceeds the samples' peak."""
+    J, t = executable["joints"], executable.t
+    peak = (np.abs(np.diff(J, axis=0)) / np.diff(t)[:, None]).max(axis=0)
+    for rate in (7.0, 125.0, 500.0):
+        steps = _servoj(write_trajectory(executable, tmp_path / "arm.script", rate=rate))
+        written = np.abs(np.diff(steps, axis=0)) * rate  # the last step may be shorter: it only holds
+        assert (written[:-1].max(axis=0) <= peak * (1 + 1e-9) + 1e-8 * rate).all()
+
+
+def test_the_export_bound_is_checked_before_writing(executable, tmp_path, monkeypatch):
+    long = Demonstration(executable.t * 1e6, executable.streams, executable.metadata)  # 15 days
+    with pytest.raises(ValueError, match=r"^out: the export would write 6.5e\+08 servoj steps \(1.3e\+06 s "
+                                         r"at 500 Hz\), more than the bound of 2097152 \(set "
+                                         r"SKILLBANK_MAX_EXPORT_SAMPLES to a larger number to write it"):
+        write_trajectory(long, tmp_path / "arm.script", rate=500)
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.setenv("SKILLBANK_MAX_EXPORT_SAMPLES", "100")
+    with pytest.raises(ValueError, match=r"would write 164 servoj steps .* bound of 100"):
+        write_trajectory(executable, tmp_path / "arm.script", rate=125)
+    with pytest.raises(ValueError, match=r"would write 40 samples, more than the bound of 30"):
+        monkeypatch.setenv("SKILLBANK_MAX_EXPORT_SAMPLES", "30")
+        write_trajectory(executable, tmp_path / "out.csv")
+    monkeypatch.setenv("SKILLBANK_MAX_EXPORT_SAMPLES", "many")
+    with pytest.raises(ValueError, match=r"SKILLBANK_MAX_EXPORT_SAMPLES: expected a whole number of samples "
+                                         r"> 0, got 'many'"):
+        write_trajectory(executable, tmp_path / "out.csv")
+    monkeypatch.setenv("SKILLBANK_MAX_EXPORT_SAMPLES", "200")
+    assert len(_servoj(write_trajectory(executable, tmp_path / "arm.script", rate=125))) == 164
 
 
 def test_formats_and_suffixes():
@@ -133,6 +220,10 @@ def _no_rosbags(monkeypatch):
     (None, {"path": "out.xlsx"}, r"out: expected a file name ending in .csv"),
     (None, {"path": "missing/out.csv"}, r"out: folder '.*missing' does not exist"),
     (None, {"path": "arm.script", "rate": 0}, r"rate: expected a number > 0"),
+    (None, {"path": "arm.script", "rate": 1000},
+     r"rate: expected servoj steps per second in \[1, 500\] Hz \(the e-Series controller runs at 500 Hz, the "
+     r"CB3 at 125 Hz\), got 1000"),
+    (None, {"path": "arm.script", "rate": float("inf")}, r"rate: expected a number > 0, got inf"),
     ("no joints", {"path": "arm.script"}, r"demo: a URScript export replays joints, and the trajectory"),
     ("no orientation", {"path": "b", "format": "rosbag"}, r"demo: a ROS bag holds the pose path"),
     ("bad metadata", {"path": "out.npz"}, r"demo.metadata: expected JSON-serialisable values"),
