@@ -58,6 +58,8 @@ _MARGIN = 1.0 + 1e-12
 #: Durations accepted (seconds): below a nanosecond rates overflow; above 30 years time stamps lose their
 #: milliseconds. A short one is stretched to the limits anyway.
 DURATION_RANGE = (1e-9, 1e9)
+# Smallest limit accepted (units/s, rad/s, ... per second): below it the stretch overflows.
+_MIN_LIMIT = 1e-9
 
 
 def check_duration(value, *, name: str = "duration") -> float:
@@ -215,6 +217,9 @@ def check_limits(limits) -> dict:
             out[key] = arr
         else:
             out[key] = check_positive(value, name=f"limits[{key!r}]")
+        if np.min(out[key]) < _MIN_LIMIT:
+            raise ValueError(f"limits[{key!r}]: expected at least {_MIN_LIMIT:g} (a smaller limit stretches "
+                             f"any motion past {DURATION_RANGE[1]:g} s), got {_show(out[key])}")
     return out
 
 
@@ -456,6 +461,10 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
             scale, key = _scale_needed(demo, limits)
         if scale > 1.0:
             _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
+            if (t[-1] - t[0]) * scale > DURATION_RANGE[1]:
+                raise ValueError(f"limits: {key} {_show(limits[key])} would stretch the motion to "
+                                 f"{(t[-1] - t[0]) * scale:.3g} s, more than {DURATION_RANGE[1]:g} s: give a "
+                                 "larger limit")
             demo = Demonstration(t[0] + (t - t[0]) * scale, streams, metadata)
             own = model is not None and key in model.rate_limits and np.array_equal(
                 np.broadcast_to(limits[key], model.rate_limits[key].shape), model.rate_limits[key])

@@ -183,6 +183,12 @@ def _reach(q):
     ({"robot": "ur5e", "branch": "elbow-up"},
      r"branch: expected one of \['shoulder-left/elbow-up/wrist-up', .*"
      r"'shoulder-right/elbow-down/wrist-down'\] or an index below 8, got 'elbow-up'"),
+    ({"limits": {"velocity": 1e-320}},
+     r"limits\['velocity'\]: expected at least 1e-09 \(a smaller limit stretches any motion past 1e\+09 s\), "
+     r"got 1e-320"),
+    ({"robot": "ur5e", "limits": {"joint_velocity": 1e-9}},
+     r"limits: joint_velocity 1e-09 would stretch the motion to [\d.e+]+ s, more than 1e\+09 s: give a "
+     r"larger limit"),
     ({"robot": "ur5e", "limits": {"joint_velocity": [1.0, 2.0]}},
      r"limits\['joint_velocity'\]: expected one number, or one per joint of ur5e \(6\), got 2"),
     ({"limits": {"velocity": 0.01}, "task": Constraints(goal=GOAL, end_velocity=[0.1, 0.0, 0.0])},
