@@ -64,6 +64,12 @@ def test_plan_branch_on_the_command_line(button_library, tmp_path, cli):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
 
 
+def test_an_unknown_scene_branch_lists_the_names_before_the_first_step(button_library):
+    with pytest.raises(ValueError, match=r"^branch: expected one of \['shoulder-left/elbow-up/wrist-up', .* "
+                                         r"or an index below 8, got 'elbow-up'$"):
+        plan_task(button_library.store, scene_from_dict(_scene(branch="elbow-up")), robot="ur5e")
+
+
 @pytest.mark.parametrize("value", [3, "", ["a"]])
 def test_a_scene_branch_is_a_name(value):
     with pytest.raises(ValueError, match=r"^branch: expected the name of an inverse-kinematics branch like "

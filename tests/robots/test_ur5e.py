@@ -225,6 +225,21 @@ def test_pose_out_of_one_branch_names_the_branches_that_reach_it(robot):
         reachable[0])
 
 
+def test_a_path_no_one_branch_reaches_says_so(robot):
+    q = np.random.default_rng(2).uniform(-np.pi, np.pi, (400, 6))
+    p, quat = robot.fk(q)
+    ok = ~np.isnan(robot.ik_all(p, quat)).any(axis=2)
+    i, j = next((i, j) for i in range(400) for j in range(400)
+                if ok[i].any() and ok[j].any() and not (ok[i] & ok[j]).any())
+    b = int(np.flatnonzero(ok[i])[0])
+    here = ", ".join(repr(robot.branch_names[k]) for k in np.flatnonzero(ok[j]))
+    with pytest.raises(KinematicsError, match=rf"^position: sample 1 is out on branch "
+                                              rf"'{robot.branch_names[b]}' \(reachable on {here}\); no one "
+                                              r"branch reaches the whole path: change the path$") as info:
+        robot.ik(p[[i, j]], quat[[i, j]], branch=b)
+    assert (info.value.index, info.value.reason) == (1, "unreachable")
+
+
 def _stretched_out(robot, q, distance, n=30):
     """A pose path from 0.1 m inside a stretched arm's reach (elbow at 0) to ``distance`` beyond it.
 
