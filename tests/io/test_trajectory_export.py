@@ -275,3 +275,15 @@ def test_a_written_reproduction_reads_back_stream_by_stream(tmp_path):
     for name in demo.stream_names:
         np.testing.assert_allclose(back[name], demo[name], atol=1e-12)
     assert back.metadata["joint_names"] == ["a", "b", "c", "d", "e", "f"]
+
+
+def test_a_written_bag_reads_back_with_skillbanks_own_reader(executable, tmp_path):
+    """The gripper's JointState on a topic named for the gripper comes back as the 'gripper' stream."""
+    from skillbank.io import load
+
+    back = load(write_trajectory(executable, tmp_path / "bag", format="rosbag", start_time=1.7e9))
+    assert set(back.stream_names) == {"position", "orientation", "gripper"}
+    np.testing.assert_allclose(back.t, executable.t - executable.t[0], atol=1e-6)
+    np.testing.assert_array_equal(back["gripper"], executable["gripper"])
+    np.testing.assert_array_equal(back["position"], executable["position"])
+    assert back.metadata["topics"]["/gripper/joint_states"]["stream"] == "gripper"
