@@ -11,7 +11,8 @@ folder is never replaced).
   ``joint_names``).
 - ``urscript``: a Universal Robots program that moves to the first joint
   configuration with ``movej`` and then replays the joint trajectory with
-  one ``servoj`` per control period (``rate`` Hz, default 125), calling
+  one ``servoj`` per control period (``rate`` Hz, default 125; targets from
+  :func:`blended_joints`, within the samples' joint speed and acceleration), calling
   ``skillbank_gripper(value)`` wherever the gripper stream changes. That
   function is defined at the top of the program; its body is the
   ``gripper_command`` (default ``set_tool_digital_out(0, value > THRESHOLD)``,
@@ -45,7 +46,8 @@ from ..core._validation import check_positive
 from ._tabular import write_npz
 
 __all__ = ["TRAJECTORY_FORMATS", "write_trajectory", "trajectory_format", "trajectory_columns",
-           "max_export_samples", "check_export_samples", "check_control_rate", "check_topic",
+           "max_export_samples", "blended_joints", "check_export_samples", "check_control_rate",
+           "check_topic",
            "MAX_EXPORT_SAMPLES", "MAX_EXPORT_VARIABLE", "CONTROL_RATES", "ROS_TOPICS"]
 
 #: Export formats, as ``--format`` names them.
@@ -208,6 +210,40 @@ def _fmt(values) -> str:
     return "[" + ", ".join(f"{v:.9f}" for v in values) + "]"
 
 
+def blended_joints(times: np.ndarray, t: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Joint targets at ``times`` whose speed and acceleration are no more than the samples'.
+
+    Linear interpolation between samples would change velocity within one control period at every
+    sample (an acceleration growing with the control rate). Instead the velocity is the piecewise-
+    linear profile through each segment's mean velocity at its midpoint (held before the first and
+    after the last midpoint), integrated from the first sample. Its slopes are exactly the samples'
+    finite-difference accelerations (:func:`skillbank.selection.peak_rates`), so the servo steps'
+    finite differences, which average it, stay within both peaks. The path passes within about
+    ``h^2 a / 4`` of each sample (``h`` the sample step, ``a`` the acceleration) rather than through
+    it; a linear-in-time correction of that drift makes it end exactly on the last sample.
+
+    Examples
+    --------
+    >>> t = np.array([0.0, 1.0, 2.0])
+    >>> blended_joints(np.array([0.0, 0.5, 1.0, 2.0]), t, np.array([[0.0], [1.0], [1.0]])).ravel().tolist()
+    [0.0, 0.5, 0.875, 1.0]
+    """
+    if Q.shape[0] < 2:
+        return np.repeat(Q[:1], len(times), axis=0)
+    h = np.diff(t)
+    v = np.diff(Q, axis=0) / h[:, None]
+    knots = np.concatenate([[t[0]], 0.5 * (t[1:] + t[:-1]), [t[-1]]])
+    w = np.vstack([v[:1], v, v[-1:]])
+    dk = np.diff(knots)
+    # the integral of the velocity profile at its knots, then within a piece (linear velocity)
+    at_knots = np.vstack([np.zeros((1, Q.shape[1])), np.cumsum(0.5 * dk[:, None] * (w[1:] + w[:-1]), axis=0)])
+    j = np.clip(np.searchsorted(knots, times, side="right") - 1, 0, len(dk) - 1)
+    u = (times - knots[j])[:, None]
+    p = Q[0] + at_knots[j] + u * w[j] + 0.5 * u**2 * (w[j + 1] - w[j]) / dk[j][:, None]
+    drift = Q[-1] - (Q[0] + at_knots[-1])
+    return p + drift * ((times - t[0]) / (t[-1] - t[0]))[:, None]
+
+
 def _servo_times(demo: Demonstration, rate: float) -> tuple[int, float, float]:
     """Number of servoj steps, start and duration: one per control period, the last at the end."""
     t0, duration = float(demo.t[0]), float(demo.t[-1] - demo.t[0])
@@ -248,7 +284,7 @@ def _urscript(demo: Demonstration, path: Path, rate: float, gripper_command: str
             k = np.arange(start, min(start + _CHUNK, n))
             # One servoj per control period; the last holds the final configuration.
             times = t0 + np.minimum(k * period, duration)
-            joints = np.column_stack([np.interp(times, demo.t, Q[:, j]) for j in range(6)])
+            joints = blended_joints(times, demo.t, Q)
             held = _held(demo, "gripper", times) if gripper else None
             lines = head + [f"  movej({_fmt(joints[0])}, a=0.5, v=0.25)"] if start == 0 else []
             for i, q in enumerate(joints):

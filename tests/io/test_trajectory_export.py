@@ -10,6 +10,7 @@ import pytest
 
 from skillbank.core import Demonstration, exp_map
 from skillbank.io import TRAJECTORY_FORMATS, read_npz, trajectory_format, write_trajectory
+from skillbank.io._trajectory_export import blended_joints
 from skillbank.robots import UR5e
 
 NAMES = list(UR5e.joint_names)
@@ -167,14 +168,45 @@ def _servoj(path):
     return np.array([x[len("servoj(["):x.index("]")].split(",") for x in lines], dtype=float)
 
 
-def test_urscript_steps_are_no_faster_than_the_trajectory(executable, tmp_path):
-    """servoj steps interpolate the samples linearly: their speed never exceeds the samples' peak."""
+def _peaks(J, t):
+    """Per-joint peak speed and acceleration by the finite differences skillbank's limits use."""
+    v = np.diff(J, axis=0) / np.diff(t)[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (t[2:] - t[:-2]))[:, None]
+    return np.abs(v).max(axis=0), np.abs(a).max(axis=0)
+
+
+@pytest.mark.parametrize("rate", [7.0, 125.0, 500.0])
+def test_urscript_steps_keep_the_trajectorys_joint_speed_and_acceleration(executable, tmp_path, rate):
+    """servoj steps average the blended velocity profile: neither peak grows with the control rate."""
     J, t = executable["joints"], executable.t
-    peak = (np.abs(np.diff(J, axis=0)) / np.diff(t)[:, None]).max(axis=0)
-    for rate in (7.0, 125.0, 500.0):
-        steps = _servoj(write_trajectory(executable, tmp_path / "arm.script", rate=rate))
-        written = np.abs(np.diff(steps, axis=0)) * rate  # the last step may be shorter: it only holds
-        assert (written[:-1].max(axis=0) <= peak * (1 + 1e-9) + 1e-8 * rate).all()
+    speed, accel = _peaks(J, t)
+    steps = _servoj(write_trajectory(executable, tmp_path / "arm.script", rate=rate))
+    # the last step only holds the end; 9 printed decimals, and the drift correction (below)
+    times = np.minimum(np.arange(len(steps)) / rate, t[-1] - t[0]) + t[0]
+    written_v, written_a = _peaks(steps[:-1], times[:-1])
+    drift = np.abs(blended_joints(t, t, J) - J).max()
+    assert (written_v <= speed + drift / (t[-1] - t[0]) + 2e-9 * rate).all()
+    assert (written_a <= accel * (1 + 1e-9) + 4e-9 * rate**2).all()
+    # and the path stays within h^2 a / 4 of the samples (h the largest sample step)
+    h = np.diff(t).max()
+    assert drift <= h**2 * accel.max() / 4 * 1.01
+    np.testing.assert_allclose(steps[[0, -1]], J[[0, -1]], atol=1e-9)
+
+
+def test_blended_joints_against_linear_interpolation():
+    """A corner at full speed: linear interpolation's acceleration grows with the rate, the blend's not."""
+    t = np.array([0.0, 1.0, 2.0, 3.0])
+    Q = np.array([[0.0], [1.0], [1.0], [1.0]])  # 1 rad/s, then stopped: sample-level acceleration 1 rad/s^2
+    for rate in (10.0, 1000.0):
+        times = np.arange(0.0, 3.0 + 1e-12, 1 / rate)
+        lin = np.interp(times, t, Q[:, 0])[:, None]
+        blend = blended_joints(times, t, Q)
+        assert _peaks(lin, times)[1][0] == pytest.approx(rate * 1.0, rel=1e-6)
+        assert _peaks(blend, times)[1][0] <= 1.0 + 1e-9
+        assert _peaks(blend, times)[0][0] <= 1.0 + 1e-9
+    # exact values: the velocity ramps from 1 to 0 between the midpoints 0.5 and 1.5
+    np.testing.assert_allclose(blended_joints(np.array([0.5, 1.0, 1.5, 3.0]), t, Q).ravel(),
+                               [0.5, 0.875, 1.0, 1.0], atol=1e-12)
 
 
 def test_the_export_bound_is_checked_before_writing(executable, tmp_path, monkeypatch):
