@@ -65,6 +65,10 @@ MAX_EXPORT_VARIABLE = "SKILLBANK_MAX_EXPORT_SAMPLES"
 CONTROL_RATES = (1.0, 500.0)
 #: Default topics of a ROS 2 bag export: joint trajectory, pose path, gripper.
 ROS_TOPICS = {"joint": "/joint_trajectory", "pose": "/pose", "gripper": "/gripper/joint_states"}
+#: servoj's own ranges (URScript manual): lookahead_time (s) and gain.
+SERVOJ_RANGES = {"lookahead_time": (0.03, 0.2), "gain": (100.0, 2000.0)}
+# A ROS 2 Time's seconds are an int32: stamps end in January 2038.
+_LAST_STAMP = 2 ** 31 - 1
 _TOPIC = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
 # servoj lines formatted and written per chunk, so a long program never sits in memory whole.
 _CHUNK = 50_000
@@ -122,6 +126,22 @@ def check_control_rate(rate) -> float:
         raise ValueError(f"rate: expected servoj steps per second in [{low:g}, {high:g}] Hz (the e-Series "
                          f"controller runs at 500 Hz, the CB3 at 125 Hz), got {rate:g}")
     return rate
+
+
+def _check_servoj(value, name: str) -> float:
+    low, high = SERVOJ_RANGES[name]
+    number = float(check_positive(value, name=name))
+    if not low <= number <= high:
+        raise ValueError(f"{name}: expected a number in [{low:g}, {high:g}] (servoj's range), got {number:g}")
+    return number
+
+
+def _check_start_time(start_time, duration: float) -> float:
+    number = float(check_positive(start_time, name="start_time", allow_zero=True))
+    if number + duration > _LAST_STAMP:
+        raise ValueError(f"start_time: expected seconds since the epoch with the last stamp before 2^31 s "
+                         f"(a ROS 2 Time's seconds are an int32), got {number:g} + {duration:g} s")
+    return number
 
 
 def check_topic(name, *, what: str = "topic") -> str:
@@ -394,9 +414,11 @@ def write_trajectory(demo, path, *, format=None, rate: float = 125.0, gripper_co
         replaced by the midpoint of the gripper stream's range. Default
         :data:`GRIPPER_COMMAND`.
     lookahead_time, gain : float
-        URScript: servoj's smoothing parameters.
+        URScript: servoj's smoothing parameters, within its ranges
+        (:data:`SERVOJ_RANGES`: 0.03 to 0.2 s, 100 to 2000).
     start_time : float, default=0.0
-        ROS bag: seconds (since the epoch) of the first sample's stamp.
+        ROS bag: seconds (since the epoch) of the first sample's stamp, >= 0;
+        the last stamp must come before 2^31 s (an int32 in ROS 2).
     frame_id : str, default="base"
         ROS bag: the frame of the poses (UR's controller base frame).
     joint_topic, pose_topic, gripper_topic : str
@@ -441,17 +463,20 @@ def write_trajectory(demo, path, *, format=None, rate: float = 125.0, gripper_co
         if len(set(topics.values())) < 3:
             raise ValueError(f"joint_topic, pose_topic, gripper_topic: expected three different topics, got "
                              f"{list(topics.values())}")
+        start = _check_start_time(start_time, float(demo.t[-1] - demo.t[0]))
         if target.exists():
             raise ValueError(f"out: {str(target)!r} already exists; a ROS 2 bag is written to a new folder")
         tmp = _temporary(target, directory=True)
         bag = tmp / "bag"
         try:
-            _rosbag(demo, bag, float(start_time), str(frame_id), topics)
+            _rosbag(demo, bag, start, str(frame_id), topics)
             bag.rename(target)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         return target
-    if kind == "urscript":  # the bound before the temporary file exists
+    if kind == "urscript":  # the bound and servoj's ranges before the temporary file exists
+        lookahead_time = _check_servoj(lookahead_time, "lookahead_time")
+        gain = _check_servoj(gain, "gain")
         n, _, duration = _servo_times(demo, rate)
         check_export_samples(n, f"servoj steps ({duration:.6g} s at {rate:g} Hz)")
     tmp = _temporary(target)
@@ -461,7 +486,7 @@ def write_trajectory(demo, path, *, format=None, rate: float = 125.0, gripper_co
         elif kind == "npz":
             write_npz(demo, tmp)
         else:
-            _urscript(demo, tmp, rate, gripper_command, float(lookahead_time), float(gain))
+            _urscript(demo, tmp, rate, gripper_command, lookahead_time, gain)
         os.replace(tmp, target)
     finally:
         if tmp.exists():

@@ -256,6 +256,14 @@ def _no_rosbags(monkeypatch):
      r"rate: expected servoj steps per second in \[1, 500\] Hz \(the e-Series controller runs at 500 Hz, the "
      r"CB3 at 125 Hz\), got 1000"),
     (None, {"path": "arm.script", "rate": float("inf")}, r"rate: expected a number > 0, got inf"),
+    (None, {"path": "arm.script", "lookahead_time": 1.0},
+     r"lookahead_time: expected a number in \[0.03, 0.2\] \(servoj's range\), got 1"),
+    (None, {"path": "arm.script", "gain": float("nan")}, r"gain: expected a number > 0, got nan"),
+    (None, {"path": "arm.script", "gain": 50}, r"gain: expected a number in \[100, 2000\]"),
+    (None, {"path": "b", "format": "rosbag", "start_time": -1.0}, r"start_time: expected a number >= 0"),
+    (None, {"path": "b", "format": "rosbag", "start_time": 2.2e9},
+     r"start_time: expected seconds since the epoch with the last stamp before 2\^31 s \(a ROS 2 Time's "
+     r"seconds are an int32\), got 2.2e\+09 \+ 1.3 s"),
     ("no joints", {"path": "arm.script"}, r"demo: a URScript export replays joints, and the trajectory"),
     ("no orientation", {"path": "b", "format": "rosbag"}, r"demo: a ROS bag holds the pose path"),
     ("bad metadata", {"path": "out.npz"}, r"demo.metadata: expected JSON-serialisable values"),
