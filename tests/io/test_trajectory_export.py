@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from skillbank.core import Demonstration, exp_map
 from skillbank.io import TRAJECTORY_FORMATS, read_npz, trajectory_format, write_trajectory
@@ -327,3 +329,30 @@ def test_a_written_bag_reads_back_with_skillbanks_own_reader(executable, tmp_pat
     np.testing.assert_array_equal(back["gripper"], executable["gripper"])
     np.testing.assert_array_equal(back["position"], executable["position"])
     assert back.metadata["topics"]["/gripper/joint_states"]["stream"] == "gripper"
+
+
+@settings(max_examples=60, deadline=None)
+@given(steps=st.lists(st.floats(1e-3, 0.1), min_size=1, max_size=30),
+       values=st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=31), rate=st.floats(1.0, 500.0))
+def test_blended_joints_never_exceed_the_samples_peaks(steps, values, rate):
+    """True by construction: servo differences average a velocity profile whose slopes are the samples'
+    accelerations; the drift correction adds a constant velocity and no acceleration."""
+    n = min(len(steps) + 1, len(values))
+    t = np.concatenate([[0.0], np.cumsum(steps[:n - 1])])
+    Q = np.array(values[:n])[:, None]
+    times = np.arange(0.0, t[-1], 1.0 / rate)
+    if len(times) < 3:
+        return
+    v = np.diff(Q[:, 0]) / np.diff(t)
+    accel = np.abs(np.diff(v) / (0.5 * (t[2:] - t[:-2]))).max() if n > 2 else 0.0
+    # the drift the correction removes: the profile's integral, by the trapezoidal rule on its knots (exact)
+    knots = np.concatenate([[t[0]], 0.5 * (t[1:] + t[:-1]), [t[-1]]])
+    w = np.concatenate([v[:1], v, v[-1:]])
+    drift = Q[-1, 0] - Q[0, 0] - float(np.sum(0.5 * np.diff(knots) * (w[1:] + w[:-1])))
+    written = blended_joints(times, t, Q)[:, 0]
+    wv = np.abs(np.diff(written)) * rate
+    wa = np.abs(np.diff(written, 2)) * rate**2
+    assert wv.max() <= np.abs(v).max() + abs(drift) / t[-1] + 1e-9 * (1 + np.abs(v).max())
+    # round-off of a second difference: ~1e-15 of the values, over the period squared
+    assert wa.max() <= accel * (1 + 1e-9) + 1e-13 * rate**2
+    np.testing.assert_allclose(blended_joints(t[[0, -1]], t, Q)[:, 0], Q[[0, -1], 0], atol=1e-12)
