@@ -143,6 +143,11 @@ def test_rosbag_points_carry_velocities_and_accelerations_that_integrate_to_the_
     assert span > 0.3
     assert np.abs(Q[0] + _trapezoid(V, t) - Q).max() < 1e-3 * span
     assert np.abs(V[0] + _trapezoid(A, t) - V).max() < 1e-2 * np.abs(V).max()
+    # the differences are convex combinations of the samples' (weights by the steps): within their peaks,
+    # so a trajectory that meets the robot's limits sends rates that meet them
+    speed, accel = _peaks(executable["joints"], executable.t)
+    assert (np.abs(V).max(axis=0) <= speed * (1 + 1e-9) + 1e-12).all()
+    assert (np.abs(A).max(axis=0) <= accel * (1 + 1e-9) + 1e-9).all()
 
 
 def test_rosbag_topics_are_configurable_and_checked(executable, tmp_path):
