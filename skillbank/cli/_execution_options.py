@@ -89,6 +89,7 @@ def robot_params(args) -> dict:
             raise ValueError(f"branch: --branch {branch} needs joints: give --robot too")
         from ..robots import robot_model  # numpy only; loaded when a robot is asked for
 
+        branch = int(branch) if branch.strip().isdigit() else branch  # an index, as the message offers
         robot_model(args.robot).branch_index(branch)  # an unknown name fails first, listing the names
     return {"robot": args.robot, "limits": limits, "branch": branch}
 
