@@ -17,8 +17,8 @@ __all__ = ["LIMITS", "DURATION_RANGE", "check_limits", "check_duration", "robot_
 #: per joint (a number for all or one per joint; rad/s, rad/s^2).
 LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration", "joint_velocity",
           "joint_acceleration")
-#: Durations accepted (seconds): below a nanosecond rates overflow; above 30 years time stamps lose their
-#: milliseconds. A short one is stretched to the limits anyway.
+#: Durations accepted (seconds): below a nanosecond rates overflow; up to 1e9 s (32 years) a ROS 2
+#: bag's int32 seconds still hold the last stamp. A short one is stretched to the limits anyway.
 DURATION_RANGE = (1e-9, 1e9)
 # Smallest limit accepted (units/s, rad/s, ... per second): below it the stretch overflows.
 _MIN_LIMIT = 1e-9
