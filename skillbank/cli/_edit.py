@@ -13,6 +13,7 @@ from ._options import (
     add_repair_option,
     constraints_from_args,
     execution_params,
+    export_params,
 )
 
 __all__ = ["add_parser", "run"]
@@ -70,6 +71,7 @@ def run(args) -> int:
     execution = execution_params(args)
     check_robot(args)
     kind = output_format(args)
+    writing = export_params(args, kind, execution["duration"])
     if args.plot is not None:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
@@ -83,8 +85,7 @@ def run(args) -> int:
     meta = {"method": args.method, "inputs": [str(p) for p in args.input]}
     done = make_executable(Demonstration(out.t - out.t[0], {"position": out["position"]}, meta), sources,
                            constraints, ids=[Path(p).name for p in args.input], robot=execution["robot"],
-                           limits=execution["limits"], fixed_time=execution["duration"] is not None,
-                           kind="file")
+                           limits=execution["limits"], kind="file", branch=execution["branch"])
     traj = done.trajectory
     Y, t = traj["position"], traj.t
     error = constraints.position_error(Y)
@@ -92,7 +93,7 @@ def run(args) -> int:
     traj.metadata.update(constraint_error=error, orientation_error=done.orientation_error,
                          collision=collision)
     if args.out is not None:
-        write_trajectory(traj, args.out, format=kind)
+        write_trajectory(traj, args.out, format=kind, **writing)
     plot = None
     if args.plot is not None:
         from ..plotting import plot_edit  # matplotlib, as above

@@ -18,6 +18,7 @@ from ._options import (
     add_segmentation_options,
     constraints_from_args,
     execution_params,
+    export_params,
     parallel_params,
     reader_options,
     segmentation_params,
@@ -421,6 +422,7 @@ def _reuse(args) -> int:
     execution = execution_params(args)
     check_robot(args)
     kind = output_format(args)
+    writing = export_params(args, kind, execution["duration"])
     if args.plot is not None:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
@@ -431,7 +433,7 @@ def _reuse(args) -> int:
                            random_state=args.seed, progress=show_progress(args), **options, **execution)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     if args.out is not None:
-        io.write_trajectory(result.trajectory, args.out, format=kind)
+        io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
     if args.plot is not None:
         from ..plotting import plot_edit  # matplotlib only when a figure is asked for
 

@@ -15,12 +15,21 @@ import re
 import sys
 
 from ..core import Constraints, ViaPoint, parse_obstacle
+from ._execution_options import (
+    add_execution_options,
+    add_export_options,
+    add_robot_options,
+    execution_params,
+    export_params,
+    robot_params,
+)
 
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
     "add_repair_option", "add_reader_options", "reader_options", "show_progress", "add_execution_options",
-    "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE",
+    "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE", "add_robot_options",
+    "robot_params", "add_export_options", "export_params",
 ]
 
 #: The environment variable naming a Dask scheduler for `library add` when no option says otherwise.
@@ -277,37 +286,6 @@ def add_constraint_options(p) -> None:
                    help="orientation at the goal: a unit quaternion, scalar-last")
     p.add_argument("--via-orientation", action="append", default=[], metavar="PHASE:QX,QY,QZ,QW",
                    help="orientation at a phase in [0, 1]: a unit quaternion, scalar-last (repeatable)")
-
-
-def add_execution_options(p) -> None:
-    """``--duration``, ``--robot``, ``--max-joint-velocity``, ``--format`` (see :func:`execution_params`)."""
-    p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
-                   help="duration of the result (default: the demonstrations' mean); time starts at 0")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="add a 'joints' stream by inverse kinematics for this robot (ur5e), from the pose "
-                        "path (metres, quaternions, in the robot's base frame)")
-    p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
-                   help="slow the whole result down uniformly until no joint moves faster (needs --robot)")
-    p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
-                   help="format of --out (default from its suffix: .csv, .npz, .script, .bag): every "
-                        "stream with the joint names (csv, npz), a UR program of servoj steps (urscript), or "
-                        "a ROS 2 bag folder of a JointTrajectory and PoseStamped poses (rosbag, needs "
-                        "skillbank[ros])")
-
-
-def execution_params(args) -> dict:
-    """``duration``, ``robot`` and ``limits`` keyword arguments from :func:`add_execution_options`' options.
-
-    Examples
-    --------
-    >>> import argparse
-    >>> execution_params(argparse.Namespace(duration=None, robot="ur5e", max_joint_velocity=1.0))
-    {'duration': None, 'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}}
-    """
-    if args.max_joint_velocity is not None and args.robot is None:
-        raise ValueError("max-joint-velocity: a joint velocity limit needs joints: give --robot too")
-    limits = {} if args.max_joint_velocity is None else {"joint_velocity": args.max_joint_velocity}
-    return {"duration": args.duration, "robot": args.robot, "limits": limits}
 
 
 def _number(text: str, name: str, whole) -> float:

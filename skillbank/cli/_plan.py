@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from ._library import _DB_READ, _location, _target, check_robot, output_format, print_execution
-from ._options import show_progress
+from ._options import add_export_options, add_robot_options, export_params, robot_params, show_progress
 
 __all__ = ["add_parser"]
 
@@ -30,15 +30,13 @@ def add_parser(sub):
     p.add_argument("--domain", type=Path, default=None,
                    help="a PDDL domain to use as it is (default: built from the skills' descriptions, see "
                         "'library describe')")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="add one continuous 'joints' stream by inverse kinematics for this robot (ur5e)")
-    p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
-                   help="slow each step down uniformly until no joint moves faster (needs --robot)")
+    add_robot_options(p, what="each step")  # --robot, --max-joint-velocity/-acceleration, --branch
     p.add_argument("--seed", type=int, default=None, help="random seed (for methods that sample)")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
                    help="format of --out (default from its suffix)")
+    add_export_options(p)
     p.add_argument("--plot", type=Path, default=None,
                    help="write a 3-D figure of the path coloured by step, with the scene's objects and "
                         "obstacles, and the PDDL files beside it (<plot>.domain.pddl, <plot>.problem.pddl)")
@@ -54,16 +52,17 @@ def _plan(args) -> int:
     from ..planning import load_scene, plan_task, write_pddl  # the planner's layers, when a plan runs
     from ..store import open_store  # the store, when a plan runs (not for --help)
 
-    if args.max_joint_velocity is not None and args.robot is None:
-        raise ValueError("max-joint-velocity: a joint velocity limit needs joints: give --robot too")
-    limits = {} if args.max_joint_velocity is None else {"joint_velocity": args.max_joint_velocity}
     check_robot(args)
+    limits, branch = (robot_params(args)[k] for k in ("limits", "branch"))
     kind = output_format(args)
+    writing = export_params(args, kind)
     if args.plot is not None:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     scene = load_scene(args.scene)
+    if branch is not None:
+        scene.branch = branch  # the command line's branch over the scene's
     if args.domain is not None and not args.domain.is_file():
         raise ValueError(f"domain: expected a PDDL domain file, got {str(args.domain)!r}, which is not "
                          "a file")
@@ -82,7 +81,7 @@ def _plan(args) -> int:
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
     if args.out is not None:
-        io.write_trajectory(result.trajectory, args.out, format=kind)
+        io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
     written = [args.out] if args.out is not None else []
     if args.plot is not None:
         from ..plotting import plot_plan  # matplotlib only when a figure is asked for

@@ -367,7 +367,7 @@ class Library(Adding):
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
               shortlist: int = SHORTLIST, random_state=None, progress: bool = False, duration=None,
-              robot=None, limits=None):
+              robot=None, limits=None, branch=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -376,7 +376,7 @@ class Library(Adding):
         ``"length"`` orders all of them by curve length; ``"deformation"``
         and ``"endpoints"`` by how far each candidate is from the task.
         ``progress`` shows a tqdm bar on stderr over the candidates adapted
-        (the result is the same). ``duration``, ``robot`` and ``limits`` make
+        (the result is the same). ``duration``, ``robot``, ``limits`` and ``branch`` make
         the reproduction executable (time from 0, gripper and other streams
         of the best primitive, joints by inverse kinematics, velocity and
         acceleration limits): see :func:`skillbank.selection.reuse`.
@@ -397,7 +397,7 @@ class Library(Adding):
             return reuse([p.demo for p in prims], constraints, method=method, k=k,
                          ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
                          progress=_ticker(bar) if progress else None, duration=duration, robot=robot,
-                         limits=limits)
+                         limits=limits, branch=branch)
 
     # -- planning ---------------------------------------------------------------------------------
     def describe(self, label, action, binding=None) -> int:

@@ -19,7 +19,7 @@ from ..core import Constraints, Demonstration, quaternion_angle
 from ..core._validation import summarise
 from ..robots import RobotModel, robot_model
 from ..selection import reuse
-from ..selection._execution import check_limits, peak_rates
+from ..selection._execution import check_limits, peak_rates, robot_limits
 
 __all__ = ["PlanStep", "PlanResult", "reproduce_plan"]
 
@@ -198,12 +198,12 @@ def _reuse(skill, constraints, scene, names, where, limits, random_state):
     return res
 
 
-def _joints(model, traj, seed, where) -> np.ndarray:
+def _joints(model, traj, seed, where, branch=None) -> np.ndarray:
     if "orientation" not in traj.streams:
         raise ValueError(f"{where}: robot {model.name} needs an orientation, and the skill's primitives "
                          "have none")
     try:
-        return model.ik(traj["position"], traj["orientation"], q_seed=seed)
+        return model.ik(traj["position"], traj["orientation"], q_seed=seed, branch=branch)
     except ValueError as exc:
         raise ValueError(f"{where}: robot {model.name}: {' '.join(str(exc).split())}") from None
 
@@ -278,6 +278,14 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         joints = model.check_joints(joints, name="start.joints")[0]
         position, orientation = model.fk(joints)
     pieces, steps, notes = [], [], []
+    branch = getattr(scene, "branch", None)
+    if model is not None:
+        limits, more = robot_limits(model, limits)  # the robot's own joint limits always apply
+        notes += more
+        if branch is not None:
+            model.branch_index(branch)  # an unknown name fails before the first step, listing the names
+    elif branch is not None:
+        raise ValueError(f"branch: the scene's branch {branch!r} needs a robot (robot='ur5e', --robot ur5e)")
     errors = {"position": 0.0, "orientation": 0.0}
     if model is not None:
         errors["joints"] = 0.0
@@ -314,11 +322,12 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 best = next(p for p in skill.primitives if p.id == res.used[0]).demo
                 if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
                     seed = best["joints"][0]
-            streams["joints"] = _joints(model, traj, seed, where)
+            streams["joints"] = _joints(model, traj, seed, where, branch)
             scale = _joint_scale(streams["joints"], t, limits)
             if scale > 1.0:
                 t = t * scale
-                step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits")
+                step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
+                                  f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
         G, note = _gripper(traj, b, gripper, n)
         if G is not None:
             streams["gripper"] = G[:, None]

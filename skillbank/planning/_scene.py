@@ -12,7 +12,9 @@ Obstacles use the ``--obstacle`` syntax (a list, named ``obstacles[k]``, or an
 object of named specs); orientations are scalar-last unit quaternions; an
 object's orientation is the tool's orientation at it. ``start`` may give
 ``joints`` instead of a pose (with a robot), and a ``gripper`` value.
-Optional ``domain`` names a PDDL file beside the scene (never outside its folder).
+Optional ``domain`` names a PDDL file beside the scene (never outside its folder);
+optional ``branch`` names the robot's inverse-kinematics branch for every step
+(``"shoulder-left/elbow-up/wrist-up"``, see docs/robots.md).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from ._pddl import _check_name, parse_atom
 
 __all__ = ["Scene", "SceneObject", "load_scene", "scene_from_dict", "SCENE_KEYS", "MAX_SCENE_BYTES"]
 
-SCENE_KEYS = ("objects", "obstacles", "init", "goal", "start", "domain")
+SCENE_KEYS = ("objects", "obstacles", "init", "goal", "start", "domain", "branch")
 _START_KEYS = ("position", "orientation", "joints", "gripper")
 _OBJECT_KEYS = ("type", "position", "orientation")
 #: Largest scene file read (a scene of thousands of objects is far smaller).
@@ -68,6 +70,8 @@ class Scene:
     domain : pathlib.Path or None
         A PDDL domain file beside the scene.
     folder : pathlib.Path or None
+    branch : str or None
+        The robot's inverse-kinematics branch (checked against the robot's names when a plan runs).
     """
 
     objects: dict
@@ -78,6 +82,7 @@ class Scene:
     specs: dict = field(default_factory=dict)
     domain: Path | None = None
     folder: Path | None = None
+    branch: str | None = None
 
     def constraints(self, names=None) -> Constraints:
         """:class:`~skillbank.core.Constraints` holding the obstacles ``names`` (default all)."""
@@ -230,11 +235,15 @@ def scene_from_dict(doc, *, folder=None) -> Scene:
     if "goal" not in doc or not doc["goal"]:
         raise ValueError("goal: expected a non-empty list of atoms like '(pressed b1)', got none")
     folder = None if folder is None else Path(folder)
+    branch = doc.get("branch")
+    if branch is not None and (not isinstance(branch, str) or not branch.strip()):
+        raise ValueError(f"branch: expected the name of an inverse-kinematics branch like "
+                         f"'shoulder-left/elbow-up/wrist-up', got {branch!r}")
     return Scene(objects=objects, obstacles=obstacles, specs=specs,
                  init=_atoms(doc.get("init", []), "init", objects), goal=_atoms(doc["goal"], "goal", objects),
                  start=_start(doc.get("start", {})),
                  domain=None if doc.get("domain") is None else _confined(folder, doc["domain"], "domain"),
-                 folder=folder)
+                 folder=folder, branch=branch)
 
 
 def load_scene(path) -> Scene:

@@ -109,7 +109,10 @@ class RobotModel(ABC):
     (limits, radians), ``branch_names``, ``home`` (the configuration whose
     branch :meth:`ik` takes when given neither a branch nor a seed) and
     ``SINGULARITIES``, and implements :meth:`_fk`, :meth:`_ik` and
-    :meth:`_singularity`.
+    :meth:`_singularity`. It may set ``max_velocity`` and ``max_acceleration``
+    (per joint, rad/s and rad/s^2: the robot's own limits, which every
+    executable trajectory for it meets) and implement :meth:`_out_of_reach`
+    (how far a pose is outside the workspace, for the error message).
     """
 
     name: ClassVar[str]
@@ -119,6 +122,9 @@ class RobotModel(ABC):
     branch_names: ClassVar[tuple[str, ...]]
     home: ClassVar[tuple[float, ...]]
     SINGULARITIES: ClassVar[dict[str, Singularity]]
+    #: The robot's own joint velocity (rad/s) and acceleration (rad/s^2) limits, per joint; None: none known.
+    max_velocity: ClassVar[tuple[float, ...] | None] = None
+    max_acceleration: ClassVar[tuple[float, ...] | None] = None
 
     def __init__(self, *, base=None, tool=None, singularity_thresholds=None, max_step=0.5):
         self.base = _check_rigid(base, "base")
@@ -163,6 +169,13 @@ class RobotModel(ABC):
     def _singularity(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Per kind of ``SINGULARITIES``, its measure ``(n,)`` at joints ``q``: 0 at the singularity."""
 
+    def _out_of_reach(self, T: np.ndarray) -> np.ndarray:
+        """How far (m) each flange pose ``T (n, 4, 4)`` is outside the workspace; NaN: not known.
+
+        Only called for poses that no branch reaches; the default knows no distance.
+        """
+        return np.full(T.shape[0], np.nan)
+
     # ------------------------------------------------------------------ the interface
 
     @property
@@ -174,6 +187,15 @@ class RobotModel(ABC):
     def limits(self) -> np.ndarray:
         """Joint limits ``(n_joints, 2)``: lower and upper, radians."""
         return np.column_stack([self.lower, self.upper]).astype(float)
+
+    @property
+    def rate_limits(self) -> dict:
+        """The robot's own limits as ``{"joint_velocity": (n_joints,), "joint_acceleration": (n_joints,)}``.
+
+        Only the kinds the model declares (``max_velocity``, ``max_acceleration``).
+        """
+        given = {"joint_velocity": self.max_velocity, "joint_acceleration": self.max_acceleration}
+        return {key: np.asarray(value, dtype=float) for key, value in given.items() if value is not None}
 
     def check_joints(self, q, *, name: str = "q") -> np.ndarray:
         """Joints as a float array ``(n, n_joints)`` (one configuration becomes one row), else ValueError."""
@@ -308,22 +330,45 @@ class RobotModel(ABC):
             raise ValueError(f"q_seed: expected one configuration of {self.n_joints} joints, got shape "
                              f"{np.shape(q_seed)}")
         seed = seed[0]
+        b = None if branch is None else self.branch_index(branch)
         with numerical_errors(f"{self.name} inverse kinematics"):
             sols = self._ik(T)
-            b = self._choose_branch(sols, seed, branch)
+            self._check_reach(sols, T)
+            b = self._choose_branch(sols, seed, b)
             path = self._follow(sols, b, seed)
         return path[0] if single else path
 
     # ------------------------------------------------------------------ following a path
 
+    def _check_reach(self, sols: np.ndarray, T: np.ndarray) -> None:
+        """Samples no branch reaches are the first thing to fix: reported before singularities on the way.
+
+        A path towards a goal beyond the arm's reach stretches the arm first, so the samples before
+        the goal come near the elbow singularity; the goal's distance is what the user must change.
+        """
+        none = np.isnan(sols).any(axis=2).all(axis=1)
+        if not none.any():
+            return
+        bad = np.flatnonzero(none)
+        k = int(bad[0])
+        excess = self._out_of_reach(T[bad])
+        more = "" if bad.size == 1 else f"; {bad.size} such samples"
+        if np.isnan(excess).all():
+            message = f"position: sample {k} is out of the arm's reach (no solution on any branch{more})"
+        elif bad.size == 1:
+            message = (f"position: sample {k} is out of the arm's reach by {float(excess[0]):.3g} m (no "
+                       "solution on any branch): bring it within reach")
+        else:
+            worst = int(np.nanargmax(excess))
+            message = (f"position: sample {k} is out of the arm's reach (no solution on any branch{more}, "
+                       f"out by up to {float(excess[worst]):.3g} m at sample {int(bad[worst])}): bring the "
+                       "path within reach")
+        raise KinematicsError(message, index=k, reason="unreachable")
+
     def _choose_branch(self, sols: np.ndarray, seed: np.ndarray, branch) -> int:
         if branch is not None:
-            return self.branch_index(branch)
-        first = sols[0]
-        if np.isnan(first).all():
-            raise KinematicsError("position: sample 0 is out of the arm's reach (no inverse-kinematics "
-                                  "solution on any branch)", index=0, reason="unreachable")
-        return int(_nearest_branch(first[None], seed[None])[0])
+            return branch
+        return int(_nearest_branch(sols[0][None], seed[None])[0])
 
     def _follow(self, sols: np.ndarray, b: int, seed: np.ndarray) -> np.ndarray:
         name = self.branch_names[b]
@@ -333,10 +378,18 @@ class RobotModel(ABC):
         path = np.unwrap(path[:m], axis=0)
         failures = []  # (index, priority, message, reason): the earliest sample wins, ties by priority
         if m < sols.shape[0]:
-            others = [self.branch_names[k] for k in np.flatnonzero(~np.isnan(sols[m]).any(axis=1))]
-            where = f"on branch {name!r} (reachable on {summarise(map(repr, others))})" if others \
-                else "of the arm's reach (no solution on any branch)"
-            failures.append((m, 0, f"position: sample {m} is out {where}", "unreachable"))
+            # every sample is reachable on some branch (_check_reach): name those that reach them all
+            whole = np.flatnonzero(~np.isnan(sols).any(axis=2).any(axis=0))
+            if whole.size:
+                names = ", ".join(repr(self.branch_names[k]) for k in whole)
+                message = (f"position: sample {m} is out on branch {name!r}; the whole path is reachable on "
+                           f"{names}: choose one with branch=... (--branch on the command line)")
+            else:
+                here = summarise(repr(self.branch_names[k])
+                                 for k in np.flatnonzero(~np.isnan(sols[m]).any(axis=1)))
+                message = (f"position: sample {m} is out on branch {name!r} (reachable on {here}); no one "
+                           "branch reaches the whole path: change the path")
+            failures.append((m, 0, message, "unreachable"))
         for kind, measure in self._singularity(path).items():
             threshold = self.singularity_thresholds[kind]
             near = np.flatnonzero(measure < threshold)

@@ -54,6 +54,41 @@ _BRANCHES = tuple(f"shoulder-{s}/elbow-{e}/wrist-{w}"
                   for s in ("left", "right") for e in ("up", "down") for w in ("up", "down"))
 
 
+def _wrist_geometry(T: np.ndarray):
+    """Steps 1 to 3 of the inverse (module docstring) up to the planar arm's target.
+
+    Returns whether the base reaches (``r >= d4``, ``(n,)``), theta1 ``(n, 2)``, theta5, theta6 and
+    theta2 + theta3 + theta4 ``(n, 2, 2)`` (shoulder x wrist), and wrist 1's centre in the arm's plane,
+    ``px, py (n, 2, 2)``, from the shoulder.
+    """
+    x, y, z, p = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3]
+    p5 = p - _D6 * z
+    # 1. base angle, (n, 2) over the shoulder branches
+    r = np.hypot(p5[:, 0], p5[:, 1])
+    reach_base = r >= _D4 * (1 - 1e-12)
+    phi = np.arccos(np.minimum(_D4 / np.where(reach_base, r, _D4), 1.0))
+    t1 = np.arctan2(p5[:, 1], p5[:, 0])[:, None] + _SHOULDER * phi[:, None] + np.pi / 2
+    s1, c1 = np.sin(t1), np.cos(t1)
+
+    def along_z1(v):  # (n, 2): v . z1 per shoulder branch
+        return v[:, 0, None] * s1 - v[:, 1, None] * c1
+
+    def along_x1(v):  # v . x1, x1 = (cos theta1, sin theta1, 0) the arm plane's horizontal
+        return v[..., 0] * c1[..., None] + v[..., 1] * s1[..., None]
+
+    # 2. wrist angles, (n, 2, 2) over shoulder x wrist
+    wrist_sign = _SHOULDER[:, None] * _SAME_OPPOSITE[None, :]
+    t5 = wrist_sign * np.arccos(np.clip(along_z1(z), -1.0, 1.0))[:, :, None]
+    sign5 = np.sign(np.sin(t5))  # 0 exactly at the singularity: theta6 is then free and taken as 0
+    t6 = np.arctan2(-sign5 * along_z1(y)[:, :, None], sign5 * along_z1(x)[:, :, None])
+    # 3. theta2 + theta3 + theta4 and wrist 1's centre in the arm's plane
+    u = np.sin(t6)[..., None] * x[:, None, None, :] + np.cos(t6)[..., None] * y[:, None, None, :]
+    t234 = np.arctan2(-along_x1(u), u[..., 2])
+    px = along_x1(np.broadcast_to(p5[:, None, None, :], u.shape)) - _D5 * np.sin(t234)
+    py = p5[:, 2, None, None] - _D1 + _D5 * np.cos(t234)
+    return reach_base, t1, t5, t6, t234, px, py
+
+
 def _dh(theta: np.ndarray, i: int) -> np.ndarray:
     """The DH transforms ``(n, 4, 4)`` of joint ``i`` at angles ``theta (n,)``."""
     d, a, alpha = UR5E_DH["d"][i], UR5E_DH["a"][i], UR5E_DH["alpha"][i]
@@ -113,6 +148,11 @@ class UR5e(RobotModel):
     branch_names = _BRANCHES
     #: The usual ready pose: upper arm up, forearm level, tool pointing down.
     home = (0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0.0)
+    #: 180 degrees/s on every joint: the UR5e's technical specification (docs/robots.md).
+    max_velocity = (np.pi,) * 6
+    #: 180 degrees/s^2: UR publishes no joint acceleration; this is the figure its own ROS 2 description
+    #: (ur_description, config/ur5e/joint_limits.yaml) gives for trajectory generation (docs/robots.md).
+    max_acceleration = (np.pi,) * 6
     SINGULARITIES = {
         "shoulder": Singularity("|R|, the wrist centre's distance (m) from the base-shoulder plane", 0.05),
         "elbow": Singularity("|sin(elbow)|", 0.05),
@@ -132,31 +172,7 @@ class UR5e(RobotModel):
 
     def _ik(self, T: np.ndarray) -> np.ndarray:
         n = T.shape[0]
-        x, y, z, p = T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3]
-        p5 = p - _D6 * z
-        # 1. base angle, (n, 2) over the shoulder branches
-        r = np.hypot(p5[:, 0], p5[:, 1])
-        reach_base = r >= _D4 * (1 - 1e-12)
-        phi = np.arccos(np.minimum(_D4 / np.where(reach_base, r, _D4), 1.0))
-        t1 = np.arctan2(p5[:, 1], p5[:, 0])[:, None] + _SHOULDER * phi[:, None] + np.pi / 2
-        s1, c1 = np.sin(t1), np.cos(t1)
-
-        def along_z1(v):  # (n, 2): v . z1 per shoulder branch
-            return v[:, 0, None] * s1 - v[:, 1, None] * c1
-
-        def along_x1(v):  # v . x1, x1 = (cos theta1, sin theta1, 0) the arm plane's horizontal
-            return v[..., 0] * c1[..., None] + v[..., 1] * s1[..., None]
-
-        # 2. wrist angles, (n, 2, 2) over shoulder x wrist
-        wrist_sign = _SHOULDER[:, None] * _SAME_OPPOSITE[None, :]
-        t5 = wrist_sign * np.arccos(np.clip(along_z1(z), -1.0, 1.0))[:, :, None]
-        sign5 = np.sign(np.sin(t5))  # 0 exactly at the singularity: theta6 is then free and taken as 0
-        t6 = np.arctan2(-sign5 * along_z1(y)[:, :, None], sign5 * along_z1(x)[:, :, None])
-        # 3. theta2 + theta3 + theta4 and the planar two-link arm to wrist 1's centre
-        u = np.sin(t6)[..., None] * x[:, None, None, :] + np.cos(t6)[..., None] * y[:, None, None, :]
-        t234 = np.arctan2(-along_x1(u), u[..., 2])
-        px = along_x1(np.broadcast_to(p5[:, None, None, :], u.shape)) - _D5 * np.sin(t234)
-        py = p5[:, 2, None, None] - _D1 + _D5 * np.cos(t234)
+        reach_base, t1, t5, t6, t234, px, py = _wrist_geometry(T)
         c3 = (px**2 + py**2 - _A2**2 - _A3**2) / (2 * _A2 * _A3)
         reach_arm = np.abs(c3) <= 1 + 1e-12
         # (n, 2, 2, 2) over shoulder x elbow x wrist
@@ -171,3 +187,19 @@ class UR5e(RobotModel):
         sols = wrap_angle(sols)
         ok = reach_base[:, None, None, None] & reach_arm[:, :, None, :]
         return np.where(ok[..., None], sols, np.nan).reshape(n, 8, 6)
+
+    def _out_of_reach(self, T: np.ndarray) -> np.ndarray:
+        """Metres wrist 1's centre would have to move to come within the upper arm and forearm's reach.
+
+        Per pose the smallest over the shoulder and wrist branches of how far the shoulder-to-wrist-1
+        distance lies outside ``[|a2| - |a3|, |a2| + |a3|]`` (the arm stretched or folded); a wrist
+        centre nearer the base axis than ``d4`` adds what it lacks. A pose moved straight out along the
+        stretched arm is out by exactly the distance moved.
+        """
+        reach_base, _, _, _, _, px, py = _wrist_geometry(T)
+        distance = np.hypot(px, py)
+        lo, hi = abs(abs(_A2) - abs(_A3)), abs(_A2) + abs(_A3)
+        arm = np.maximum(np.maximum(distance - hi, lo - distance), 0.0).min(axis=(1, 2))
+        p5 = T[:, :3, 3] - _D6 * T[:, :3, 2]
+        base = np.maximum(_D4 - np.hypot(p5[:, 0], p5[:, 1]), 0.0)
+        return np.where(reach_base, arm, base + arm)

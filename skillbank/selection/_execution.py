@@ -19,6 +19,11 @@ them with what the primitives it learned from recorded:
   joints;
 - **timing**: time starts at 0; velocity and acceleration limits are met by
   slowing the whole reproduction down uniformly (the path is never changed).
+  With a robot, its own joint velocity and acceleration limits
+  (:attr:`~skillbank.robots.RobotModel.rate_limits`) always apply, tighter
+  given ones too. A duration that breaks a limit is stretched to the
+  shortest one that meets it, with a note saying from what to what; only a
+  time base given as time stamps (``t``) is strict, and refused instead.
 """
 
 from __future__ import annotations
@@ -29,19 +34,16 @@ import numpy as np
 
 from ..core import Demonstration, continuous_quaternions, slerp
 from ..core._rotations import _exp, _log, quaternion_conjugate, quaternion_multiply
-from ..core._validation import check_array, check_positive, numerical_errors
+from ..core._validation import numerical_errors
 from ..editing import edit_orientation, relative_rotations
 from ..robots import KinematicsError, RobotModel, robot_model
+from ._limits import DURATION_RANGE, LIMITS, _show, check_duration, check_limits, robot_limits
 
 __all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
-           "DISCRETE_STREAMS"]
+           "DISCRETE_STREAMS", "DURATION_RANGE", "check_duration", "robot_limits"]
 
 #: Streams carried by zero-order hold whatever their values (commands, not measurements).
 DISCRETE_STREAMS = ("gripper",)
-#: Keys of ``limits``: task-space limits are on the norm (m/s, m/s^2, rad/s, rad/s^2), joint limits
-#: per joint (a number for all or one per joint; rad/s, rad/s^2).
-LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration", "joint_velocity",
-          "joint_acceleration")
 #: Recorded streams that are derivatives of the path (RAIL stores them): not carried onto a new path.
 DERIVED_STREAMS = ("velocity", "acceleration", "jerk", "angular_velocity", "angular_acceleration")
 
@@ -50,8 +52,6 @@ _STREAM_OF = {"velocity": "position", "acceleration": "position", "angular_veloc
               "joint_acceleration": "joints"}
 # A limit met to round-off: the scaled peak may exceed it by a few ulps otherwise.
 _MARGIN = 1.0 + 1e-12
-
-
 @dataclass
 class Executable:
     """A reproduction with every stream a robot needs.
@@ -119,42 +119,12 @@ def retime(demo: Demonstration, duration=None) -> Demonstration:
     """
     t = demo.t - demo.t[0]
     if duration is not None:
-        duration = check_positive(duration, name="duration")
+        duration = check_duration(duration)
         if demo.n_steps < 2:
             raise ValueError(f"duration: a demonstration of {demo.n_steps} sample has no duration to set")
         t = t * (duration / t[-1])
         t[-1] = duration
     return Demonstration(t, demo.streams, demo.metadata)
-
-
-def check_limits(limits) -> dict:
-    """``limits`` as ``{key: float or (n,) array}``, validated; ``{}`` for None.
-
-    Examples
-    --------
-    >>> check_limits({"joint_velocity": 1.0})
-    {'joint_velocity': 1.0}
-    """
-    if limits is None:
-        return {}
-    if not isinstance(limits, dict):
-        raise ValueError(f"limits: expected a dict with keys among {list(LIMITS)}, got "
-                         f"{type(limits).__name__}")
-    unknown = sorted(set(limits) - set(LIMITS))
-    if unknown:
-        raise ValueError(f"limits: expected keys among {list(LIMITS)}, got {unknown}")
-    out = {}
-    for key, value in limits.items():
-        if value is None:
-            continue
-        if key.startswith("joint_") and np.ndim(value) == 1:
-            arr = check_array(value, name=f"limits[{key!r}]", ndim=1)
-            if (arr <= 0).any():
-                raise ValueError(f"limits[{key!r}]: expected numbers > 0, got {arr.tolist()}")
-            out[key] = arr
-        else:
-            out[key] = check_positive(value, name=f"limits[{key!r}]")
-    return out
 
 
 def _rates(values: np.ndarray, t: np.ndarray):
@@ -260,7 +230,8 @@ def _robot(robot) -> RobotModel:
     return robot_model(robot)
 
 
-def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0: float) -> np.ndarray:
+def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0: float,
+            branch=None) -> np.ndarray:
     if orientation is None:
         raise ValueError(f"robot: {model.name} inverse kinematics needs an 'orientation' stream, and the "
                          "primitives have none")
@@ -272,13 +243,14 @@ def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0
         i = int(np.clip(np.searchsorted(source.t, ts0, side="right") - 1, 0, source.n_steps - 1))
         seed = source["joints"][i]
     try:
-        return model.ik(position, orientation, q_seed=seed)
+        return model.ik(position, orientation, q_seed=seed, branch=branch)
     except KinematicsError as exc:
         raise KinematicsError(f"robot {model.name}: {exc}", index=exc.index, reason=exc.reason) from None
 
 
 def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot=None, limits=None,
-                    fixed_time: bool = False, by_index: bool = False, kind: str = "primitive") -> Executable:
+                    fixed_time: bool = False, by_index: bool = False, kind: str = "primitive",
+                    branch=None) -> Executable:
     """Complete a reproduced path with orientation, gripper, other streams, joints and timing.
 
     Parameters
@@ -294,12 +266,18 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     kind : str, default="primitive"
         What a source is called in the notes and messages (``"file"`` for ``skillbank edit``).
     robot : str or RobotModel, optional
-        Adds a ``joints`` stream by inverse kinematics (``robot_model(robot)``).
+        Adds a ``joints`` stream by inverse kinematics (``robot_model(robot)``),
+        and the robot's own joint limits to ``limits`` (:func:`robot_limits`).
     limits : dict, optional
-        Keys of :data:`LIMITS`. Met by stretching time uniformly.
+        Keys of :data:`LIMITS`. Met by stretching time uniformly (a note says
+        by how much and the duration before and after).
     fixed_time : bool, default=False
-        The time base was asked for (a duration or time stamps): limits that
-        need a longer one are an error instead of a stretch.
+        The time base was given as time stamps: limits that need a longer one
+        are an error instead of a stretch.
+    branch : int or str, optional
+        The robot's inverse-kinematics branch (a name of its ``branch_names``);
+        default the branch of the best source's recorded joints, else of the
+        robot's ``home``.
     by_index : bool, default=False
         Map reproduction phase to source samples by index rather than time
         (the sources were resampled by index onto a given time base).
@@ -327,6 +305,14 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     (True, [0.0, 0.0, 1.0, 1.0, 1.0])
     """
     limits = check_limits(limits)
+    model = None if robot is None else _robot(robot)
+    if model is not None:
+        limits, limit_notes = robot_limits(model, limits)
+        if branch is not None:
+            model.branch_index(branch)  # an unknown name fails before the work, listing the names
+    elif branch is not None:
+        raise ValueError(f"branch: an inverse-kinematics branch needs a robot, got branch={branch!r} and no "
+                         "robot (give robot='ur5e' / --robot ur5e)")
     sources = list(sources)
     ids = list(range(len(sources))) if ids is None else list(ids)
     t = out.t.copy()
@@ -334,7 +320,7 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     u = (t - t[0]) / (t[-1] - t[0]) if n > 1 else np.zeros(1)
     times = [_source_times(s, u, by_index) for s in sources]
     streams = {"position": out["position"]}
-    notes = []
+    notes = [] if model is None else list(limit_notes)
     with numerical_errors("reuse (orientation)"):
         have = [k for k, s in enumerate(sources) if "orientation" in s.streams]
         orientation, error = None, 0.0
@@ -366,10 +352,10 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         streams[name], note = _carry(best, times[0], name, label)
         notes.append(note)
     metadata = dict(out.metadata)
-    if robot is not None:
-        model = _robot(robot)
+    if model is not None:
         with numerical_errors(f"reuse ({model.name} inverse kinematics)"):
-            streams["joints"] = _joints(model, streams["position"], orientation, best, float(times[0][0]))
+            streams["joints"] = _joints(model, streams["position"], orientation, best, float(times[0][0]),
+                                        branch)
         metadata["joint_names"] = list(model.joint_names)
         metadata["robot"] = model.name
     demo = Demonstration(t, streams, metadata)
@@ -379,24 +365,29 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
             scale, key = _scale_needed(demo, limits)
         if scale > 1.0:
             _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
+            if (t[-1] - t[0]) * scale > DURATION_RANGE[1]:
+                raise ValueError(f"limits: {key} {_show(limits[key])} would stretch the motion to "
+                                 f"{(t[-1] - t[0]) * scale:.3g} s, more than {DURATION_RANGE[1]:g} s: give a "
+                                 "larger limit")
             demo = Demonstration(t[0] + (t - t[0]) * scale, streams, metadata)
-            notes.append(f"time stretched by {scale:.4g} to meet {key} {_show(limits[key])}")
+            own = model is not None and key in model.rate_limits and np.array_equal(
+                np.broadcast_to(limits[key], model.rate_limits[key].shape), model.rate_limits[key])
+            whose = f" (the {model.name}'s own limit)" if own else ""
+            before = float(t[-1] - t[0])
+            notes.append(f"time stretched by {scale:.4g} to meet {key} {_show(limits[key])}{whose}: "
+                         f"{before:.6g} s -> {before * scale:.6g} s")
     with numerical_errors("reuse (peak rates)"):
         peaks = peak_rates(demo)
     demo.metadata["time_scale"] = scale
     return Executable(trajectory=demo, orientation_error=error, peaks=peaks, time_scale=scale, notes=notes)
 
 
-def _show(limit) -> str:
-    return f"{limit:g}" if np.ndim(limit) == 0 else str(np.asarray(limit).tolist())
-
-
 def _check_stretch(constraints, fixed_time, scale, t, key, limit) -> None:
     duration = float(t[-1] - t[0])
     if fixed_time:
-        raise ValueError(f"limits: {key} {_show(limit)} cannot be met in the {duration:.6g} s asked for: it "
-                         f"needs at least {duration * scale:.6g} s (leave the duration out to slow down as "
-                         "needed)")
+        raise ValueError(f"limits: {key} {_show(limit)} cannot be met on the {duration:.6g} s time base "
+                         f"given: it needs at least {duration * scale:.6g} s (give a duration instead of "
+                         "time stamps to slow down as needed)")
     for name in ("start_velocity", "end_velocity"):
         v = getattr(constraints, name)
         if v is not None and np.any(v != 0):

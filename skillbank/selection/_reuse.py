@@ -9,8 +9,9 @@ import numpy as np
 from ..core import Demonstration
 from ..core._validation import check_array, check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, fit_reproduce, representation
+from ..robots import RobotModel, robot_model
 from ._candidates import SHORTLIST, Selection, select_candidates
-from ._execution import check_limits, executable_dict, make_executable, retime
+from ._execution import check_duration, check_limits, executable_dict, make_executable, retime
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
 
@@ -121,7 +122,8 @@ def _check_k(k, method: str, n_usable: int) -> int:
 
 
 def reproduce_selection(selection: Selection, constraints, *, method: str = "promp", k=None,
-                        random_state=None, t=None, duration=None, robot=None, limits=None) -> ReuseResult:
+                        random_state=None, t=None, duration=None, robot=None, limits=None,
+                        branch=None) -> ReuseResult:
     """Learn ``method`` from the ``k`` best candidates of a selection and reproduce the task.
 
     The second half of :func:`reuse`; call it directly to try several
@@ -132,7 +134,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     selection : Selection
         From :func:`select_candidates` with the same ``constraints``.
     constraints : Constraints
-    method, k, random_state, t, duration, robot, limits
+    method, k, random_state, t, duration, robot, limits, branch
         As in :func:`reuse`. ``duration`` stretches the reproduction's time
         base uniformly here; :func:`reuse` stretches the candidates first,
         so that velocity constraints mean the same in the result.
@@ -189,7 +191,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     metadata = {"method": method, "used": used, "k": k, "rank": selection.rank}
     done = make_executable(Demonstration(time, {"position": out["position"]}, metadata),
                            [c.recorded() for c in chosen], constraints, ids=used, robot=robot, limits=limits,
-                           fixed_time=t is not None or duration is not None, by_index=t is not None)
+                           fixed_time=t is not None, by_index=t is not None, branch=branch)
     traj = done.trajectory
     Y = traj["position"]
     with numerical_errors(f"reuse ({method} result check)"):
@@ -215,7 +217,7 @@ def _check_duration(duration, t):
         return None
     if t is not None:
         raise ValueError("duration: give a duration or a time base t, not both")
-    return check_positive(duration, name="duration")
+    return check_duration(duration)
 
 
 def _retimed(primitives, duration):
@@ -235,7 +237,7 @@ def _retimed(primitives, duration):
 
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
           rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None, duration=None, robot=None,
-          limits=None) -> ReuseResult:
+          limits=None, branch=None) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
@@ -296,13 +298,18 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         ``"ur5e"`` (a name of :data:`skillbank.robots.ROBOTS`) adds a
         ``joints`` stream by inverse kinematics of the pose path (positions
         in metres and orientations in the robot's base frame), on the branch
-        of the best candidate's recorded joints when it has them.
+        of the best candidate's recorded joints when it has them. The robot's
+        own joint velocity and acceleration limits always apply.
+    branch : int or str, optional
+        With ``robot``: the inverse-kinematics branch to follow (a name of the
+        robot's ``branch_names``), instead of the recorded joints' branch.
     limits : dict, optional
         Velocity and acceleration limits (keys ``velocity``,
         ``acceleration``, ``angular_velocity``, ``angular_acceleration``,
         ``joint_velocity``, ``joint_acceleration``), met by slowing the whole
-        reproduction down uniformly; with ``duration`` or ``t`` a limit that
-        needs more time is an error.
+        reproduction down uniformly; a ``duration`` too short for them is
+        stretched (a note says to what); with ``t`` a limit that needs more
+        time is an error.
 
     Returns
     -------
@@ -332,9 +339,12 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         _check_k(k, method, 1)
     duration = _check_duration(duration, t)
     check_limits(limits)
+    if branch is not None and robot is not None:
+        # an unknown branch fails before the candidates are adapted
+        (robot if isinstance(robot, RobotModel) else robot_model(robot)).branch_index(branch)
     if duration is not None:
         primitives = _retimed(primitives, duration)
     selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
                                   min_samples=cls.min_samples, progress=progress)
     return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t,
-                               duration=duration, robot=robot, limits=limits)
+                               duration=duration, robot=robot, limits=limits, branch=branch)

@@ -248,3 +248,31 @@ def test_real_robot_3d_with_obstacles(cli, data_dir, tmp_path):
     assert c.collides(demo) and not c.collides(Y) and doc["collision"] is False
     assert Y.shape == demo.shape and np.abs(Y[[0, -1]] - demo[[0, -1]]).max() < 1e-12
     assert plot.read_bytes()[:8] == PNG_MAGIC
+
+
+@pytest.mark.parametrize("beyond", [0.2, 0.05])
+def test_edit_a_path_beyond_the_ur5es_reach_says_by_how_much(cli, tmp_path, beyond):
+    """Issue 23, item 9: the arm stretched on the way is not the elbow singularity; the goal is out of reach.
+
+    2000 samples: some pass within 0.25 mm of full stretch, where |sin(elbow)| < 0.05, before the reach ends.
+    """
+    from skillbank.robots import UR5e
+    from skillbank.robots._ur5e import _dh
+
+    robot = UR5e()
+    q = np.array([[0.0, -1.2, 0.0, -1.5, -1.5, 0.0]])  # the elbow straight: the arm at full stretch
+    out = (_dh(q[:, 0], 0) @ _dh(q[:, 1], 1) @ _dh(q[:, 2], 2))[0, :3, 3] - _dh(q[:, 0], 0)[0, :3, 3]
+    out /= np.linalg.norm(out)  # from the shoulder to wrist 1: moving the tool along it moves wrist 1 as much
+    p, quat = robot.fk(q[0])
+    s = np.linspace(0.0, 1.0, 2000)
+    demo = skillbank.Demonstration(2.0 * s, {"position": p + np.outer(s * (0.1 + beyond) - 0.1, out),
+                                             "orientation": np.tile(quat, (2000, 1))})
+    path = sio.write_npz(demo, tmp_path / "out.npz")
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--out", tmp_path / "r.csv")
+    assert code == 2 and text == "" and err.count("\n") == 1, err
+    assert "singularity" not in err
+    found = re.search(r"is out of the arm's reach \(no solution on any branch; \d+ such samples, out by up "
+                      r"to ([\d.]+) m at sample 1999\): bring the path within reach", err)
+    assert found, err
+    assert float(found.group(1)) == pytest.approx(beyond, rel=5e-3)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.npz"]

@@ -68,17 +68,17 @@ def test_reuse_json_contract_with_robot_and_csv(cli, buttons, tmp_path):
 
 
 def test_reuse_text_npz_urscript_and_rosbag(cli, buttons, tmp_path):
-    argv = ["--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e", "--duration", "6"]
+    argv = ["--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e", "--duration", "10"]
     code, text, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "r.npz")
     assert code == 0, err
-    assert "orientation error" in text and "over 6 s from t = 0" in text and "peak joint velocity" in text
+    assert "orientation error" in text and "over 10 s from t = 0" in text and "peak joint velocity" in text
     assert "note: gripper: from primitive" in text and f"wrote {tmp_path / 'r.npz'}" in text
     back = read_npz(tmp_path / "r.npz")
-    assert back.t[-1] == 6.0 and back.metadata["joint_names"] == list(UR5e.joint_names)
-    code, _, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "r.script")
+    assert back.t[-1] == 10.0 and back.metadata["joint_names"] == list(UR5e.joint_names)
+    code, _, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "r.script", "--control-rate", "500")
     assert code == 0, err
     lines = [x.strip() for x in (tmp_path / "r.script").read_text().splitlines()]
-    assert sum(x.startswith("servoj(") for x in lines) == 6 * 125 + 1
+    assert sum(x.startswith("servoj(") for x in lines) == 10 * 500 + 1
     assert sum(x.startswith("skillbank_gripper(") for x in lines) >= 1
     code, _, err = _reuse(cli, buttons, *argv, "--out", tmp_path / "bag", "--format", "rosbag")
     assert code == 0, err
@@ -87,7 +87,7 @@ def test_reuse_text_npz_urscript_and_rosbag(cli, buttons, tmp_path):
 
     with AnyReader([tmp_path / "bag"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
-    assert counts == {"/joint_trajectory": 1, "/pose": back.n_steps}
+    assert counts == {"/joint_trajectory": 1, "/pose": back.n_steps, "/gripper/joint_states": back.n_steps}
 
 
 def test_edit_carries_the_streams_and_adds_joints(cli, buttons, tmp_path):
@@ -100,7 +100,10 @@ def test_edit_carries_the_streams_and_adds_joints(cli, buttons, tmp_path):
     assert code == 0, err
     doc = json.loads(text)
     assert set(doc) == KEYS and doc["used"] == [str(path)] and doc["rejected"] == {}
-    assert doc["t"][0] == 0.0 and doc["t"][-1] == pytest.approx(demo.duration)
+    # the recording's own timing asks more than the UR5e's pi rad/s^2 somewhere: stretched, with a note
+    assert doc["t"][0] == 0.0 and doc["t"][-1] > demo.duration
+    note = next(n for n in doc["notes"] if n.startswith("time stretched"))
+    assert note.endswith(f"(the ur5e's own limit): {demo.duration:.6g} s -> {doc['t'][-1]:.6g} s"), note
     assert doc["orientation_error"] < 1e-9 and doc["constraint_error"] < 1e-9
     J = np.array(doc["streams"]["joints"])
     position, _ = UR5e().fk(J)
@@ -176,8 +179,12 @@ def test_reuse_errors_exit_2_with_one_line(cli, tmp_path, argv, match):
 
 @pytest.mark.parametrize(("goal", "argv", "match"), [
     ("1.6,0.0,0.2", ["--robot", "ur5e"], r"robot ur5e: position: sample \d+ is out"),
-    (None, ["--robot", "ur5e", "--duration", "0.2", "--max-joint-velocity", "0.01"],
-     r"limits: joint_velocity 0.01 cannot be met in the 0.2 s asked for: it needs at least [\d.]+ s"),
+    ("0.08,-0.668,0.098", ["--robot", "ur5e", "--branch", "elbow-up"],
+     r"branch: expected one of \['shoulder-left/elbow-up/wrist-up', 'shoulder-left/elbow-up/wrist-down', "
+     r"'shoulder-left/elbow-down/wrist-up', 'shoulder-left/elbow-down/wrist-down', "
+     r"'shoulder-right/elbow-up/wrist-up', 'shoulder-right/elbow-up/wrist-down', "
+     r"'shoulder-right/elbow-down/wrist-up', 'shoulder-right/elbow-down/wrist-down'\] or an index below 8, "
+     r"got 'elbow-up'"),
 ])
 def test_robot_errors_exit_2_and_write_nothing(cli, buttons, tmp_path, goal, argv, match):
     import re
@@ -198,3 +205,144 @@ def test_edit_errors(cli, tmp_path):
                                  "'orientation' stream, and file(s) ['a.csv'] have none "
                                  "(streams ['position'])\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv"]
+
+
+def _servoj(path):
+    """The joint targets of a URScript's servoj steps, and their period."""
+    lines = [x.strip() for x in path.read_text().splitlines() if x.strip().startswith("servoj(")]
+    period = {float(x.split("t=")[1].split(",")[0]) for x in lines}
+    assert len(period) == 1
+    return np.array([x[len("servoj(["):x.index("]")].split(",") for x in lines], dtype=float), period.pop()
+
+
+@pytest.mark.parametrize("rate", ["125", "500"])
+def test_a_nanosecond_is_stretched_to_the_robots_limits_in_the_written_script(cli, buttons, tmp_path, rate):
+    """Issue 23, item 7: --duration 1e-9 wrote 0.29 rad servoj steps in 8 ms; now the UR5e's limits hold."""
+    out = tmp_path / "fast.script"
+    code, text, err = _reuse(cli, buttons, "--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e",
+                             "--duration", "1e-9", "--control-rate", rate, "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    end = doc["t"][-1]
+    note = next(n for n in doc["notes"] if n.startswith("time stretched"))
+    assert note.endswith(f"(the ur5e's own limit): 1e-09 s -> {end:.6g} s"), note
+    assert 0.5 < end < 60.0
+    steps, period = _servoj(out)
+    assert period == pytest.approx(1 / float(rate))
+    assert len(steps) == int(np.ceil(end * float(rate) - 1e-9)) + 1
+    speed = np.abs(np.diff(steps[:-1], axis=0)) / period  # the last step only holds the end
+    # the JSON trajectory keeps pi rad/s and pi rad/s^2, one of them exactly (the stretch is no longer
+    # than needed); the servoj steps follow it (blended_joints), no faster than its samples
+    J, t = np.array(doc["streams"]["joints"]), np.array(doc["t"])
+    v = np.diff(J, axis=0) / np.diff(t)[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (t[2:] - t[:-2]))[:, None]
+    assert max(np.abs(v).max() / np.pi, np.sqrt(np.abs(a).max() / np.pi)) == pytest.approx(1.0, abs=1e-9)
+    assert speed.max() <= np.abs(v).max() * (1 + 1e-6) + 1e-9 * float(rate)  # 9 printed decimals
+    assert speed.max() <= np.pi
+    # and their acceleration too, at 125 and at 500 Hz (9 printed decimals: 2e-9 rad per second difference)
+    accel = np.abs(np.diff(steps[:-1], 2, axis=0)) / period**2
+    assert accel.max() <= np.pi * (1 + 1e-9) + 2e-9 / period**2
+
+
+def test_a_million_seconds_of_urscript_is_refused_before_the_work(buttons, tmp_path, limited):
+    """Issue 23, item 4: 14.8 GB and growing; now one line naming the bound and how to go past it."""
+    out = tmp_path / "x.script"
+    code, text, err = limited("library", "reuse", buttons["db"], "--skill", "button", "--goal",
+                              ",".join(f"{v:.6f}" for v in buttons["goal"]), "--goal-orientation",
+                              _q(buttons["goal_q"]), "--robot", "ur5e", "--duration", "1e6", "--out", out,
+                              memory=1 << 30, timeout=60)
+    assert code == 2 and text == "" and err.count("\n") == 1, err
+    assert err == ("skillbank library reuse: error: out: the export would write 1.25e+08 servoj steps "
+                   "(1e+06 s at 125 Hz), more than the bound of 2097152 (set SKILLBANK_MAX_EXPORT_SAMPLES to "
+                   "a larger number to write it, or shorten the motion or lower the rate)\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_branch_is_chosen_on_the_command_line(cli, buttons, tmp_path):
+    robot = UR5e()
+    argv = ["--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e", "--json"]
+    code, text, err = _reuse(cli, buttons, *argv)
+    assert code == 0, err
+    doc = json.loads(text)
+    P, Q = np.array(doc["streams"]["position"]), np.array(doc["streams"]["orientation"])
+    recorded = set(robot.branch_of(np.array(doc["streams"]["joints"])).tolist())
+    whole = np.flatnonzero(~np.isnan(robot.ik_all(P, Q)).any(axis=2).any(axis=0))
+    other = next(int(b) for b in whole if b not in recorded)
+    code, text, err = _reuse(cli, buttons, *argv, "--branch", robot.branch_names[other])
+    assert code == 0, err
+    J = np.array(json.loads(text)["streams"]["joints"])
+    assert set(robot.branch_of(J).tolist()) == {other}
+    code, text, err = _reuse(cli, buttons, *argv, "--branch", str(other))  # or its index
+    assert code == 0, err
+    np.testing.assert_array_equal(np.array(json.loads(text)["streams"]["joints"]), J)
+    position, _ = robot.fk(J)
+    assert np.abs(position - P).max() < 1e-9  # the same pose path, on the other branch
+    # edit takes it too
+    path = write_npz(load(buttons["file"]).slice(1385, 2074), tmp_path / "move.npz")
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    P, Q = np.array(doc["streams"]["position"]), np.array(doc["streams"]["orientation"])
+    recorded = set(robot.branch_of(np.array(doc["streams"]["joints"])).tolist())
+    whole = np.flatnonzero(~np.isnan(robot.ik_all(P, Q)).any(axis=2).any(axis=0))
+    other = next(int(b) for b in whole if b not in recorded)
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--branch", robot.branch_names[other], "--json")
+    assert code == 0, err
+    assert set(robot.branch_of(np.array(json.loads(text)["streams"]["joints"])).tolist()) == {other}
+
+
+def test_ros_topics_and_acceleration_limit_on_the_command_line(cli, buttons, tmp_path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    code, text, err = _reuse(cli, buttons, "--goal-orientation", _q(buttons["goal_q"]), "--robot", "ur5e",
+                             "--max-joint-acceleration", "0.5", "--out", tmp_path / "bag", "--format",
+                             "rosbag",
+                             "--joint-topic", "/ur/scaled_joint_trajectory_controller/joint_trajectory",
+                             "--pose-topic", "/ur/tool_pose", "--gripper-topic", "/gripper/state", "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["peaks"]["joints"]["acceleration"] <= 0.5 * (1 + 1e-9)
+    with AnyReader([tmp_path / "bag"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+    assert topics == {"/ur/scaled_joint_trajectory_controller/joint_trajectory":
+                      "trajectory_msgs/msg/JointTrajectory", "/ur/tool_pose": "geometry_msgs/msg/PoseStamped",
+                      "/gripper/state": "sensor_msgs/msg/JointState"}
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--duration", "nan", *OUT], r"duration: expected a number > 0, got nan"),
+    (["--duration", "inf", *OUT], r"duration: expected a number > 0, got inf"),
+    (["--duration", "1e-12", *OUT], r"duration: expected seconds in \[1e-09, 1e\+09\], got 1e-12"),
+    (["--max-joint-acceleration", "1", *OUT], r"max-joint-acceleration: a joint acceleration limit needs "
+                                               r"joints: give --robot too"),
+    (["--robot", "ur5e", "--max-joint-acceleration", "-1", *OUT],
+     r"max-joint-acceleration: expected a number > 0, got -1"),
+    (["--branch", "shoulder-left/elbow-up/wrist-up", *OUT],
+     r"branch: --branch .* needs joints: give --robot"),
+    (["--control-rate", "100", *OUT], r"control-rate: --control-rate is the servoj rate of a URScript export "
+                                      r"\(--out arm.script\), got a csv --out"),
+    (["--control-rate", "1000", "--out", "{tmp}/a.script"], r"rate: expected servoj steps per second in "
+                                                            r"\[1, 500\] Hz"),
+    (["--joint-topic", "/a", *OUT], r"joint-topic: topics are for a ROS 2 bag export"),
+    (["--pose-topic", "tool pose", "--out", "{tmp}/new.bag"], r"pose-topic: expected a ROS 2 topic name"),
+    (["--duration", "1e5", "--out", "{tmp}/a.script", "--control-rate", "500"],
+     r"out: the export would write 5e\+07 servoj steps \(100000 s at 500 Hz\), more than the bound of "
+     r"2097152 \(set SKILLBANK_MAX_EXPORT_SAMPLES"),
+])
+def test_execution_option_errors_exit_2_before_the_work(cli, tmp_path, argv, match):
+    import re
+
+    db = _plain_library(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    for command in (["library", "reuse", db, "--skill", "reach"], ["edit", tmp_path / "d.csv"]):
+        if command[0] == "edit":
+            s = np.linspace(0.0, 1.0, 30)
+            write_csv(Demonstration(s, {"position": np.c_[s, s, s]}), tmp_path / "d.csv")
+            before = sorted(p.name for p in tmp_path.iterdir())
+        code, out, err = cli(*command, "--goal", "0.5,0.0,0.3", *argv)
+        assert code == 2 and out == "" and err.count("\n") == 1, err
+        assert re.search(match, err), err
+        after = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("plain.db-"))
+        assert after == before

@@ -198,8 +198,8 @@ def test_ik_takes_the_equivalent_angles_nearest_the_seed_within_limits(robot):
 def test_unreachable_pose_names_the_sample(robot):
     p, quat = robot.fk(np.tile(HOME, (5, 1)))
     p[3] = [2.0, 0.0, 0.5]
-    with pytest.raises(KinematicsError, match=r"^position: sample 3 is out of the arm's reach \(no solution "
-                                                r"on any branch\)$") as info:
+    with pytest.raises(KinematicsError, match=r"^position: sample 3 is out of the arm's reach by 1.13 m \(no "
+                                                r"solution on any branch\): bring it within reach$") as info:
         robot.ik(p, quat, q_seed=HOME)
     assert (info.value.index, info.value.reason) == (3, "unreachable")
     # the wrist centre on the base axis: the d4 offset makes it unreachable whatever the distance
@@ -216,9 +216,77 @@ def test_pose_out_of_one_branch_names_the_branches_that_reach_it(robot):
     i = int(np.flatnonzero(missing.any(axis=1))[0])
     b = int(np.flatnonzero(missing[i])[0])
     reachable = [robot.branch_names[k] for k in np.flatnonzero(~missing[i])]
-    with pytest.raises(KinematicsError, match=rf"sample 0 is out on branch '{robot.branch_names[b]}' "
-                                                rf"\(reachable on '{reachable[0]}'"):
+    with pytest.raises(KinematicsError, match=rf"sample 0 is out on branch '{robot.branch_names[b]}'; the "
+                                                rf"whole path is reachable on '{reachable[0]}'.*: choose one "
+                                                r"with branch=\.\.\. \(--branch on the command line\)$"):
         robot.ik(p[i], quat[i], branch=b)
+    # the branch named in the message is followed
+    assert robot.branch_of(robot.ik(p[i], quat[i], branch=reachable[0]))[0] == robot.branch_names.index(
+        reachable[0])
+
+
+def test_a_path_no_one_branch_reaches_says_so(robot):
+    q = np.random.default_rng(2).uniform(-np.pi, np.pi, (400, 6))
+    p, quat = robot.fk(q)
+    ok = ~np.isnan(robot.ik_all(p, quat)).any(axis=2)
+    i, j = next((i, j) for i in range(400) for j in range(400)
+                if ok[i].any() and ok[j].any() and not (ok[i] & ok[j]).any())
+    b = int(np.flatnonzero(ok[i])[0])
+    here = ", ".join(repr(robot.branch_names[k]) for k in np.flatnonzero(ok[j]))
+    with pytest.raises(KinematicsError, match=rf"^position: sample 1 is out on branch "
+                                              rf"'{robot.branch_names[b]}' \(reachable on {here}\); no one "
+                                              r"branch reaches the whole path: change the path$") as info:
+        robot.ik(p[[i, j]], quat[[i, j]], branch=b)
+    assert (info.value.index, info.value.reason) == (1, "unreachable")
+
+
+def _stretched_out(robot, q, distance, n=30):
+    """A pose path from 0.1 m inside a stretched arm's reach (elbow at 0) to ``distance`` beyond it.
+
+    The tool moves along the line from the shoulder to wrist 1's centre (in the arm's plane, so the base
+    angle and the wrist keep their solution): wrist 1's centre moves by the same distance.
+    """
+    from skillbank.robots._ur5e import _dh
+
+    q = np.array([q], dtype=float)
+    T1 = _dh(q[:, 0], 0)
+    T3 = T1 @ _dh(q[:, 1], 1) @ _dh(q[:, 2], 2)
+    out = T3[0, :3, 3] - T1[0, :3, 3]
+    out /= np.linalg.norm(out)
+    p, quat = robot.fk(q[0])
+    return np.linspace(p - 0.1 * out, p + distance * out, n), np.tile(quat, (n, 1))
+
+
+@pytest.mark.parametrize("distance", [0.2, 0.05, 0.5])
+@pytest.mark.parametrize("q", [[0.3, -0.7, 0.0, -0.9, 1.2, 0.4], [0.0, -1.2, 0.0, -1.5, -1.5, 0.0]])
+def test_a_goal_beyond_reach_says_by_how_much_not_singularity(robot, q, distance):
+    """The samples before it stretch the arm (the elbow singularity), but the reach is what to fix."""
+    p, quat = _stretched_out(robot, q, distance)
+    pattern = (r"^position: sample \d+ is out of the arm's reach \(no solution on any branch; \d+ such "
+               r"samples, out by up to ([\d.]+) m at sample 29\): bring the path within reach$")
+    with pytest.raises(KinematicsError, match=pattern) as info:
+        robot.ik(p, quat)
+    assert info.value.reason == "unreachable"
+    shown = float(str(info.value).split("up to ")[1].split(" m")[0])
+    assert shown == pytest.approx(distance, rel=5e-3)  # printed to 3 digits
+    # the goal alone: one sample
+    with pytest.raises(KinematicsError, match=rf"^position: sample 0 is out of the arm's reach by "
+                                              rf"{distance:.3g} m"):
+        robot.ik(p[-1], quat[-1])
+    # 0.1 mm short of stretched (the elbow at 0.031 rad): within reach, so the singularity is reported
+    inside, _ = _stretched_out(robot, q, -1e-4)
+    with pytest.raises(KinematicsError, match=r"is near the elbow singularity"):
+        robot.ik(inside, quat)
+
+
+def test_reach_distance_of_a_wrist_too_near_the_base_axis(robot):
+    # tool pointing down with the wrist centre on the base axis: d4 (0.1333 m) short of the base's reach
+    quat = robot.fk(HOME)[1]
+    T = np.eye(4)[None].copy()
+    T[0, :3, :3] = np.array([[1.0, 0, 0], [0, -1, 0], [0, 0, -1]]) @ np.eye(3)
+    T[0, :3, 3] = [0.0, 0.0, 0.5]
+    assert np.isnan(robot.ik_all([0.0, 0.0, 0.5], quat)).all()
+    assert robot._out_of_reach(T)[0] >= 0.1333 - 1e-12
 
 
 @pytest.mark.parametrize("kind, joint, end, measure", [

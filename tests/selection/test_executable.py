@@ -115,9 +115,82 @@ def test_limits_are_met_by_slowing_down_without_changing_the_path():
     assert max(ratios) == pytest.approx(1.0, abs=1e-9)
 
 
+def test_a_duration_too_short_for_the_limits_is_stretched_with_a_note():
+    task = Constraints(goal=GOAL)
+    res = reuse(SKILL, task, method="ja", duration=0.5, limits={"velocity": 0.01})
+    assert res.time_scale > 1.0 and res.trajectory.t[-1] == pytest.approx(0.5 * res.time_scale, rel=1e-12)
+    assert peak_rates(res.trajectory)["position"]["velocity"] == pytest.approx(0.01, rel=1e-9)
+    note = next(n for n in res.notes if n.startswith("time stretched"))
+    assert note == (f"time stretched by {res.time_scale:.4g} to meet velocity 0.01: 0.5 s -> "
+                    f"{res.trajectory.t[-1]:.6g} s")
+
+
+def test_the_robots_own_limits_always_apply():
+    """1 ns asked for: stretched to the UR5e's 180 deg/s and 180 deg/s^2, one of them met exactly."""
+    task = Constraints(goal=GOAL, goal_orientation=GOAL_Q)
+    res = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9)
+    J, t = res.trajectory["joints"], res.trajectory.t
+    v = np.diff(J, axis=0) / np.diff(t)[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (t[2:] - t[:-2]))[:, None]
+    ratio = max(np.abs(v).max() / np.pi, np.sqrt(np.abs(a).max() / np.pi))
+    assert ratio <= 1.0 and ratio == pytest.approx(1.0, abs=1e-9)
+    note = next(n for n in res.notes if n.startswith("time stretched"))
+    assert note.endswith(f"(the ur5e's own limit): 1e-09 s -> {t[-1]:.6g} s"), note
+    assert note.startswith(f"time stretched by {res.time_scale:.4g} to meet joint_")
+    # a given limit above the robot's: the robot's applies, and a note says so
+    fast = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9, limits={"joint_velocity": 10.0})
+    assert "joint_velocity: 10 is above the ur5e's own limit 3.142; the robot's limit applies" in fast.notes
+    np.testing.assert_array_equal(fast.trajectory.t, t)
+    # a tighter given limit is met as given
+    slow = reuse(SKILL, task, method="ja", robot="ur5e", limits={"joint_velocity": 0.2})
+    dq = np.diff(slow.trajectory["joints"], axis=0) / np.diff(slow.trajectory.t)[:, None]
+    assert np.abs(dq).max() <= 0.2
+
+
+def test_the_chosen_branch_is_followed():
+    task = Constraints(goal=GOAL, goal_orientation=GOAL_Q)
+    robot = UR5e()
+    default = reuse(SKILL, task, method="ja", robot="ur5e")
+    recorded = robot.branch_of(SKILL[0]["joints"][:1])[0]
+    assert set(robot.branch_of(default.trajectory["joints"])) == {recorded}
+    reachable = ~np.isnan(robot.ik_all(default.trajectory["position"], default.trajectory["orientation"])
+                          ).any(axis=2).any(axis=0)
+    others = [b for b in np.flatnonzero(reachable) if b != recorded]
+    assert others
+    for b in others[:2]:
+        res = reuse(SKILL, task, method="ja", robot="ur5e", branch=robot.branch_names[b])
+        J = res.trajectory["joints"]
+        assert set(robot.branch_of(J)) == {b}
+        np.testing.assert_allclose(robot.fk(J)[0], res.trajectory["position"], atol=1e-9)
+        # the branch's name is the signs: the elbow's and the wrist's relative to the shoulder's
+        elbow_up = np.sign(np.sin(J[:, 2]) * _reach(J)) < 0
+        assert set(elbow_up) == {"elbow-up" in robot.branch_names[b]}
+
+
+def _reach(q):
+    t2, t23, t234 = q[:, 1], q[:, 1] + q[:, 2], q[:, 1] + q[:, 2] + q[:, 3]
+    return -0.425 * np.cos(t2) - 0.3922 * np.cos(t23) + 0.0997 * np.sin(t234)
+
+
 @pytest.mark.parametrize(("kwargs", "match"), [
-    ({"duration": 0.5, "limits": {"velocity": 0.01}},
-     r"limits: velocity 0.01 cannot be met in the 0.5 s asked for: it needs at least \d+"),
+    ({"t": np.linspace(0.0, 0.5, 90), "limits": {"velocity": 0.01}},
+     r"limits: velocity 0.01 cannot be met on the 0.5 s time base given: it needs at least \d+"),
+    ({"duration": 1e-12}, r"duration: expected seconds in \[1e-09, 1e\+09\], got 1e-12 \(a short duration is "
+                          r"stretched to the robot's limits anyway: give at least 1e-09 s\)"),
+    ({"duration": 2e9}, r"duration: expected seconds in \[1e-09, 1e\+09\], got 2e\+09 \(split a longer task"),
+    ({"duration": float("nan")}, r"duration: expected a number > 0, got nan"),
+    ({"branch": "elbow-up"}, r"branch: an inverse-kinematics branch needs a robot"),
+    ({"robot": "ur5e", "branch": "elbow-up"},
+     r"branch: expected one of \['shoulder-left/elbow-up/wrist-up', .*"
+     r"'shoulder-right/elbow-down/wrist-down'\] or an index below 8, got 'elbow-up'"),
+    ({"limits": {"velocity": 1e-320}},
+     r"limits\['velocity'\]: expected at least 1e-09 \(a smaller limit stretches any motion past 1e\+09 s\), "
+     r"got 1e-320"),
+    ({"robot": "ur5e", "limits": {"joint_velocity": 1e-9}},
+     r"limits: joint_velocity 1e-09 would stretch the motion to [\d.e+]+ s, more than 1e\+09 s: give a "
+     r"larger limit"),
+    ({"robot": "ur5e", "limits": {"joint_velocity": [1.0, 2.0]}},
+     r"limits\['joint_velocity'\]: expected one number, or one per joint of ur5e \(6\), got 2"),
     ({"limits": {"velocity": 0.01}, "task": Constraints(goal=GOAL, end_velocity=[0.1, 0.0, 0.0])},
      r"limits: velocity 0.01 needs the motion slowed down .* non-zero end velocity"),
     ({"limits": {"speed": 1.0}}, r"limits: expected keys among \['velocity'"),

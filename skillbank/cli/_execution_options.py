@@ -1,0 +1,144 @@
+"""Options of the commands that make executable output: duration, robot, branch, limits, export.
+
+``library reuse`` and ``edit`` take all of them (:func:`add_execution_options`),
+``plan`` the robot and export options. Values are checked here, before any
+work, with the library's own checks.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["add_robot_options", "add_export_options", "add_execution_options", "robot_params",
+           "execution_params", "export_params"]
+
+
+def add_robot_options(p, *, what: str = "the whole result") -> None:
+    """``--robot``, ``--max-joint-velocity``, ``--max-joint-acceleration``, ``--branch``.
+
+    See :func:`robot_params`.
+    """
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="add a 'joints' stream by inverse kinematics for this robot (ur5e), from the pose "
+                        "path (metres, quaternions, in the robot's base frame); the robot's own joint "
+                        "velocity and acceleration limits always apply (docs/robots.md)")
+    p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
+                   help=f"slow {what} down uniformly until no joint moves faster (needs --robot; the "
+                        "robot's own limit where it is lower)")
+    p.add_argument("--max-joint-acceleration", type=float, default=None, metavar="RAD_PER_S2",
+                   help=f"slow {what} down uniformly until no joint accelerates faster (needs --robot; the "
+                        "robot's own limit where it is lower)")
+    p.add_argument("--branch", default=None, metavar="NAME",
+                   help="the inverse-kinematics branch to follow, e.g. shoulder-left/elbow-up/wrist-up "
+                        "(needs --robot; default: the branch of the recorded joints, else of the robot's "
+                        "home pose; docs/robots.md names them)")
+
+
+def add_export_options(p) -> None:
+    """``--control-rate`` (URScript) and the ROS 2 bag's topics (see :func:`export_params`)."""
+    from ..io._trajectory_export import ROS_TOPICS  # the writers' defaults, written in one place
+
+    p.add_argument("--control-rate", type=float, default=None, metavar="HZ",
+                   help="URScript: servoj steps per second, 1 to 500 (default 125, the CB3's rate; the "
+                        "e-Series runs at 500); duration x rate steps, at most 2^21 unless "
+                        "SKILLBANK_MAX_EXPORT_SAMPLES says more")
+    for key, what in (("joint", "the JointTrajectory"), ("pose", "the PoseStamped poses"),
+                      ("gripper", "the gripper's JointState")):
+        p.add_argument(f"--{key}-topic", default=None, metavar="TOPIC",
+                       help=f"ROS 2 bag: the topic of {what} (default {ROS_TOPICS[key]})")
+
+
+def add_execution_options(p) -> None:
+    """``--duration``, the robot options, ``--format`` and the export options (:func:`execution_params`)."""
+    p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+                   help="duration of the result (default: the demonstrations' mean); time starts at 0; one "
+                        "too short for the limits is stretched to the shortest that meets them, with a note")
+    add_robot_options(p)
+    p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
+                   help="format of --out (default from its suffix: .csv, .npz, .script, .bag): every "
+                        "stream with the joint names (csv, npz), a UR program of servoj steps (urscript), or "
+                        "a ROS 2 bag folder of a JointTrajectory, PoseStamped poses and the gripper's "
+                        "JointState (rosbag, needs skillbank[ros])")
+    add_export_options(p)
+
+
+def robot_params(args) -> dict:
+    """``robot``, ``limits`` and ``branch`` from :func:`add_robot_options`' options, checked before the work.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> robot_params(argparse.Namespace(robot="ur5e", max_joint_velocity=1.0, max_joint_acceleration=None,
+    ...                                 branch=None))
+    {'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}, 'branch': None}
+    """
+    from ..core._validation import check_positive  # numpy only
+
+    limits = {}
+    for key, option in (("joint_velocity", "max-joint-velocity"),
+                        ("joint_acceleration", "max-joint-acceleration")):
+        value = getattr(args, f"max_{key}", None)
+        if value is None:
+            continue
+        if args.robot is None:
+            raise ValueError(f"{option}: a joint {key.split('_')[1]} limit needs joints: give --robot too")
+        limits[key] = check_positive(value, name=option)
+    branch = getattr(args, "branch", None)
+    if branch is not None:
+        if args.robot is None:
+            raise ValueError(f"branch: --branch {branch} needs joints: give --robot too")
+        from ..robots import robot_model  # numpy only; loaded when a robot is asked for
+
+        branch = int(branch) if branch.strip().isdigit() else branch  # an index, as the message offers
+        robot_model(args.robot).branch_index(branch)  # an unknown name fails first, listing the names
+    return {"robot": args.robot, "limits": limits, "branch": branch}
+
+
+def execution_params(args) -> dict:
+    """``duration``, ``robot``, ``limits``, ``branch`` keyword arguments from :func:`add_execution_options`.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> execution_params(argparse.Namespace(duration=None, robot="ur5e", max_joint_velocity=1.0))
+    {'duration': None, 'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}, 'branch': None}
+    """
+    duration = args.duration
+    if duration is not None:
+        from ..selection._execution import check_duration  # numpy only
+
+        duration = check_duration(duration)
+    return {"duration": duration, **robot_params(args)}
+
+
+def export_params(args, kind, duration=None) -> dict:
+    """Keyword arguments of ``write_trajectory`` from :func:`add_export_options`' options, for ``--out``.
+
+    Options of another format than ``kind`` are an error; with ``duration`` known, the number of servoj
+    steps is checked against its bound here, before the work.
+    """
+    from ..io._trajectory_export import (  # the writers' checks, only when a result is written
+        check_control_rate,
+        check_export_samples,
+        check_topic,
+    )
+
+    rate = getattr(args, "control_rate", None)
+    topics = {f"{key}_topic": getattr(args, f"{key}_topic", None) for key in ("joint", "pose", "gripper")}
+    topics = {key: value for key, value in topics.items() if value is not None}
+    got = f"a {kind} --out" if kind else "no --out"
+    if rate is not None and kind != "urscript":
+        raise ValueError(f"control-rate: --control-rate is the servoj rate of a URScript export (--out "
+                         f"arm.script), got {got}")
+    if topics and kind != "rosbag":
+        option = next(iter(topics)).replace("_", "-")
+        raise ValueError(f"{option}: topics are for a ROS 2 bag export (--out folder.bag or --format "
+                         f"rosbag), got {got}")
+    out = {key: check_topic(value, what=key.replace("_", "-")) for key, value in topics.items()}
+    if kind == "urscript":
+        rate = check_control_rate(125.0 if rate is None else rate)
+        out["rate"] = rate
+        if duration is not None:
+            check_export_samples(math.ceil(duration * rate - 1e-9) + 1,
+                                 f"servoj steps ({duration:g} s at {rate:g} Hz)")
+    return out
