@@ -6,16 +6,8 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._errors import (
-    HDF5_MAGIC,
-    FormatError,
-    as_file,
-    check_clock,
-    check_repair_time,
-    expect_magic,
-    reading,
-    real_array,
-)
+from ._errors import FormatError, as_file, check_clock, check_repair_time, reading, real_array
+from ._h5 import open_h5
 
 __all__ = ["read_handwriting_h5", "HANDWRITING_GROUPS"]
 
@@ -103,12 +95,9 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None, repair_t
     >>> read_handwriting_h5("seed/r_shape.h5", group="unsmoothed", index=2).n_steps  # doctest: +SKIP
     237
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     check_repair_time(repair_time)
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+    with open_h5(p) as h5:
         names = _demo_names(p, h5, group)
         if index is None:
             if not names:

@@ -9,7 +9,8 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_positive, summarise
-from ._errors import HDF5_MAGIC, FormatError, as_file, expect_magic, reading, real_array
+from ._errors import FormatError, as_file, reading, real_array
+from ._h5 import open_h5
 from ._lerobot import select_episodes
 
 __all__ = ["read_robomimic", "ROBOMIMIC_GROUP", "is_robomimic", "DEFAULT_CONTROL_FREQ"]
@@ -93,15 +94,12 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     >>> demos[0].metadata["label"], demos[0]["robot0_eef_pos"].shape[1]  # doctest: +SKIP
     ('Lift', 3)
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
     if obs_keys is not None:
         obs_keys = [obs_keys] if isinstance(obs_keys, str) else list(obs_keys)
         if not obs_keys or not all(isinstance(k, str) for k in obs_keys):
             raise ValueError(f"obs_keys: expected a list of observation names, got {obs_keys!r}")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+    with open_h5(p) as h5:
         if not is_robomimic(h5):
             raise FormatError(p, f"expected a robomimic dataset (group '{ROBOMIMIC_GROUP}' with demo_N "
                               f"groups), found [{summarise(map(repr, sorted(h5.keys())))}]")

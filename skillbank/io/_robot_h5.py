@@ -6,16 +6,8 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._errors import (
-    HDF5_MAGIC,
-    FormatError,
-    as_file,
-    check_clock,
-    check_repair_time,
-    expect_magic,
-    reading,
-    real_array,
-)
+from ._errors import FormatError, as_file, check_clock, check_repair_time, reading, real_array
+from ._h5 import open_h5
 
 __all__ = ["read_robot_h5", "ROBOT_STREAMS", "UR_JOINT_NAMES", "UR_JOINT_STATES_ORDER"]
 
@@ -149,13 +141,10 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None, scalar_first: boo
     >>> demo.metadata["joint_names"][0]  # doctest: +SKIP
     'shoulder_pan_joint'
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     check_repair_time(repair_time)
     joint_names = _check_joint_names(joint_names)
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+    with open_h5(p) as h5:
         raw = {name: _read_stream(p, h5, name) for name in ROBOT_STREAMS}
     raw = {name: value for name, value in raw.items() if value is not None}
     order, names = _joint_order(p, raw["joints"][1].shape[1], joint_names)
