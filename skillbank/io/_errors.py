@@ -35,6 +35,7 @@ _LIBRARY_ERRORS = (
     AttributeError,
     EOFError,
     RuntimeError,
+    ArithmeticError,
     NotImplementedError,
     UnicodeError,
     zipfile.BadZipFile,
