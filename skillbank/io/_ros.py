@@ -109,6 +109,10 @@ def _bag_errors(path):
     except errors as exc:
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise FormatError(path, f"unreadable ROS bag: {detail}") from None
+    except AssertionError:  # rosbags checks a ROS 1 bag's records against each other with assert
+        raise FormatError(path, "unreadable ROS bag: its records contradict each other (a consistency check "
+                          "of the reader failed), so the file is corrupt; 'rosbag reindex' may repair a "
+                          "copy of it") from None
 
 
 def _open(p, stack):
