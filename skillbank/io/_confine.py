@@ -21,7 +21,8 @@ from pathlib import Path, PurePosixPath, PureWindowsPath
 
 from ._errors import FormatError, file_problem, kind_of
 
-__all__ = ["check_input_file", "check_input_folder", "atomic_output", "inside"]
+__all__ = ["check_input_file", "check_input_folder", "atomic_output", "inside", "MAX_READ_BYTES",
+           "ReadBudget", "max_read_bytes"]
 
 def check_input_file(path, *, name: str = "input") -> Path:
     """Return ``path`` as a Path if it is a regular file (or a link to one); else a one-line ValueError.
@@ -189,3 +190,51 @@ def atomic_output(path, *, name: str = "out"):
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+#: Bytes a reader takes from one file at most (its datasets or tables as stored in memory); the
+#: environment variable ``SKILLBANK_MAX_READ_BYTES`` sets another bound.
+MAX_READ_BYTES = 1 << 30
+READ_BYTES_VARIABLE = "SKILLBANK_MAX_READ_BYTES"
+
+
+def max_read_bytes() -> int:
+    """The bound on bytes read from one file: ``$SKILLBANK_MAX_READ_BYTES``, else :data:`MAX_READ_BYTES`."""
+    raw = os.environ.get(READ_BYTES_VARIABLE)
+    if raw is None or not raw.strip():
+        return MAX_READ_BYTES
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value <= 0:
+        raise ValueError(f"{READ_BYTES_VARIABLE}: expected a positive number of bytes, got {raw[:40]!r}")
+    return value
+
+
+class ReadBudget:
+    """What is left of :func:`max_read_bytes` while one file is read; checked before each read.
+
+    A file of a few kilobytes can declare a dataset of gigabytes (a chunked
+    HDF5 dataset whose chunks were never written reads as its fill value; a
+    parquet column of one repeated value compresses to nothing): the
+    declared size is checked before the read allocates it.
+    """
+
+    def __init__(self, path):
+        self.path, self.limit = path, max_read_bytes()
+        self.left = self.limit
+
+    def take(self, n_bytes: int, what: str) -> None:
+        """Count ``n_bytes`` of ``what``, or raise a FormatError saying the bound and how to lift it."""
+        if n_bytes > self.left:
+            read = self.limit - self.left
+            raise FormatError(self.path, f"{what} would take {n_bytes} bytes in memory, and with the {read} "
+                              f"bytes read before it that passes the bound of {self.limit} bytes read from "
+                              f"one file; set {READ_BYTES_VARIABLE} to read more")
+        self.left -= n_bytes
+
+    def dataset(self, dset, name: str):
+        """The content of an h5py dataset, counted against the bound first."""
+        self.take(int(dset.size) * dset.dtype.itemsize, f"dataset '{name}' ({dset.shape}, {dset.dtype})")
+        return dset[()]

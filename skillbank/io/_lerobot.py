@@ -20,7 +20,7 @@ from tqdm import tqdm
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._confine import inside
+from ._confine import ReadBudget, inside
 from ._errors import FormatError, check_clock, open_regular, reading
 from ._lerobot_checks import (
     check_fps,
@@ -114,9 +114,18 @@ def _text(root: Path, rel: str) -> str | None:
 
 
 def _parquet(root: Path, path: Path, pq, what: str):
-    """A parquet file of the dataset, read through a descriptor checked to be a regular file."""
+    """A parquet file of the dataset, read through a descriptor checked to be a regular file.
+
+    Its size in memory, as its footer declares it, is checked against the
+    read bound first: a column of one repeated value compresses to nothing.
+    """
     with open_regular(path) as fh, reading(root, what):
-        return pq.read_table(fh)
+        parquet = pq.ParquetFile(fh)
+        meta = parquet.metadata
+        size = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+        rel = path.relative_to(os.path.realpath(root)).as_posix()
+        ReadBudget(root).take(size, f"'{rel}' ({meta.num_rows} rows)")
+        return parquet.read()
 
 
 def _json(root: Path, rel: str):

@@ -301,3 +301,48 @@ def test_segment_out_onto_a_fifo_exits_2_and_leaves_the_fifo(tmp_path, cli):
         code, stdout, err = cli("segment", src, "--out", out)
     assert code == 2 and len(err.strip().splitlines()) == 1 and "FIFO" in err, err
     assert stat.S_ISFIFO(os.stat(fifo).st_mode) and [p.name for p in out.iterdir()] == ["d_segment00.npz"]
+
+
+# ---------------------------------------------------------------- a few bytes that declare gigabytes
+
+
+def _declaring_gigabytes(path):
+    """A robot recording whose joints declare 2^28 rows (12.9 GB) in chunks never written: a small file."""
+    with h5py.File(path, "a") as h5:
+        del h5["joint_state_info/joint_positions"]
+        h5["joint_state_info"].create_dataset("joint_positions", shape=(1 << 28, 6), dtype="f8",
+                                              chunks=(4096, 6))
+    return path
+
+
+def test_a_dataset_declaring_gigabytes_is_refused_before_it_is_read(robot_h5, raises_format_error):
+    path = _declaring_gigabytes(robot_h5())
+    assert path.stat().st_size < 100_000
+    reason = (r"dataset 'joint_state_info/joint_positions' \(\(268435456, 6\), float64\) would take "
+              r"12884901888 bytes in memory, and with the 800 bytes read before it that passes the bound of "
+              r"1073741824 bytes read from one file; set SKILLBANK_MAX_READ_BYTES to read more$")
+    with raises_format_error(path, reason):
+        read_robot_h5(path)
+
+
+def test_the_gigabyte_dataset_exits_2_within_a_small_memory_limit(robot_h5, limited):
+    path = _declaring_gigabytes(robot_h5())
+    code, out, err = limited("segment", path, "--json", memory=1 << 30, timeout=60)
+    assert one_line_refusal(code, out, err) and "SKILLBANK_MAX_READ_BYTES" in err, err
+
+
+def test_the_read_bound_is_set_by_the_environment(robot_h5, handwriting_h5, monkeypatch, raises_format_error):
+    path, hand = robot_h5(), handwriting_h5()
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", "1000")
+    with raises_format_error(path, r"passes the bound of 1000 bytes read from one file"):
+        read_robot_h5(path)
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", "500")  # 320 bytes a demonstration: the second passes it
+    with raises_format_error(hand, r"dataset 'normalized/1/x' \(\(20,\), int32\) would take 80 bytes in "
+                                   r"memory, and with the 480 bytes read before it that passes the bound"):
+        read_handwriting_h5(hand)
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", str(1 << 20))
+    assert read_robot_h5(path).n_steps == 50
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", "lots")
+    with pytest.raises(ValueError, match=r"^SKILLBANK_MAX_READ_BYTES: expected a positive number of bytes, "
+                                         r"got 'lots'$"):
+        read_robot_h5(path)

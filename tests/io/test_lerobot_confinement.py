@@ -232,3 +232,11 @@ def test_the_task_label_is_recorded_as_coming_from_the_metadata(tmp_path, new_li
         (other,) = report["demonstrations"]
         assert [p.label for p in lib.primitives(demonstration=other)] == ["mine"]
         assert "label_from" not in lib.provenance(other)
+
+
+def test_a_data_file_is_held_to_the_read_bound_before_it_is_read(dataset, monkeypatch):
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", "100")
+    with raises_format(dataset, r"'data/chunk-000/episode_000000.parquet' \(5 rows\) would take \d+ bytes in "
+                                "memory, .* passes the bound of 100 bytes read from one file; set "
+                                "SKILLBANK_MAX_READ_BYTES to read more$"):
+        read_lerobot(dataset)
