@@ -346,3 +346,12 @@ def test_the_read_bound_is_set_by_the_environment(robot_h5, handwriting_h5, monk
     with pytest.raises(ValueError, match=r"^SKILLBANK_MAX_READ_BYTES: expected a positive number of bytes, "
                                          r"got 'lots'$"):
         read_robot_h5(path)
+
+
+def test_load_positions_refuses_a_fifo(tmp_path):
+    from skillbank.io import load_positions
+
+    fifo = tmp_path / "path.csv"
+    os.mkfifo(fifo)
+    with no_hang(), pytest.raises(ValueError, match=r"^input: expected a regular file, got '.*', a FIFO"):
+        load_positions([fifo])
