@@ -36,6 +36,7 @@ _LIBRARY_ERRORS = (
     EOFError,
     RuntimeError,
     ArithmeticError,
+    SystemError,  # h5py walking the links of a corrupt file
     NotImplementedError,
     UnicodeError,
     zipfile.BadZipFile,
