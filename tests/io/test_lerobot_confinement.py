@@ -240,3 +240,16 @@ def test_a_data_file_is_held_to_the_read_bound_before_it_is_read(dataset, monkey
                                 "memory, .* passes the bound of 100 bytes read from one file; set "
                                 "SKILLBANK_MAX_READ_BYTES to read more$"):
         read_lerobot(dataset)
+
+
+def test_library_add_and_segment_of_a_dataset_reading_outside_exit_2(dataset, tmp_path, cli, table_rows):
+    _info(dataset, data_path="../../outside/x.parquet")
+    db = tmp_path / "lib.sqlite"
+    assert cli("library", "init", db)[0] == 0
+    before = table_rows(db)
+    for argv in (("library", "add", db, dataset, "--feature", "observation.state=position", "--whole"),
+                 ("segment", dataset, "--json")):
+        code, out, err = cli(*argv)
+        assert _one_line(code, out, err) and "leaves the dataset folder" in err, err
+        assert "secret" not in err
+    assert table_rows(db) == before
