@@ -110,6 +110,7 @@ def _text(root: Path, rel: str) -> str | None:
     if path is None:
         return None
     with open_regular(path) as fh, reading(root, f"expected UTF-8 text in '{rel}'"):
+        ReadBudget(root).take(os.fstat(fh.fileno()).st_size, f"'{rel}'")
         return fh.read().decode("utf-8")
 
 

@@ -234,12 +234,19 @@ def test_the_task_label_is_recorded_as_coming_from_the_metadata(tmp_path, new_li
         assert "label_from" not in lib.provenance(other)
 
 
-def test_a_data_file_is_held_to_the_read_bound_before_it_is_read(dataset, monkeypatch):
-    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", "100")
-    with raises_format(dataset, r"'data/chunk-000/episode_000000.parquet' \(5 rows\) would take \d+ bytes in "
-                                "memory, .* passes the bound of 100 bytes read from one file; set "
-                                "SKILLBANK_MAX_READ_BYTES to read more$"):
-        read_lerobot(dataset)
+def test_a_data_file_is_held_to_the_read_bound_before_it_is_read(tmp_path, monkeypatch):
+    root = write_lerobot(tmp_path / "ds", "v2.1", _episodes(lengths=(2000, 7, 4)))
+    data = root / "data" / "chunk-000" / "episode_000000.parquet"
+    meta = pq.ParquetFile(data).metadata
+    declared = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+    assert declared > max(f.stat().st_size for f in (root / "meta").iterdir())  # the metadata stays readable
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", str(declared - 1))
+    with raises_format(root, rf"'data/chunk-000/episode_000000.parquet' \(2000 rows\) would take {declared} "
+                             rf"bytes in memory, .* passes the bound of {declared - 1} bytes read from one "
+                             "file; set SKILLBANK_MAX_READ_BYTES to read more$"):
+        read_lerobot(root)
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", str(declared))
+    assert read_lerobot(root, episodes=[0])[0].n_steps == 2000
 
 
 def test_library_add_and_segment_of_a_dataset_reading_outside_exit_2(dataset, tmp_path, cli, table_rows):
@@ -253,3 +260,11 @@ def test_library_add_and_segment_of_a_dataset_reading_outside_exit_2(dataset, tm
         assert _one_line(code, out, err) and "leaves the dataset folder" in err, err
         assert "secret" not in err
     assert table_rows(db) == before
+
+
+def test_metadata_text_is_held_to_the_read_bound(dataset, monkeypatch):
+    size = (dataset / "meta" / "info.json").stat().st_size
+    monkeypatch.setenv("SKILLBANK_MAX_READ_BYTES", str(size - 1))
+    with raises_format(dataset, rf"'meta/info.json' would take {size} bytes in memory, .* passes the bound "
+                                rf"of {size - 1} bytes read from one file"):
+        read_lerobot(dataset)
