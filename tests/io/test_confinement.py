@@ -169,11 +169,17 @@ def test_a_fifo_input_is_refused_without_blocking(tmp_path, name, raises_format_
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
 
 
-def test_a_fifo_given_to_the_cli_exits_2_at_once(tmp_path, limited):
+def test_a_fifo_given_to_the_cli_exits_2_at_once(tmp_path, limited, cli, table_rows):
     fifo = tmp_path / "rec.bag"
     os.mkfifo(fifo)
     code, out, err = limited("segment", fifo, "--json", memory=1 << 30, timeout=60)
     assert one_line_refusal(code, out, err) and "FIFO" in err, err
+    db = tmp_path / "lib.sqlite"
+    assert cli("library", "init", db)[0] == 0
+    before = table_rows(db)
+    code, out, err = limited("library", "add", db, fifo, memory=1 << 30, timeout=60)
+    assert one_line_refusal(code, out, err) and "FIFO" in err, err
+    assert table_rows(db) == before and stat.S_ISFIFO(os.stat(fifo).st_mode)
 
 
 def test_a_fifo_inside_a_ros2_bag_folder_is_refused(tmp_path, raises_format_error, limited):
