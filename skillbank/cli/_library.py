@@ -104,7 +104,8 @@ def add_parser(sub):
     add_segmentation_options(c)
     add_reader_options(c)
     c.add_argument("--whole", action="store_true", help="store each demonstration as one primitive")
-    c.add_argument("--label", default=None, help="label every primitive added")
+    c.add_argument("--label", default=None, help="label every primitive added (default: a LeRobot episode's "
+                   "task)")
     c.add_argument("--assign", choices=["incremental", "none", "recluster"], default="incremental",
                    help="put new primitives in the nearest existing cluster (default), leave them "
                         "unclustered, or recluster everything afterwards")

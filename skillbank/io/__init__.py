@@ -8,7 +8,10 @@ robomimic HDF5 files (:func:`read_robomimic`); generic CSV and NPZ readers and
 writers; JSON output for results; and format detection with :func:`load` /
 :func:`load_all`. Every reading problem raises
 :class:`FormatError`, a :class:`ValueError` with a one-line message
-``cannot read '<path>': <reason>``.
+``cannot read '<path>': <reason>``. Inputs must be regular files (or folders
+of them; :func:`check_input_file`), and nothing outside the folder a reader
+was pointed at is read; outputs are written whole or not at all
+(:func:`atomic_output`).
 
 Examples
 --------
@@ -18,6 +21,7 @@ Examples
 ['joints', 'position', 'orientation', 'force', 'torque', 'gripper']
 """
 
+from ._confine import atomic_output, check_input_file
 from ._detect import detect_format, load, load_all
 from ._errors import FormatError
 from ._folders import load_folder, load_positions
@@ -42,6 +46,8 @@ from ._trajectory_export import TRAJECTORY_FORMATS, trajectory_format, write_tra
 
 __all__ = [
     "FormatError",
+    "check_input_file",
+    "atomic_output",
     "read_robot_h5",
     "read_handwriting_h5",
     "read_rosbag",

@@ -17,8 +17,8 @@ from ._errors import (
     describe_content,
     expect_magic,
     read_head,
-    reading,
 )
+from ._h5 import open_h5
 from ._handwriting_h5 import HANDWRITING_GROUPS, read_handwriting_h5
 from ._lerobot import LEROBOT_INFO, read_lerobot
 from ._rail import read_rail_file
@@ -43,7 +43,7 @@ _RECORDINGS = {"ros1-bag": read_rosbag, "ros2-bag": read_rosbag, "mcap": read_ro
 def _hdf5_kind(path) -> str:
     import h5py  # slow to import; only when an HDF5 file is read
 
-    with reading(path, "corrupt HDF5 file"), h5py.File(path, "r") as h5:
+    with open_h5(path) as h5:
         groups = sorted(k for k in h5.keys() if isinstance(h5[k], h5py.Group))
         robomimic = is_robomimic(h5)
     robot_group = ROBOT_STREAMS["joints"][0]
@@ -86,7 +86,7 @@ def _folder_kind(path):
     if not p.is_dir():
         return None
     if (p / ROS2_METADATA).is_file():
-        return "ros2-bag"
+        return ros_kind(p)  # checks the folder's files
     if (p / LEROBOT_INFO).is_file():
         return "lerobot"
     raise FormatError(p, f"expected a file, found a directory that is neither a ROS 2 bag (no "

@@ -8,6 +8,8 @@ see a traceback from inside h5py, scipy or numpy.
 from __future__ import annotations
 
 import csv
+import os
+import stat
 import struct
 import zipfile
 import zlib
@@ -19,7 +21,7 @@ import numpy as np
 __all__ = [
     "FormatError", "HDF5_MAGIC", "MAT5_MAGIC", "ZIP_MAGICS",
     "TIME_REPAIRS", "as_file", "check_clock", "check_repair_time", "describe_content", "expect_magic",
-    "reading", "read_head", "real_array",
+    "reading", "read_head", "real_array", "kind_of", "file_problem", "open_regular",
 ]
 
 # What the file libraries raise on bad content. FormatError is a ValueError,
@@ -33,6 +35,8 @@ _LIBRARY_ERRORS = (
     AttributeError,
     EOFError,
     RuntimeError,
+    ArithmeticError,
+    SystemError,  # h5py walking the links of a corrupt file
     NotImplementedError,
     UnicodeError,
     zipfile.BadZipFile,
@@ -94,16 +98,74 @@ def reading(path, what: str = "invalid content"):
 
 
 def as_file(path) -> Path:
-    """Return ``path`` as a Path, raising FormatError unless it is a regular file."""
+    """Return ``path`` as a Path, raising FormatError unless it is a regular file (or a link to one).
+
+    Checked with ``os.stat`` before anything opens it: a FIFO, a device or
+    a socket would block a reader or never end.
+    """
     try:
         p = Path(path)
     except TypeError:
         raise FormatError(path, f"expected a file path, got {type(path).__name__}") from None
-    if not p.exists():
-        raise FormatError(p, "no such file")
-    if p.is_dir():
-        raise FormatError(p, "expected a file, found a directory")
+    problem = file_problem(p)
+    if problem is not None:
+        folder = problem.endswith("a directory")
+        raise FormatError(p, "expected a file, found a directory" if folder else problem)
     return p
+
+
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def kind_of(mode: int) -> str:
+    """What a file of ``st_mode`` ``mode`` is, in words ("a regular file", "a FIFO (named pipe)", ...)."""
+    if stat.S_ISREG(mode):
+        return "a regular file"
+    return next((what for test, what in _KINDS if test(mode)), "not a regular file")
+
+
+def file_problem(path) -> str | None:
+    """Why ``path`` cannot be read as an input file (missing, a folder, a FIFO, ...), or None.
+
+    ``os.stat`` only: nothing is opened, so a FIFO cannot block.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return "no such file" if not os.path.islink(path) else "a symbolic link to nothing"
+    except OSError as exc:
+        return f"cannot inspect it: {os.strerror(exc.errno) if exc.errno else exc}"
+    if stat.S_ISREG(mode):
+        return None
+    return f"expected a regular file, found {kind_of(mode)}"
+
+
+@contextmanager
+def open_regular(path):
+    """Open ``path`` for binary reading only if it is a regular file: a FIFO or device never blocks.
+
+    Opened with ``O_NONBLOCK`` and checked with ``fstat`` on the open
+    descriptor, so a path swapped after an earlier check is caught too.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as exc:
+        raise FormatError(path, f"cannot open file: {exc.strerror or exc}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            raise FormatError(path, f"expected a regular file, found {kind_of(mode)}")
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        fh = os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+    with fh:
+        yield fh
 
 
 #: The repairs a reader may apply to a clock that does not increase (its ``repair_time`` option).
@@ -196,7 +258,7 @@ ZIP_MAGICS = (b"PK\x03\x04", b"PK\x05\x06")
 
 def read_head(path: Path, n: int = 1024) -> bytes:
     """The first ``n`` bytes of a file, with I/O errors as FormatError."""
-    with reading(path, "cannot open file"), open(path, "rb") as fh:
+    with open_regular(path) as fh, reading(path, "cannot read file"):
         return fh.read(n)
 
 

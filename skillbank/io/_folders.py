@@ -7,6 +7,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..core import Demonstration
+from ._confine import check_input_file
 from ._detect import load
 
 __all__ = ["load_folder", "load_positions", "TRAJECTORY_SUFFIXES"]
@@ -71,8 +72,9 @@ def load_positions(paths, *, repair_time=None, every_stream: bool = False) -> li
     demos = []
     for path in paths:
         path = Path(path)
-        if not path.is_file():
+        if not path.exists():
             raise ValueError(f"input: no such file: {str(path)!r}")
+        check_input_file(path, name="input")  # a FIFO or a device would block the reader
         demo = load(path, repair_time=repair_time)
         if "position" in demo.streams:
             name = "position"

@@ -6,16 +6,9 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._errors import (
-    HDF5_MAGIC,
-    FormatError,
-    as_file,
-    check_clock,
-    check_repair_time,
-    expect_magic,
-    reading,
-    real_array,
-)
+from ._confine import ReadBudget
+from ._errors import FormatError, as_file, check_clock, check_repair_time, reading, real_array
+from ._h5 import open_h5
 
 __all__ = ["read_handwriting_h5", "HANDWRITING_GROUPS"]
 
@@ -35,14 +28,15 @@ def _demo_names(path, h5, group: str) -> list[str]:
     return sorted((k for k in h5[group].keys() if hasattr(h5[group][k], "keys")), key=_sort_key)
 
 
-def _read_one(path, node, group: str, name: str, repair_time) -> Demonstration:
+def _read_one(path, node, group: str, name: str, repair_time, budget) -> Demonstration:
     missing = [k for k in ("t", "x", "y") if k not in node]
     if missing:
         raise FormatError(
             path, f"expected datasets t, x, y in '{group}/{name}', missing {missing}, "
             f"found [{summarise(map(repr, sorted(node.keys())))}]"
         )
-    t_ms, x, y = (real_array(path, node[k][()], f"'{group}/{name}/{k}'").ravel() for k in ("t", "x", "y"))
+    t_ms, x, y = (real_array(path, budget.dataset(node[k], f"{group}/{name}/{k}"), f"'{group}/{name}/{k}'")
+                  .ravel() for k in ("t", "x", "y"))
     if not (t_ms.shape == x.shape == y.shape) or t_ms.size == 0:
         raise FormatError(
             path, f"expected non-empty t, x, y of equal length in '{group}/{name}', "
@@ -103,19 +97,17 @@ def read_handwriting_h5(path, *, group: str = "normalized", index=None, repair_t
     >>> read_handwriting_h5("seed/r_shape.h5", group="unsmoothed", index=2).n_steps  # doctest: +SKIP
     237
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     check_repair_time(repair_time)
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+    budget = ReadBudget(p)
+    with open_h5(p) as h5:
         names = _demo_names(p, h5, group)
         if index is None:
             if not names:
                 raise FormatError(p, f"expected demonstrations in group {group!r}, found none")
-            return [_read_one(p, h5[group][n], group, n, repair_time) for n in names]
+            return [_read_one(p, h5[group][n], group, n, repair_time, budget) for n in names]
         key = str(index)
         if isinstance(index, bool) or key not in names:
             among = summarise(names, limit=10)
             raise FormatError(p, f"expected an index in group {group!r} among [{among}], got {index!r}")
-        return _read_one(p, h5[group][key], group, key, repair_time)
+        return _read_one(p, h5[group][key], group, key, repair_time, budget)

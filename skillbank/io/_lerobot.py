@@ -10,6 +10,7 @@ v3.0).
 from __future__ import annotations
 
 import json
+import os
 import re
 from collections.abc import Iterable
 from pathlib import Path
@@ -19,7 +20,17 @@ from tqdm import tqdm
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._errors import FormatError, check_clock, reading
+from ._confine import ReadBudget, inside
+from ._errors import FormatError, check_clock, open_regular, reading
+from ._lerobot_checks import (
+    check_fps,
+    check_index,
+    check_rows,
+    check_shape,
+    check_task_rows,
+    check_template,
+    format_template,
+)
 
 __all__ = ["read_lerobot", "LEROBOT_INFO", "select_episodes"]
 
@@ -88,74 +99,118 @@ def select_episodes(episodes, available, *, name: str = "episodes") -> list[int]
     return chosen
 
 
-def _json(path: Path, root: Path):
-    with reading(root, f"invalid JSON in '{path.relative_to(root)}'"):
-        return json.loads(path.read_text(encoding="utf-8"))
+def _member(root: Path, rel: str, what: str = "file") -> Path | None:
+    """A file of the dataset, checked to be a regular file inside it (no link out); None when absent."""
+    path = inside(root, rel, what=what)
+    return path if path.exists() else None
 
 
-def _jsonl(path: Path, root: Path) -> list[dict]:
-    if not path.is_file():
-        raise FormatError(root, f"expected '{path.relative_to(root).as_posix()}', found none")
-    with reading(root, f"invalid JSON lines in '{path.relative_to(root)}'"):
-        lines = path.read_text(encoding="utf-8").splitlines()
-        return [json.loads(line) for line in lines if line.strip()]
+def _text(root: Path, rel: str) -> str | None:
+    path = _member(root, rel)
+    if path is None:
+        return None
+    with open_regular(path) as fh, reading(root, f"expected UTF-8 text in '{rel}'"):
+        ReadBudget(root).take(os.fstat(fh.fileno()).st_size, f"'{rel}'")
+        return fh.read().decode("utf-8")
+
+
+def _parquet(root: Path, path: Path, pq, what: str):
+    """A parquet file of the dataset, read through a descriptor checked to be a regular file.
+
+    Its size in memory, as its footer declares it, is checked against the
+    read bound first: a column of one repeated value compresses to nothing.
+    """
+    with open_regular(path) as fh, reading(root, what):
+        parquet = pq.ParquetFile(fh)
+        meta = parquet.metadata
+        size = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+        rel = path.relative_to(os.path.realpath(root)).as_posix()
+        ReadBudget(root).take(size, f"'{rel}' ({meta.num_rows} rows)")
+        return parquet.read()
+
+
+def _json(root: Path, rel: str):
+    text = _text(root, rel)
+    if text is None:
+        raise FormatError(root, f"expected '{rel}', found none")
+    with reading(root, f"invalid JSON in '{rel}'"):
+        return json.loads(text)
+
+
+def _jsonl(root: Path, rel: str) -> list:
+    text = _text(root, rel)
+    if text is None:
+        raise FormatError(root, f"expected '{rel}', found none")
+    with reading(root, f"invalid JSON lines in '{rel}'"):
+        return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+def _version(info: dict) -> str:
+    return "v2" if info["codebase_version"].startswith("v2") else "v3"
 
 
 def _info(root: Path) -> dict:
-    info = _json(root / LEROBOT_INFO, root)
+    info = _json(root, LEROBOT_INFO)
     if not isinstance(info, dict):
         raise FormatError(root, f"expected a JSON object in {LEROBOT_INFO}, found {type(info).__name__}")
     missing = [k for k in ("codebase_version", "fps", "features", "data_path") if k not in info]
     if missing:
         raise FormatError(root, f"expected keys {missing} in {LEROBOT_INFO}, found "
                           f"[{summarise(map(repr, sorted(info)))}]")
-    fps = info["fps"]
-    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not 0 < fps < np.inf:
-        raise FormatError(root, f"expected a positive 'fps' in {LEROBOT_INFO}, found {fps!r}")
+    check_fps(root, info["fps"])
     if not isinstance(info["features"], dict):
         raise FormatError(root, f"expected 'features' to be an object in {LEROBOT_INFO}")
-    version = str(info["codebase_version"])
-    if not re.match(r"^v[23]\.", version):
+    version = info["codebase_version"]
+    if not isinstance(version, str) or not re.match(r"^v[23]\.", version):
         raise FormatError(root, f"expected codebase_version v2.x or v3.x in {LEROBOT_INFO}, found "
-                          f"{version!r}")
+                          f"{str(version)[:40]!r}")
+    check_template(root, info["data_path"], _version(info))
+    if _version(info) == "v2" and check_index(root, info.get("chunks_size", 1000),
+                                             f"'chunks_size' in {LEROBOT_INFO}") == 0:
+        raise FormatError(root, f"expected a positive 'chunks_size' in {LEROBOT_INFO} (episodes per chunk "
+                          "folder, LeRobot writes 1000), found 0")
     return info
 
 
 def _episodes(root: Path, info: dict, pq) -> dict[int, dict]:
     """The episodes index: episode number -> its row (length, tasks, and in v3 its data file)."""
-    if info["codebase_version"].startswith("v2"):
-        rows = _jsonl(root / "meta" / "episodes.jsonl", root)
+    if _version(info) == "v2":
+        rows = _jsonl(root, "meta/episodes.jsonl")
     else:
         files = sorted((root / "meta" / "episodes").glob("chunk-*/file-*.parquet"))
         if not files:
             raise FormatError(root, "expected episode files meta/episodes/chunk-*/file-*.parquet, found none")
         rows = []
-        with reading(root, "corrupt episodes index"):
-            for f in files:
-                table = pq.read_table(f)
+        for f in files:
+            member = _member(root, f.relative_to(root).as_posix())
+            table = _parquet(root, member, pq, "corrupt episodes index")
+            with reading(root, "corrupt episodes index"):
                 keep = [c for c in table.column_names if not c.startswith(("stats/", "videos/"))]
                 rows += table.select(keep).to_pylist()
-    if not rows or not all(isinstance(r, dict) and "episode_index" in r for r in rows):
+    if not rows:
         raise FormatError(root, "expected an episodes index with an 'episode_index' per episode, found none")
-    return {int(r["episode_index"]): r for r in rows}
+    return check_rows(root, rows, _version(info))
 
 
 def _tasks(root: Path, info: dict, pq) -> dict[int, str]:
-    if info["codebase_version"].startswith("v2"):
-        path = root / "meta" / "tasks.jsonl"
-        return {int(r["task_index"]): str(r["task"]) for r in _jsonl(path, root)} if path.is_file() else {}
-    path = root / "meta" / "tasks.parquet"
-    if not path.is_file():
-        return {}
-    with reading(root, "corrupt meta/tasks.parquet"):
-        table = pq.read_table(path)
-        # pandas writes the task strings as the index; its column is named after it.
-        text = next((c for c in ("task", "__index_level_0__") if c in table.column_names),
-                    next((c for c in table.column_names if c != "task_index"), None))
-        if text is None:
+    if _version(info) == "v2":
+        if _member(root, "meta/tasks.jsonl") is None:
             return {}
-        return dict(zip(map(int, table.column("task_index").to_pylist()),
-                        map(str, table.column(text).to_pylist()), strict=True))
+        return check_task_rows(root, _jsonl(root, "meta/tasks.jsonl"), "meta/tasks.jsonl")
+    path = _member(root, "meta/tasks.parquet")
+    if path is None:
+        return {}
+    table = _parquet(root, path, pq, "corrupt meta/tasks.parquet")
+    # pandas writes the task strings as the index; its column is named after it.
+    text = next((c for c in ("task", "__index_level_0__") if c in table.column_names),
+                next((c for c in table.column_names if c != "task_index"), None))
+    if text is None or "task_index" not in table.column_names:
+        raise FormatError(root, f"expected columns 'task_index' and 'task' in meta/tasks.parquet, found "
+                          f"[{summarise(map(repr, table.column_names))}]")
+    with reading(root, "corrupt meta/tasks.parquet"):
+        rows = [{"task_index": i, "task": t} for i, t in zip(table.column("task_index").to_pylist(),
+                                                             table.column(text).to_pylist(), strict=True)]
+    return check_task_rows(root, rows, "meta/tasks.parquet")
 
 
 def _numbers(root, column, n: int, width: int, where: str) -> np.ndarray:
@@ -261,9 +316,9 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
     except ImportError:
         raise _missing_pyarrow() from None
     root = Path(path)
-    if not (root / LEROBOT_INFO).is_file():
+    if not root.is_dir() or not os.path.lexists(root / LEROBOT_INFO):
         found = "no such file or folder" if not root.exists() else (
-            "a file" if root.is_file() else f"a folder without {LEROBOT_INFO}")
+            "a file" if not root.is_dir() else f"a folder without {LEROBOT_INFO}")
         raise FormatError(root, f"expected a LeRobot dataset folder (holding {LEROBOT_INFO}), found {found}")
     info = _info(root)
     specs = info["features"]
@@ -292,7 +347,7 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
     index = _episodes(root, info, pq)
     tasks = _tasks(root, info, pq)
     chosen = select_episodes(episodes, index)
-    widths = {k: int(np.prod(specs[k].get("shape", [1]) or [1])) for k in numeric}
+    widths = {k: check_shape(root, k, specs[k]) for k in numeric}
     common = {"source": str(root), "format": "lerobot", "codebase_version": info["codebase_version"],
               "fps": info["fps"], "robot_type": info.get("robot_type")}
     names = {k: n for k in numeric if (n := _feature_names(specs[k])) is not None and len(n) == widths[k]}
@@ -312,25 +367,22 @@ def read_lerobot(path, *, episodes=None, features=None, progress=False) -> list[
 
 def _episode(root, info, row, ep, numeric, widths, tasks, common, cache, pq) -> Demonstration:
     where = f"episode {ep}"
-    v2 = info["codebase_version"].startswith("v2")
-    try:
-        if v2:
-            chunk = ep // int(info.get("chunks_size", 1000))
-            rel = info["data_path"].format(episode_chunk=chunk, episode_index=ep)
-        else:
-            rel = info["data_path"].format(chunk_index=int(row["data/chunk_index"]),
-                                           file_index=int(row["data/file_index"]))
-    except (KeyError, ValueError, IndexError, TypeError) as exc:
-        raise FormatError(root, f"{where}: cannot locate its data file from data_path "
-                          f"{info['data_path']!r} ({type(exc).__name__}: {exc})") from None
-    file = root / rel
-    if not file.is_file():
-        raise FormatError(root, f"{where}: expected data file '{rel}', found none")
-    with reading(root, f"{where}: corrupt data file '{rel}'"):
-        if rel not in cache:
-            cache.clear()
-            table = pq.read_table(file)
+    # The template's fields were checked (names, widths) with info.json, the indices with the episodes index.
+    if _version(info) == "v2":
+        rel = format_template(root, info["data_path"], where, episode_index=ep,
+                              episode_chunk=ep // info.get("chunks_size", 1000))
+    else:
+        rel = format_template(root, info["data_path"], where, chunk_index=row["data/chunk_index"],
+                              file_index=row["data/file_index"])
+    if rel not in cache:
+        file = _member(root, rel, what="data file")
+        if file is None:
+            raise FormatError(root, f"{where}: expected data file '{rel}', found none")
+        cache.clear()
+        table = _parquet(root, file, pq, f"{where}: corrupt data file '{rel}'")
+        with reading(root, f"{where}: corrupt data file '{rel}'"):
             cache[rel] = (table, _rows_by_episode(table))
+    with reading(root, f"{where}: corrupt data file '{rel}'"):
         table, rows = cache[rel]
         if rows is not None:
             chosen = rows.get(ep, (0, 0))
@@ -353,9 +405,10 @@ def _episode(root, info, row, ep, numeric, widths, tasks, common, cache, pq) -> 
         task_index = (table.column("task_index")[0].as_py() if "task_index" in table.column_names else None)
     t, *values, _ = check_clock(root, frames / float(info["fps"]), *streams.values(),
                                 where=f"{where} (clock 'frame_index')")
-    labels = [str(x) for x in row.get("tasks") or []] or ([tasks[task_index]] if task_index in tasks else [])
+    labels = list(row.get("tasks") or []) or ([tasks[task_index]] if task_index in tasks else [])
     metadata = {**common, "episode": ep}
     if labels:
-        metadata.update(label=labels[0], tasks=labels)
+        # "task": what the episode shows, which a library takes as its primitives' label (Library.add_files).
+        metadata.update(label=labels[0], task=labels[0], tasks=labels)
     with reading(root, f"invalid {where}"):
         return Demonstration(t - t[0], dict(zip(streams, values, strict=True)), metadata)

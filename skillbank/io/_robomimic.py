@@ -9,7 +9,9 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_positive, summarise
-from ._errors import HDF5_MAGIC, FormatError, as_file, expect_magic, reading, real_array
+from ._confine import ReadBudget
+from ._errors import FormatError, as_file, reading, real_array
+from ._h5 import open_h5
 from ._lerobot import select_episodes
 
 __all__ = ["read_robomimic", "ROBOMIMIC_GROUP", "is_robomimic", "DEFAULT_CONTROL_FREQ"]
@@ -93,25 +95,24 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     >>> demos[0].metadata["label"], demos[0]["robot0_eef_pos"].shape[1]  # doctest: +SKIP
     ('Lift', 3)
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
     if obs_keys is not None:
         obs_keys = [obs_keys] if isinstance(obs_keys, str) else list(obs_keys)
         if not obs_keys or not all(isinstance(k, str) for k in obs_keys):
             raise ValueError(f"obs_keys: expected a list of observation names, got {obs_keys!r}")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
+    with open_h5(p) as h5:
         if not is_robomimic(h5):
             raise FormatError(p, f"expected a robomimic dataset (group '{ROBOMIMIC_GROUP}' with demo_N "
                               f"groups), found [{summarise(map(repr, sorted(h5.keys())))}]")
         data = h5[ROBOMIMIC_GROUP]
+        budget = ReadBudget(p)
         numbers = {int(m.group(1)): k for k in data.keys() if (m := _DEMO.match(k))}
         if filter_key is not None:
             masks = sorted(h5["mask"].keys()) if "mask" in h5 else []
             if filter_key not in masks:
                 raise ValueError(f"filter_key: expected one of {masks}, got {filter_key!r}")
-            listed = {v.decode() if isinstance(v, bytes) else str(v) for v in h5["mask"][filter_key][()]}
+            mask = budget.dataset(h5["mask"][filter_key], f"mask/{filter_key}")
+            listed = {v.decode() if isinstance(v, bytes) else str(v) for v in np.ravel(mask)}
             numbers = {n: k for n, k in numbers.items() if k in listed}
         env_args = _env_args(p, data)
         hz, rate_from = _rate(p, control_freq, env_args)
@@ -119,10 +120,10 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         common = {"source": str(p), "format": "robomimic-h5", "rate_hz": hz, "rate_from": rate_from}
         if env_args.get("env_name"):
             common["label"] = str(env_args["env_name"])
-        return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common) for n in chosen]
+        return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
 
 
-def _demo(p, group, name, number, obs_keys, hz, common) -> Demonstration:
+def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration:
     obs = group.get("obs")
     available = sorted(obs.keys()) if hasattr(obs, "keys") else []
     if obs_keys is not None:
@@ -135,9 +136,10 @@ def _demo(p, group, name, number, obs_keys, hz, common) -> Demonstration:
         if dataset.ndim > 2 or dataset.dtype.kind not in "biuf":
             skipped[key] = list(dataset.shape)
             continue
-        raw[key] = real_array(p, dataset[()], f"'{name}/obs/{key}'")
+        raw[key] = real_array(p, budget.dataset(dataset, f"{name}/obs/{key}"), f"'{name}/obs/{key}'")
     if "actions" in group:
-        raw["actions"] = real_array(p, group["actions"][()], f"'{name}/actions'")
+        actions = budget.dataset(group["actions"], f"{name}/actions")
+        raw["actions"] = real_array(p, actions, f"'{name}/actions'")
     if not raw:
         raise FormatError(p, f"expected numeric observations or actions in '{name}', found none")
     lengths = {k: v.shape[0] for k, v in raw.items()}

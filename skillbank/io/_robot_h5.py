@@ -6,16 +6,9 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import summarise
-from ._errors import (
-    HDF5_MAGIC,
-    FormatError,
-    as_file,
-    check_clock,
-    check_repair_time,
-    expect_magic,
-    reading,
-    real_array,
-)
+from ._confine import ReadBudget
+from ._errors import FormatError, as_file, check_clock, check_repair_time, reading, real_array
+from ._h5 import open_h5
 
 __all__ = ["read_robot_h5", "ROBOT_STREAMS", "UR_JOINT_NAMES", "UR_JOINT_STATES_ORDER"]
 
@@ -37,7 +30,7 @@ UR_JOINT_NAMES = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
 UR_JOINT_STATES_ORDER = tuple(sorted(UR_JOINT_NAMES))
 
 
-def _read_stream(path, h5, name):
+def _read_stream(path, h5, name, budget):
     """Return (clock (n, 2), data (n, d)) for one stream, or None if its group is absent."""
     group_name, data_name, clock_name = ROBOT_STREAMS[name]
     if group_name not in h5:
@@ -50,8 +43,10 @@ def _read_stream(path, h5, name):
         if key not in group:
             found = summarise(map(repr, sorted(group.keys())))
             raise FormatError(path, f"expected a dataset '{group_name}/{key}', found [{found}]")
-    clock = real_array(path, group[clock_name][()], f"'{group_name}/{clock_name}'")
-    data = real_array(path, group[data_name][()], f"'{group_name}/{data_name}'")
+    clock = real_array(path, budget.dataset(group[clock_name], f"{group_name}/{clock_name}"),
+                       f"'{group_name}/{clock_name}'")
+    data = real_array(path, budget.dataset(group[data_name], f"{group_name}/{data_name}"),
+                      f"'{group_name}/{data_name}'")
     if clock.ndim != 2 or clock.shape[1] != 2 or clock.shape[0] == 0:
         raise FormatError(
             path, f"expected '{group_name}/{clock_name}' of shape (n, 2) [seconds, nanoseconds] "
@@ -149,14 +144,12 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None, scalar_first: boo
     >>> demo.metadata["joint_names"][0]  # doctest: +SKIP
     'shoulder_pan_joint'
     """
-    import h5py  # slow to import; only when an HDF5 file is read
-
     check_repair_time(repair_time)
     joint_names = _check_joint_names(joint_names)
     p = as_file(path)
-    expect_magic(p, HDF5_MAGIC, "HDF5 content")
-    with reading(p, "corrupt HDF5 file"), h5py.File(p, "r") as h5:
-        raw = {name: _read_stream(p, h5, name) for name in ROBOT_STREAMS}
+    budget = ReadBudget(p)
+    with open_h5(p) as h5:
+        raw = {name: _read_stream(p, h5, name, budget) for name in ROBOT_STREAMS}
     raw = {name: value for name, value in raw.items() if value is not None}
     order, names = _joint_order(p, raw["joints"][1].shape[1], joint_names)
     raw["joints"] = (raw["joints"][0], raw["joints"][1][:, order])

@@ -18,7 +18,16 @@ from tqdm import tqdm
 from ..core import Demonstration
 from ..core._validation import check_positive, summarise
 from ._align import Source, align_sources, check_split, split_pieces, time_base
-from ._errors import FormatError, check_clock, check_repair_time, describe_content, read_head, reading
+from ._confine import check_input_folder
+from ._errors import (
+    FormatError,
+    as_file,
+    check_clock,
+    check_repair_time,
+    describe_content,
+    read_head,
+    reading,
+)
 from ._robot_h5 import UR_JOINT_NAMES
 from ._ros_messages import (
     DISCRETE_TYPES,
@@ -63,7 +72,11 @@ def ros_kind(path) -> str:
         if not (p / ROS2_METADATA).is_file():
             raise FormatError(p, f"expected a ROS 2 bag folder holding {ROS2_METADATA}, found a folder "
                               "without it")
+        # rosbags opens the storage files the metadata names, in this folder: each must be a regular file
+        # (a FIFO would block), and no link may lead out of the folder.
+        check_input_folder(p, what="a ROS 2 bag folder")
         return "ros2-bag"
+    as_file(p)
     if p.suffix.lower() not in ROS_FILES:
         raise FormatError(p, f"expected a ROS bag ({', '.join(ROS_FILES)} or a ROS 2 bag folder), "
                           f"found extension {p.suffix or '(none)'!r}")
@@ -96,6 +109,10 @@ def _bag_errors(path):
     except errors as exc:
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise FormatError(path, f"unreadable ROS bag: {detail}") from None
+    except AssertionError:  # rosbags checks a ROS 1 bag's records against each other with assert
+        raise FormatError(path, "unreadable ROS bag: its records contradict each other (a consistency check "
+                          "of the reader failed), so the file is corrupt; 'rosbag reindex' may repair a "
+                          "copy of it") from None
 
 
 def _open(p, stack):

@@ -6,6 +6,7 @@ topic, that keeps only the stamps and the numbers, in arrays that grow.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Iterable, Mapping
 
 import numpy as np
@@ -88,6 +89,8 @@ class Samples:
 
     def _add_joint_state(self, msg, log_ns):
         names, position = msg.name, msg.position
+        if names and names != self.names:
+            self._check_distinct(names)
         if self.names is None:
             self.names = list(names) if names else [str(i) for i in range(len(position))]
         elif names != self.names and names:  # JointState does not promise an order: go by name
@@ -100,6 +103,14 @@ class Samples:
             raise FormatError(self.path, f"topic {self.topic!r}: expected {len(self.names)} joint positions, "
                               f"message {self.n} has {len(position)}")
         self._push(header_ns(msg.header), log_ns, position)
+
+    def _check_distinct(self, names) -> None:
+        # Columns are matched by name: a name given twice leaves one of its positions unread.
+        twice = sorted(n for n, count in Counter(names).items() if count > 1)
+        if twice:
+            raise FormatError(self.path, f"topic {self.topic!r}: message {self.n + self.skipped} names "
+                              f"joint(s) {summarise(map(repr, twice))} more than once; expected distinct "
+                              "joint names, one per position")
 
     def _add_pose(self, msg, log_ns):
         pose = msg.pose if self.stamped else msg

@@ -9,7 +9,8 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_array
-from ._errors import ZIP_MAGICS, FormatError, as_file, expect_magic, reading
+from ._confine import atomic_output
+from ._errors import ZIP_MAGICS, FormatError, as_file, expect_magic, open_regular, reading
 
 __all__ = [
     "read_csv", "read_feature_matrix", "write_csv", "read_npz", "write_npz", "write_json", "to_jsonable",
@@ -53,8 +54,8 @@ def _table(p, lines: list[str], header: bool) -> np.ndarray:
 
 
 def _text_lines(p) -> list[str]:
-    with reading(p, "expected a UTF-8 text file"):
-        text = p.read_text(encoding="utf-8-sig")
+    with open_regular(p) as fh, reading(p, "expected a UTF-8 text file"):
+        text = fh.read().decode("utf-8-sig")
     lines = text.splitlines()
     while lines and not lines[-1].strip():
         lines.pop()
@@ -212,7 +213,9 @@ def write_csv(demo, path, *, stream: str | None = None) -> Path:
     data = demo.streams[stream]
     header = ",".join(["t"] + [f"{stream}_{k}" for k in range(data.shape[1])])
     p = Path(path)
-    np.savetxt(p, np.column_stack([demo.t, data]), fmt="%.17g", delimiter=",", header=header, comments="")
+    with atomic_output(p, name="path") as tmp:
+        np.savetxt(tmp, np.column_stack([demo.t, data]), fmt="%.17g", delimiter=",", header=header,
+                   comments="")
     return p
 
 
@@ -303,7 +306,7 @@ def write_npz(demo, path) -> Path:
         raise ValueError(f"demo.metadata: expected JSON-serialisable values, got {exc}") from None
     p = Path(path)
     # An open handle stops numpy from appending ".npz" to the name.
-    with open(p, "wb") as fh:
+    with atomic_output(p, name="path") as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, t=demo.t, **demo.streams, metadata=np.array(meta))
     return p
 
@@ -355,5 +358,6 @@ def write_json(obj, path) -> Path:
     """
     p = Path(path)
     text = json.dumps(to_jsonable(obj), indent=2)
-    p.write_text(text + "\n", encoding="utf-8")
+    with atomic_output(p, name="path") as tmp:
+        tmp.write_text(text + "\n", encoding="utf-8")
     return p

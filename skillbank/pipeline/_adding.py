@@ -108,7 +108,9 @@ class Adding:
         segmentation : dict, optional
             Keyword arguments of the segmenter, plus ``"streams"``.
         label : str, optional
-            Label every new primitive.
+            Label every new primitive. Default: the demonstration's task,
+            ``demo.metadata["task"]`` (a LeRobot episode's task string),
+            recorded in the provenance as ``"label_from"``; else none.
         source : str, optional
             Default: ``demo.metadata["source"]``.
         assign : {"incremental", "none", "recluster"}, default="incremental"

@@ -63,7 +63,13 @@ def check_demo(demo, name):
     if not isinstance(demo, Demonstration):
         raise ValueError(f"{name}: expected a Demonstration, got {type(demo).__name__}")
     if "position" not in demo.streams:
-        raise ValueError(f"{name}: expected a 'position' stream, got streams {demo.stream_names}")
+        hint = ""
+        if demo.metadata.get("format") == "lerobot" and demo.stream_names:
+            # A LeRobot dataset names its features itself: say how to read one of them as the position.
+            feature = next((s for s in demo.stream_names if "state" in s), demo.stream_names[0])
+            hint = (f"; read one feature as the position: --feature {feature}=position "
+                    f"(reader_options={{'features': ['{feature}=position']}})")
+        raise ValueError(f"{name}: expected a 'position' stream, got streams {demo.stream_names}{hint}")
 
 
 def file_reason(exc, path) -> str:
@@ -147,6 +153,10 @@ def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> 
     """``(store item, why it stays unclustered or None)``: everything but the write."""
     cuts, provenance = bounds(demo, segment, segmentation)
     src = source if source is not None else demo.metadata.get("source")
+    task = demo.metadata.get("task")
+    if label is None and isinstance(task, str) and task.strip():
+        # The recording says what it shows (a LeRobot episode's task): its primitives' own label, as if given.
+        label, provenance["label_from"] = task.strip(), "metadata['task']"
     members, why = None, None
     if assign == "incremental":
         members, why = assignment([demo.slice(a, b) for a, b in cuts], snapshot)

@@ -215,16 +215,18 @@ def test_what_is_not_a_dataset(tmp_path):
 
 
 @pytest.mark.parametrize(("changes", "message"), [
-    ({"fps": 0}, r"expected a positive 'fps' in meta/info.json, found 0$"),
-    ({"fps": "fast"}, r"expected a positive 'fps' in meta/info.json, found 'fast'$"),
+    ({"fps": 0}, r"expected 'fps' in meta/info.json to be a number in \(0, 1e\+06\] frames per second, "
+                 "found 0$"),
+    ({"fps": "fast"}, r"expected 'fps' in meta/info.json to be a number .* found 'fast'$"),
     ({"codebase_version": "v1.6"}, r"expected codebase_version v2.x or v3.x in meta/info.json, found "
                                    r"'v1.6'$"),
     ({"features": []}, r"expected 'features' to be an object in meta/info.json$"),
     ({"data_path": None}, r"expected keys \['data_path'\] in meta/info.json, found \["),
     ({"features": {"observation.images.top": {"dtype": "video"}}},
      r"expected numeric features in meta/info.json, found \['observation.images.top'\]$"),
-    ({"data_path": "data/{missing}.parquet"}, r"episode 0: cannot locate its data file from data_path "
-                                              r"'data/\{missing\}.parquet' \(KeyError: 'missing'\)$"),
+    ({"data_path": "data/{missing}.parquet"}, r"'data_path' in meta/info.json: expected fields among "
+                                              r"\['\{episode_chunk\}', '\{episode_index\}'\], found "
+                                              r"\{missing\}$"),
 ])
 def test_bad_info(tmp_path, changes, message):
     root = write_lerobot(tmp_path / "ds", "v2.1", _episodes())

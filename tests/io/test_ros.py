@@ -642,6 +642,54 @@ def test_bad_content(tmp_path):
         read_rosbag(path)
 
 
+def test_duplicate_joint_names_are_refused(tmp_path):
+    same = (["a", "b", "a"], [0, 1, 2])
+    twice = {"/joint_states": ("sensor_msgs/msg/JointState", stamped([0.0, 0.1], [same, same]))}
+    path = write_bag(tmp_path, "ros1", twice, name="twice")
+    with raises_format(path, r"topic '/joint_states': message 0 names joint\(s\) 'a' more than once; "
+                             "expected distinct joint names, one per position$"):
+        read_rosbag(path)
+    # a later message that repeats a name while it reorders: one of its positions would go unread
+    messages = [(["a", "b"], [0, 1]), (["b", "a", "b"], [1, 0, 5])]
+    later = {"/joint_states": ("sensor_msgs/msg/JointState", stamped([0.0, 0.1], messages))}
+    path = write_bag(tmp_path, "mcap", later, name="later")
+    with raises_format(path, r"topic '/joint_states': message 1 names joint\(s\) 'b' more than once"):
+        read_rosbag(path)
+
+
+def _flip_until_the_reader_asserts(path):
+    """Flip one byte at a time of a ROS 1 bag until rosbags' own reader fails an assert on it."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    data = path.read_bytes()
+    for i in range(len(data) // 8, len(data)):  # past the header: an index or record field
+        flipped = bytearray(data)
+        flipped[i] ^= 0xFF
+        path.write_bytes(bytes(flipped))
+        try:
+            with AnyReader([path], default_typestore=get_typestore(Stores.LATEST)) as reader:
+                for _ in reader.messages():
+                    pass
+        except AssertionError:
+            return i
+        except Exception:  # noqa: BLE001, S112 - other damage: not the case this test is about
+            continue
+    raise AssertionError("no flipped byte makes rosbags assert")
+
+
+def test_a_ros1_bag_with_a_flipped_byte_is_one_line(tmp_path, cli):
+    recording, _ = synthetic(duration=0.3)
+    path = write_bag(tmp_path, "ros1", recording)
+    _flip_until_the_reader_asserts(path)
+    reason = (r"unreadable ROS bag: its records contradict each other \(a consistency check of the reader "
+              r"failed\), so the file is corrupt; 'rosbag reindex' may repair a copy of it$")
+    with raises_format(path, reason):
+        read_rosbag(path)
+    code, out, err = cli("segment", path, "--json")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "contradict each other" in err
+
+
 @pytest.mark.parametrize(("options", "message"), [
     ({"topics": "/joint_states"}, r"topics: expected a mapping of topic to stream name or 'topic=stream' "
                                   r"strings, got '/joint_states'"),
