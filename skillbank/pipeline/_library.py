@@ -449,12 +449,14 @@ class Library(Adding):
         with tqdm(desc="exporting", unit="demo") as bar:
             return self.store.export(folder, progress=_ticker(bar))
 
-    def import_folder(self, folder) -> dict:
+    def import_folder(self, folder, *, max_bytes=None) -> dict:
         """Import a folder written by :meth:`export`; importing it again changes nothing.
 
-        The whole folder is checked first (paths confined to it, the manifest
-        validated, the files checked against it), so a bad folder changes
-        nothing; the import itself is one transaction.
+        The whole folder is checked first (paths confined to it, no links,
+        the manifest validated, the files checked against it), so a bad
+        folder changes nothing; the import itself is one transaction. Its
+        arrays may take at most ``max_bytes`` once decompressed (default
+        1 GiB, or ``$SKILLBANK_MAX_IMPORT_BYTES``; ``docs/scaling.md``).
 
         - Into an **empty** library: an exact copy (ids, clustering versions,
           memberships and labels kept).
@@ -479,7 +481,7 @@ class Library(Adding):
         >>> lib.import_folder("backup")["skipped"]  # doctest: +SKIP
         {1: 1, 2: 2}
         """
-        result = self.store.import_folder(folder)
+        result = self.store.import_folder(folder, max_bytes=max_bytes)
         result["assigned"] = {}
         if result["mode"] != "merge":
             return result

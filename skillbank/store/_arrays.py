@@ -96,7 +96,7 @@ def from_npy(blob) -> np.ndarray:
     flat = np.frombuffer(data, dtype=dtype, count=size // dtype.itemsize if dtype.itemsize else 0,
                          offset=start)
     # a copy: the array owns its memory and is writable, as np.load's is
-    return (flat.reshape(shape[::-1]).T if fortran else flat.reshape(shape)).copy()
+    return (flat.reshape(shape[::-1]).T if fortran else flat.reshape(shape)).copy(order="K")
 
 
 def to_json(obj) -> str:

@@ -13,16 +13,19 @@ every pair of them.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
 
 from ..core import Demonstration
 from ..io import write_npz
-from ._arrays import from_json, from_npy, to_json
+from ._arrays import from_json, to_json
 from ._manifest import FORMAT, MANIFEST
+from ._rows import MAX_ID, check_demonstration_record, check_version_record
 from ._schema import SCHEMA_VERSION, now
 
 __all__ = ["write_export", "import_records", "copy_library", "records_of", "content_hash", "MANIFEST",
@@ -79,10 +82,11 @@ def _merge_descriptions(records, imported, *, copy: bool) -> dict:
     return {d["label"]: d["revision"] for d in new}
 
 
-def demonstration_record(did, source, created, provenance, primitives, demo) -> dict:
-    """A demonstration record from rows: ``provenance`` is ``(kind, params JSON, created)``."""
+def demonstration_record(did, source, created, provenance, primitives, demo, n_steps=None) -> dict:
+    """A demonstration record from rows: ``provenance`` is ``(kind, params JSON, created)``; ``n_steps``
+    the sample count its row stores (checked against ``demo`` before a copy or export writes it)."""
     kind, params, p_created = provenance
-    return {"id": int(did), "source": source, "created": created, "demo": demo,
+    return {"id": int(did), "source": source, "created": created, "demo": demo, "n_steps": n_steps,
             "provenance": None if kind is None else {"kind": kind, "params": from_json(params),
                                                      "created": p_created},
             "primitives": [{"id": int(i), "start": int(a), "stop": int(b), "label": lab}
@@ -90,16 +94,40 @@ def demonstration_record(did, source, created, provenance, primitives, demo) -> 
 
 
 def version_record(version, created, params, n_clusters, arrays, members, labels) -> dict:
-    """A version record from rows: ``arrays`` the ``.npy`` bytes of centres, PCA mean and components;
-    ``members`` ``(primitive id, cluster, features .npy, assigned)``; ``labels`` ``(cluster, label)``."""
-    centers, mean, comps = (from_npy(b) for b in arrays)
+    """A version record from rows: ``arrays`` the centres, PCA mean and components (decoded);
+    ``members`` ``(primitive id, cluster, features, assigned)``; ``labels`` ``(cluster, label)``."""
+    centers, mean, comps = arrays
     return {"version": int(version), "created": created, "params": from_json(params),
             "n_clusters": int(n_clusters), "labels": [(int(c), lab) for c, lab in labels],
             "arrays": {"centers": centers, "pca_mean": mean, "pca_components": comps,
                        "member_ids": [int(m[0]) for m in members],
                        "member_clusters": [int(m[1]) for m in members],
-                       "member_features": [from_npy(m[2]) for m in members],
+                       "member_features": [m[2] for m in members],
                        "member_assigned": [m[3] for m in members]}}
+
+
+@contextlib.contextmanager
+def _checked(location: str, what: str):
+    """A row validator's ValueError as one line: which library is damaged, and what to do."""
+    try:
+        yield
+    except ValueError as exc:
+        if " is damaged: " in str(exc):
+            raise
+        raise ValueError(f"library {location!r} is damaged: {exc}; {what}; restore it from a backup"
+                         ) from None
+
+
+def check_source_demonstration(location: str, d: dict, what: str) -> None:
+    """A stored demonstration record checked as an import checks one (:mod:`skillbank.store._rows`)."""
+    with _checked(location, what):
+        check_demonstration_record(d, f"demonstration {d['id']}", n_steps=d.get("n_steps"))
+
+
+def check_source_version(location: str, v: dict, primitives, what: str) -> None:
+    """A stored clustering version record checked as an import checks one."""
+    with _checked(location, what):
+        check_version_record(v, primitives, f"clustering version {v['version']}")
 
 
 def records_of(store):
@@ -131,6 +159,20 @@ def write_export(records, folder, *, progress=None) -> Path:
         raise ValueError(f"folder: expected a folder, got the file {str(folder)!r}")
     if folder.is_dir() and any(folder.iterdir()):
         raise ValueError(f"folder: expected a new or empty folder, {str(folder)!r} is not empty")
+    created = not folder.exists()
+    try:
+        return _write_export(records, folder, progress)
+    except BaseException:  # nothing half-written: the folder was new or empty, so all in it is ours
+        if created:
+            shutil.rmtree(folder, ignore_errors=True)
+        else:
+            for part in folder.iterdir():
+                shutil.rmtree(part, ignore_errors=True) if part.is_dir() else part.unlink(missing_ok=True)
+        raise
+
+
+def _write_export(records, folder: Path, progress) -> Path:
+    location, what = getattr(getattr(records, "store", None), "location", "?"), "nothing was exported"
     (folder / "demonstrations").mkdir(parents=True, exist_ok=True)
     (folder / "versions").mkdir(exist_ok=True)
     demos_doc, versions_doc = [], []
@@ -138,7 +180,10 @@ def write_export(records, folder, *, progress=None) -> Path:
         total, demos = records.demonstrations()
         if progress is not None:
             progress(0, total)
+        primitives = set()
         for done, d in enumerate(demos, 1):
+            check_source_demonstration(location, d, what)  # what an import would refuse is not written
+            primitives.update(p["id"] for p in d["primitives"])
             name = f"demonstrations/demo_{d['id']:06d}.npz"
             write_npz(d["demo"], folder / name)
             demos_doc.append({"id": d["id"], "file": name, "source": d["source"], "created": d["created"],
@@ -146,6 +191,7 @@ def write_export(records, folder, *, progress=None) -> Path:
             if progress is not None:
                 progress(done, total)
         for v in records.versions():
+            check_source_version(location, v, primitives, what)
             a = v["arrays"]
             feats, m = a["member_features"], len(a["member_ids"])
             width = feats[0].shape[0] if m else a["pca_components"].shape[0]
@@ -302,8 +348,9 @@ def copy_library(source, destination, *, progress=None) -> dict:
         total, demos = src.demonstrations()
         if progress is not None:
             progress(0, total)
-        primitives = {}
+        primitives, where, what = {}, source.location, "nothing was copied"
         for done, d in enumerate(demos, 1):
+            check_source_demonstration(where, d, what)  # rows an import would refuse are not copied either
             _, prims = dst.insert_demonstration(d, keep_id=True)
             primitives.update(prims)
             counts["demonstrations"] = done
@@ -311,9 +358,15 @@ def copy_library(source, destination, *, progress=None) -> dict:
                 progress(done, total)
         counts["primitives"] = len(primitives)
         for v in src.versions():
+            check_source_version(where, v, primitives, what)
             dst.insert_version(v, primitives)
             counts["versions"] += 1
         described = getattr(src, "descriptions", None)
         _merge_descriptions(dst, described(history=True) if callable(described) else [], copy=True)
-        dst.set_counters(src.counters())
+        counters = src.counters()
+        for table, last in counters.items():  # the copy's next add numbers on from them
+            if not 0 <= int(last) <= MAX_ID:
+                raise ValueError(f"library {where!r} is damaged: its {table} id counter: expected an id in "
+                                 f"0..{MAX_ID} (2^53 - 1), got {last}; {what}; restore it from a backup")
+        dst.set_counters(counters)
     return counts
