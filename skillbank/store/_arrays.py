@@ -48,7 +48,8 @@ def npy_header(fh) -> tuple:
         raise ValueError(f"expected a .npy array header, got one that cannot be read ({type(exc).__name__})"
                          ) from None
     if dtype.hasobject:
-        raise ValueError("expected a numeric .npy array, got an array of Python objects (never unpickled)")
+        raise ValueError("expected numbers, got an array of Python objects: not a numeric .npy array (never "
+                         "unpickled)")
     return shape, fortran, dtype
 
 

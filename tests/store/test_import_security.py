@@ -225,7 +225,7 @@ PATHS = [
      r"got one that cannot be read \(BadZipFile\)"),
     ("pickled array", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(
         t=np.linspace(0, 1, 40), position=np.array([{"x": SECRET}] * 40, dtype=object))),
-     r"an array of Python objects \(never unpickled\)"),
+     r"an array of Python objects: not a numeric \.npy array \(never unpickled\)"),
     ("text stream", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(
         t=np.linspace(0, 1, 40), position=np.array([SECRET] * 40))),
      "expected numeric arrays, got a text array"),
