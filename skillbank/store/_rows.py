@@ -93,7 +93,8 @@ def check_demonstration_record(record: dict, where: str, *, n_steps=None) -> Non
         a, b = _int(p["start"]), _int(p["stop"])
         if a is None or b is None or not 0 <= a < b <= demo.n_steps:
             raise ValueError(f"{where} primitive {pid}: expected 0 <= start < stop <= {demo.n_steps} (the "
-                             f"demonstration's samples), got start {p['start']!r}, stop {p['stop']!r}"[:300])
+                             f"samples of demonstration {record['id']}), got start {p['start']!r}, "
+                             f"stop {p['stop']!r}"[:300])
         if pid in seen:
             raise ValueError(f"{where} primitive {pid}: expected a unique primitive id, got it twice")
         seen.add(pid)
