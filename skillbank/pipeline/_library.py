@@ -12,6 +12,7 @@ from ..core._validation import check_id, check_positive
 from ..planning import describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
+from ..store._rows import MAX_N_POINTS
 from ._adding import Adding
 from ._adding import check_label as _check_label
 
@@ -204,8 +205,8 @@ class Library(Adding):
             raise ValueError(f"features: expected one of {list(FEATURE_KINDS)}, got {features!r}")
         n_points = check_positive(n_points, name="n_points", integer=True)
         n_components = check_positive(n_components, name="n_components", integer=True)
-        if n_points < 2:
-            raise ValueError(f"n_points: expected an integer >= 2, got {n_points}")
+        if not 2 <= n_points <= MAX_N_POINTS:  # what a copy, export and import of the library accept
+            raise ValueError(f"n_points: expected an integer in 2..{MAX_N_POINTS}, got {n_points}")
         self._check_writable("record a clustering")
         with tqdm(total=4, desc="clustering", unit="step", disable=not progress) as bar:
             bar.set_postfix_str("loading primitives")

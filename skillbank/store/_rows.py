@@ -124,8 +124,8 @@ def check_version_params(params, where: str) -> None:
             raise ValueError(f"{where}.{key}: expected a positive integer, got {params[key]!r}"[:300])
     stretch = params.get("stretch")
     if stretch is not None and (isinstance(stretch, bool) or not isinstance(stretch, (int, float))
-                                or not np.isfinite(stretch) or not 0 < stretch <= 1e6):
-        raise ValueError(f"{where}.stretch: expected a finite number in (0, 1e6], got {stretch!r}"[:300])
+                                or not np.isfinite(stretch) or not stretch > 0):
+        raise ValueError(f"{where}.stretch: expected a finite number > 0, got {stretch!r}"[:300])
     seed = params.get("random_state")
     if seed is not None and (_int(seed) is None or not 0 <= _int(seed) <= _MAX_SEED):
         raise ValueError(f"{where}.random_state: expected null or an integer in 0..{_MAX_SEED}, "

@@ -243,7 +243,7 @@ def test_a_header_declaring_a_terabyte_is_refused_within_a_1_gib_limit(limited, 
     (lambda d: d["versions"][0]["params"].update(features="velocity"),
      r"versions\[0\]\.params\.features: expected one of \['default', 'position'\], got 'velocity'$"),
     (lambda d: d["versions"][0]["params"].update(stretch=-1.0),
-     r"params\.stretch: expected a finite number in \(0, 1e6\], got -1\.0$"),
+     r"params\.stretch: expected a finite number > 0, got -1\.0$"),
     (lambda d: d["versions"][0]["params"].update(random_state=-1),
      r"params\.random_state: expected null or an integer in 0\.\.4294967295, got -1$"),
     (lambda d: d["versions"][0]["params"].update(n_components=0),
@@ -279,3 +279,12 @@ def test_the_largest_id_imports_and_a_later_add_numbers_on_from_it(cli, new_libr
     assert code == 0, err
     report = json.loads(out)
     assert report["demonstrations"] == [MAX_ID + 1] and report["primitives"] == [[MAX_ID + 1]]
+
+
+def test_cluster_refuses_what_a_copy_or_an_import_would(tmp_path):
+    """A library clustered by skillbank can always be copied, exported and imported: n_points is bounded."""
+    from skillbank.pipeline import Library  # the pipeline, for this one test of what it records
+
+    with Library(tmp_path / "lib.db") as lib:
+        with pytest.raises(ValueError, match=r"^n_points: expected an integer in 2\.\.10000, got 10001$"):
+            lib.cluster(n_points=MAX_N_POINTS + 1)
