@@ -86,7 +86,10 @@ def from_npy(blob) -> np.ndarray:
         raise ValueError("expected .npy array bytes, got NULL")
     if isinstance(blob, str):
         raise ValueError("expected .npy array bytes, got text")
-    data = memoryview(blob).cast("B")
+    try:
+        data = memoryview(blob).cast("B")
+    except TypeError:  # SQLite keeps any type in any column
+        raise ValueError(f"expected .npy array bytes, got a value of type {type(blob).__name__}") from None
     fh = io.BytesIO(data)
     shape, fortran, dtype = npy_header(fh)
     start, size = fh.tell(), npy_bytes(shape, dtype)

@@ -157,7 +157,11 @@ def load_demonstrations(db, ids) -> dict:
             if n != len(t):
                 raise damaged(db.store.location, f"demonstration {did}", f"expected n_steps {len(t)} (the "
                               f"samples of its t), got {n!r}"[:200], remedy(db.store.location, did))
-            rows[did] = (t, stored_json(db, meta, f"demonstration {did} (its metadata)", did))
+            meta = stored_json(db, meta, f"demonstration {did} (its metadata)", did)
+            if not isinstance(meta, dict):
+                raise damaged(db.store.location, f"demonstration {did} (its metadata)", "expected a JSON "
+                              f"object, got a JSON {type(meta).__name__}", remedy(db.store.location, did))
+            rows[did] = (t, meta)
         for did, name, data in db.execute(
                 f"SELECT demonstration_id, name, data FROM streams WHERE demonstration_id IN ({q}) "
                 "ORDER BY demonstration_id, position", part).fetchall():

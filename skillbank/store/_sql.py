@@ -258,7 +258,7 @@ class SQLStore(Store):
                 if not isinstance(n, int) or n < 1:
                     raise damaged(self.location, f"demonstration {did}",
                                   f"expected n_steps >= 1, got {n!r}"[:200], remedy(self.location, did))
-                if not 0 <= a < b <= n:
+                if not (isinstance(a, int) and isinstance(b, int) and 0 <= a < b <= n):
                     raise damaged(self.location, f"primitive {pid}", f"expected 0 <= start < stop <= {n} "
                                   f"(the samples of demonstration {did}), got start {a}, stop {b}",
                                   remedy(self.location, did))

@@ -81,6 +81,9 @@ CASES = [
     ("stream is text", "UPDATE streams SET data = ? WHERE demonstration_id = 1",
      (b"plain text, not an array",), READS_SAMPLES, r"demonstration 1 \(stream 'position'\): expected \.npy "
      r"array bytes, got bytes that are not \(no \.npy magic\)" + _REMOVE),
+    ("stream is a TEXT value", "UPDATE streams SET data = ? WHERE demonstration_id = 1",
+     ("plain text, not an array",), READS_SAMPLES, r"demonstration 1 \(stream 'position'\): expected \.npy "
+     r"array bytes, got (text|bytes that are not \(no \.npy magic\))" + _REMOVE),
     ("t declares 10^11 values", "UPDATE demonstrations SET t = ? WHERE id = 1", (_huge_header(),),
      READS_SAMPLES, r"demonstration 1 \(its t\): expected a \.npy array whose header matches its data, got "
      r"a header declaring 800000000000 bytes of data \(<f8 of shape \(100000000000,\)\) followed by 64"
@@ -93,6 +96,8 @@ CASES = [
      r"whose header matches its data, got a header declaring 800000000000 bytes" + r".*" + _RESTORE),
     ("metadata is not JSON", "UPDATE demonstrations SET metadata = ? WHERE id = 1", ("{not json",),
      READS_SAMPLES, r"demonstration 1 \(its metadata\): expected JSON text, got text that is not" + _REMOVE),
+    ("metadata is a list", "UPDATE demonstrations SET metadata = ? WHERE id = 1", ("[1, 2]",),
+     READS_SAMPLES, r"demonstration 1 \(its metadata\): expected a JSON object, got a JSON list" + _REMOVE),
     ("n_steps = -5", "UPDATE demonstrations SET n_steps = -5 WHERE id = 1", (),
      READS_ROWS, r"demonstration 1: expected n_steps (>= 1|80 \(the samples of its t\)), got -5"),
     ("n_steps longer than t", "UPDATE demonstrations SET n_steps = 500 WHERE id = 1", (),
@@ -242,3 +247,19 @@ def test_from_npy_gives_back_the_bytes_it_was_given(array, fortran):
     back = from_npy(blob)
     assert back.dtype == array.dtype and back.shape == array.shape and back.flags.writeable
     assert to_npy(back) == blob and from_npy(memoryview(blob)).tobytes() == back.tobytes()
+
+
+@pytest.mark.parametrize(("sql", "params", "command", "match"), [
+    ("UPDATE streams SET data = 5 WHERE demonstration_id = 1", (), "reuse",
+     r"demonstration 1 \(stream 'position'\): expected \.npy array bytes, got a value of type int"),
+    ("UPDATE primitives SET stop = 40.5 WHERE id = 1", (), "list",
+     r"primitive 1: expected 0 <= start < stop <= 80 \(the samples of demonstration 1\), got start 0, "
+     r"stop 40\.5"),
+])
+def test_values_of_another_type_in_a_sqlite_column(cli, tmp_path, sql, params, command, match):
+    """SQLite keeps a value of any type in any column: one of the wrong type is named, not used."""
+    location = tmp_path / "lib.db"
+    _build(location)
+    _damage(location, sql, params)
+    code, out, err, _ = _run(cli, command, location, tmp_path)
+    assert code == 2 and err.count("\n") == 1 and re.search(f"is damaged: {match}", err), err
