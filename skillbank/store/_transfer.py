@@ -146,8 +146,12 @@ def write_export(records, folder, *, progress=None) -> Path:
     see :func:`skillbank.io.write_npz`), ``versions/version_<n>.npz`` (centres,
     PCA arrays, members, their clusters and features) and ``manifest.json``
     (everything else). Read in one snapshot (``records.snapshot()``), so it is
-    consistent even while other processes write. ``progress``, when given, is
-    called as ``progress(done, total)`` with the demonstrations written so far.
+    consistent even while other processes write. Every record is checked as
+    an import would check it (:mod:`skillbank.store._rows`), so a damaged
+    library gives one line instead of an export that cannot be imported; a
+    failed export leaves nothing in ``folder`` (nor ``folder`` itself when it
+    was new). ``progress``, when given, is called as ``progress(done, total)``
+    with the demonstrations written so far.
 
     Returns
     -------
@@ -305,7 +309,12 @@ def copy_library(source, destination, *, progress=None) -> dict:
     provenance), primitive (range, own label), clustering version (params,
     arrays, members with their features and how they joined, cluster
     labels) and the id counters are copied, so the next demonstration added
-    to either gets the same id.
+    to either gets the same id. Every row is checked as an import checks it
+    (:mod:`skillbank.store._rows`: sample counts, bounds inside their
+    demonstration, array shapes, finite values, ids and counters in
+    ``0..2^53 - 1``), and a damaged source (also a blob that is not ``.npy``
+    or an orphan primitive) raises one line naming the library and the row;
+    the destination stays empty.
 
     Parameters
     ----------
@@ -323,7 +332,8 @@ def copy_library(source, destination, *, progress=None) -> dict:
     ------
     ValueError
         When ``destination`` already holds demonstrations or clustering
-        versions (nothing is written; to merge, export and import).
+        versions (nothing is written; to merge, export and import), or when
+        ``source`` is damaged.
 
     Examples
     --------
