@@ -28,6 +28,7 @@ quote a file's bytes.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 
@@ -35,6 +36,7 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_array
+from ._arrays import content_hash
 from ._npz import load_arrays, measure_npz, open_confined
 from ._rows import MAX_ID, check_demonstration_record, check_version_params, check_version_record
 from ._schema import SCHEMA_VERSION
@@ -382,6 +384,14 @@ def _version_arrays(arrays: dict, v: dict, primitives: set, shown: str) -> dict:
     return out
 
 
+def _read_again(root, d, shown, identity) -> Demonstration:
+    """A demonstration of the export read again for the import's transaction: the very file checked."""
+    demo = _demo(load_arrays(root, d["file"], shown, identity), d, shown)
+    if content_hash(demo) != d["hash"]:
+        raise ValueError(f"{shown}: expected a file that stays put, got one changed while being imported")
+    return demo
+
+
 def read_export(folder, *, max_bytes=None) -> dict:
     """Read and check everything in an exported folder, changing nothing.
 
@@ -398,7 +408,10 @@ def read_export(folder, *, max_bytes=None) -> dict:
     -------
     dict
         The normalised manifest (:func:`check_manifest`) with each
-        demonstration's ``"demo"`` (a Demonstration) and each version's
+        demonstration's ``"n_steps"``, ``"hash"`` (its :func:`content_hash`)
+        and ``"read"`` (a function returning it as a Demonstration, read
+        again and checked to be the file measured, so an import holds one
+        demonstration at a time, not the export) and each version's
         ``"arrays"`` (``centers``, ``pca_mean``, ``pca_components``,
         ``member_ids``, ``member_clusters``, ``member_features``,
         ``member_assigned``).
@@ -439,8 +452,10 @@ def read_export(folder, *, max_bytes=None) -> dict:
     for d in doc["demonstrations"]:
         where = f"{d['where']}.file"
         shown = _shown(where, d["file"])
-        d["demo"] = _demo(load_arrays(root, d["file"], shown, identity[where]), d, shown)
-        check_demonstration_record(d, f"{MANIFEST} {d['where']}")  # what a copy checks too
+        demo = _demo(load_arrays(root, d["file"], shown, identity[where]), d, shown)
+        check_demonstration_record({**d, "demo": demo}, f"{MANIFEST} {d['where']}")  # as a copy checks
+        d.update(n_steps=demo.n_steps, hash=content_hash(demo),
+                 read=functools.partial(_read_again, root, d, shown, identity[where]))
     primitives = {p["id"] for d in doc["demonstrations"] for p in d["primitives"]}
     for v in doc["versions"]:
         where = f"{v['where']}.file"

@@ -14,16 +14,14 @@ every pair of them.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import shutil
 from pathlib import Path
 
 import numpy as np
 
-from ..core import Demonstration
 from ..io import write_npz
-from ._arrays import from_json, to_json
+from ._arrays import content_hash, from_json
 from ._manifest import FORMAT, MANIFEST
 from ._rows import MAX_ID, check_demonstration_record, check_version_record
 from ._schema import SCHEMA_VERSION, now
@@ -219,36 +217,6 @@ def _write_export(records, folder: Path, progress) -> Path:
     return path
 
 
-def content_hash(demo: Demonstration) -> str:
-    """SHA-256 over ``t``, every stream (name, dtype, shape, bytes, in order) and the metadata JSON.
-
-    Two demonstrations with the same hash hold the same samples, streams and
-    metadata; ``library import`` uses it to skip what a library already holds.
-
-    Examples
-    --------
-    >>> a = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 1})
-    >>> b = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 2})
-    >>> content_hash(a) == content_hash(Demonstration(a.t, dict(a.streams), {"user": 1}))
-    True
-    >>> content_hash(a) == content_hash(b)
-    False
-    """
-    h = hashlib.sha256()
-
-    def field(data: bytes) -> None:  # length-prefixed, so field boundaries cannot be shifted
-        h.update(len(data).to_bytes(8, "little"))
-        h.update(data)
-
-    for name, arr in (("t", demo.t), *demo.streams.items()):
-        arr = np.ascontiguousarray(arr)
-        field(name.encode("utf-8"))
-        field(f"{arr.dtype.str} {arr.shape}".encode())
-        field(arr.tobytes())
-    field(to_json(demo.metadata).encode("utf-8"))
-    return h.hexdigest()
-
-
 def _existing_hashes(records, n_steps) -> dict:
     """``{content hash: id}`` of the stored demonstrations with one of the lengths ``n_steps``."""
     out = {}
@@ -278,18 +246,20 @@ def import_records(records, doc) -> dict:
         "primitives": {old: new}, "versions": {old: new},
         "skipped": {old demonstration id: id of the copy already stored}}``.
     """
-    hashes = {d["id"]: content_hash(d["demo"]) for d in doc["demonstrations"]}
+    hashes = {d["id"]: d["hash"] for d in doc["demonstrations"]}
     maps = {"mode": "copy", "demonstrations": {}, "primitives": {}, "versions": {}, "skipped": {}}
     with records.writing():
         empty = sum(records.counts()) == 0
-        lengths = [d["demo"].n_steps for d in doc["demonstrations"]]
+        lengths = [d["n_steps"] for d in doc["demonstrations"]]
         stored = {} if empty else _existing_hashes(records, lengths)
         maps["mode"] = "copy" if empty else "merge"
         for d in doc["demonstrations"]:
             if hashes[d["id"]] in stored:
                 maps["skipped"][d["id"]] = stored[hashes[d["id"]]]
                 continue
-            did, prims = records.insert_demonstration(d, keep_id=empty)
+            # read again here, one at a time (checked to be what was measured and hashed): memory holds
+            # one demonstration, not the export
+            did, prims = records.insert_demonstration(dict(d, demo=d["read"]()), keep_id=empty)
             maps["demonstrations"][d["id"]] = did
             maps["primitives"].update(prims)
         for v in doc["versions"] if empty else ():
@@ -338,6 +308,7 @@ def copy_library(source, destination, *, progress=None) -> dict:
     Examples
     --------
     >>> import os, tempfile
+    >>> from skillbank import Demonstration
     >>> from skillbank.store import open_store
     >>> folder = tempfile.mkdtemp()
     >>> t = np.linspace(0.0, 1.0, 20)

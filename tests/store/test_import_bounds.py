@@ -288,3 +288,22 @@ def test_cluster_refuses_what_a_copy_or_an_import_would(tmp_path):
     with Library(tmp_path / "lib.db") as lib:
         with pytest.raises(ValueError, match=r"^n_points: expected an integer in 2\.\.10000, got 10001$"):
             lib.cluster(n_points=MAX_N_POINTS + 1)
+
+
+# -- one demonstration at a time ------------------------------------------------------------------------
+def test_a_file_changed_between_the_check_and_the_write_is_refused(folder, tmp_path, table_rows):
+    """The import reads each demonstration again inside its transaction: it must be the very file checked."""
+    from skillbank.store._manifest import read_export
+    from skillbank.store._transfer import import_records
+
+    doc = read_export(folder)
+    assert all("demo" not in d and d["n_steps"] == 40 for d in doc["demonstrations"])  # none held in memory
+    write_npz(_demo(7), folder / "demonstrations" / "demo_000002.npz")  # another valid demonstration
+    with SQLiteStore(tmp_path / "lib.db") as store:
+        store.add_demonstration(_demo(9, n=30), [(0, 30)])
+        before = table_rows(tmp_path / "lib.db")
+        with pytest.raises(ValueError, match=r"^manifest\.json demonstrations\[1\]\.file 'demonstrations/"
+                                             r"demo_000002\.npz': expected a file that stays put, got one "
+                                             "changed while being imported$"):
+            import_records(store.records(), doc)
+    assert table_rows(tmp_path / "lib.db") == before

@@ -26,8 +26,8 @@ from skillbank.cli import _main
 from skillbank.io import write_npz
 from skillbank.store import SQLiteStore
 from skillbank.store import _manifest as manifest_module
+from skillbank.store._arrays import content_hash
 from skillbank.store._manifest import check_manifest, json_depth
-from skillbank.store._transfer import content_hash
 
 SECRET = "TOPSECRET-7f3a-do-not-print"
 
