@@ -50,9 +50,9 @@ FORMAT = "skillbank-library"
 MAX_MANIFEST_BYTES = 64 * 2 ** 20
 #: Deepest JSON nesting accepted (an export nests 6 deep plus the segmentation parameters).
 MAX_DEPTH = 64
-#: Default bound of the bytes one import's arrays take once decompressed: 1 GiB (the import holds them
-#: all until its transaction commits). Raise it with ``max_bytes=`` (``library import --max-bytes``) or
-#: ``$SKILLBANK_MAX_IMPORT_BYTES``.
+#: Default bound of the bytes one import's arrays take once decompressed: 1 GiB (a few MB of archive can
+#: expand to gigabytes, each read twice, the largest held in memory). Raise it with ``max_bytes=``
+#: (``library import --max-bytes``) or ``$SKILLBANK_MAX_IMPORT_BYTES``.
 MAX_IMPORT_BYTES = 2 ** 30
 _MAX_ID = MAX_ID  # what every store holds and a later add can number on from (skillbank.store._rows)
 _MAX_PATH = 4096
