@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -190,6 +191,9 @@ def add_parser(sub):
                                        "a non-empty one (skipping demonstrations already there)")
     c.add_argument("db", type=_location, help="the library (created when missing)")
     c.add_argument("folder", type=Path, help="a folder written by 'library export'")
+    c.add_argument("--max-bytes", type=float, default=None, metavar="BYTES",
+                   help="the most bytes the export's arrays may take once decompressed, checked before any "
+                        "is read (default 1 GiB, or $SKILLBANK_MAX_IMPORT_BYTES; e.g. 8e9)")
     c.add_argument("--json", action="store_true", help="print the counts and id maps as JSON")
     c.set_defaults(func=_import)
 
@@ -483,9 +487,22 @@ def _export(args) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def _new_file_removed_on_failure(location):
+    """A library file this command creates is removed again (with WAL's side files) when the command fails."""
+    new = None if isinstance(location, _URL) or location.exists() else location
+    try:
+        yield
+    except BaseException:
+        for path in () if new is None else (new, new.with_name(new.name + "-wal"),
+                                             new.with_name(new.name + "-shm")):
+            path.unlink(missing_ok=True)
+        raise
+
+
 def _import(args) -> int:
-    with _open(args, create=True) as lib:
-        res = lib.import_folder(args.folder)
+    with _new_file_removed_on_failure(args.db), _open(args, create=True) as lib:
+        res = lib.import_folder(args.folder, max_bytes=args.max_bytes)
     kinds = ("demonstrations", "primitives", "versions")
     added = {k: len(res[k]) for k in kinds}
     if args.json:
@@ -514,7 +531,8 @@ def _copy(args) -> int:
         bar.total = total
         bar.update(done - bar.n)
 
-    with open_store(_target(args.src), create=False, readonly=True) as src, \
+    with _new_file_removed_on_failure(args.dst), \
+            open_store(_target(args.src), create=False, readonly=True) as src, \
             open_store(_target(args.dst)) as dst, \
             tqdm(desc="copying", unit="demo", disable=not show_progress(args)) as bar:
         counts = copy_library(src, dst, progress=tick)

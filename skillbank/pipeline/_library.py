@@ -12,6 +12,7 @@ from ..core._validation import check_id, check_positive
 from ..planning import describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
+from ..store._rows import MAX_N_POINTS
 from ._adding import Adding
 from ._adding import check_label as _check_label
 
@@ -204,8 +205,8 @@ class Library(Adding):
             raise ValueError(f"features: expected one of {list(FEATURE_KINDS)}, got {features!r}")
         n_points = check_positive(n_points, name="n_points", integer=True)
         n_components = check_positive(n_components, name="n_components", integer=True)
-        if n_points < 2:
-            raise ValueError(f"n_points: expected an integer >= 2, got {n_points}")
+        if not 2 <= n_points <= MAX_N_POINTS:  # what a copy, export and import of the library accept
+            raise ValueError(f"n_points: expected an integer in 2..{MAX_N_POINTS}, got {n_points}")
         self._check_writable("record a clustering")
         with tqdm(total=4, desc="clustering", unit="step", disable=not progress) as bar:
             bar.set_postfix_str("loading primitives")
@@ -449,12 +450,14 @@ class Library(Adding):
         with tqdm(desc="exporting", unit="demo") as bar:
             return self.store.export(folder, progress=_ticker(bar))
 
-    def import_folder(self, folder) -> dict:
+    def import_folder(self, folder, *, max_bytes=None) -> dict:
         """Import a folder written by :meth:`export`; importing it again changes nothing.
 
-        The whole folder is checked first (paths confined to it, the manifest
-        validated, the files checked against it), so a bad folder changes
-        nothing; the import itself is one transaction.
+        The whole folder is checked first (paths confined to it, no links,
+        the manifest validated, the files checked against it), so a bad
+        folder changes nothing; the import itself is one transaction. Its
+        arrays may take at most ``max_bytes`` once decompressed (default
+        1 GiB, or ``$SKILLBANK_MAX_IMPORT_BYTES``; ``docs/scaling.md``).
 
         - Into an **empty** library: an exact copy (ids, clustering versions,
           memberships and labels kept).
@@ -479,7 +482,8 @@ class Library(Adding):
         >>> lib.import_folder("backup")["skipped"]  # doctest: +SKIP
         {1: 1, 2: 2}
         """
-        result = self.store.import_folder(folder)
+        # a backend written before the bound existed takes no max_bytes: it is passed only when given
+        result = self.store.import_folder(folder, **({} if max_bytes is None else {"max_bytes": max_bytes}))
         result["assigned"] = {}
         if result["mode"] != "merge":
             return result

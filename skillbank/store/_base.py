@@ -347,12 +347,15 @@ class Store(ABC):
         """
 
     @abstractmethod
-    def import_folder(self, folder) -> dict:
+    def import_folder(self, folder, *, max_bytes=None) -> dict:
         """Import an exported folder in one transaction, after checking all of it; a bad one changes nothing.
 
-        Every path the manifest names must resolve, after links, to a regular
-        file inside ``folder``; the manifest is validated against its schema
-        and the files against the manifest before the transaction begins
+        Every path the manifest names must be a regular file of its own
+        inside ``folder`` (no symbolic or hard links); the arrays of all its
+        NPZ files may take at most ``max_bytes`` once decompressed (default
+        1 GiB, or ``$SKILLBANK_MAX_IMPORT_BYTES``), measured before any is
+        read; the manifest is validated against its schema and the files
+        against the manifest before the transaction begins
         (:func:`skillbank.store._manifest.read_export`). Messages name the
         manifest entry and never quote a file's contents.
 

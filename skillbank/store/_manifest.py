@@ -3,16 +3,24 @@
 An export folder may come from anyone. :func:`read_export` checks all of it
 before the import's transaction begins, so a bad folder changes nothing:
 
-- every path the manifest names must resolve, after following links, to a
-  regular file inside the folder; a path leading outside, a folder, a FIFO
-  or a device is refused after ``os.stat``, without being opened;
+- every path the manifest names must be a regular file of its own inside
+  the folder: a path leading outside, a symbolic link, a hard link, a
+  folder, a FIFO or a device is refused, the last ones without being opened
+  (:mod:`skillbank.store._npz` says why); no two entries may name one file;
+- the arrays of all its NPZ files together may take at most
+  :func:`max_import_bytes` once decompressed (:data:`MAX_IMPORT_BYTES`, 1 GiB,
+  by default; ``max_bytes=`` or ``$SKILLBANK_MAX_IMPORT_BYTES`` raise it),
+  measured from the archives' directories and the arrays' headers before
+  any array is read;
 - the manifest is at most :data:`MAX_MANIFEST_BYTES` and nested at most
   :data:`MAX_DEPTH` deep, and is validated against its schema (types,
   ranges, unique ids);
 - every NPZ file is read without unpickling, each array's header checked
   against the data it holds before anything is allocated, and checked
-  against the manifest (bounds within their demonstration, members naming
-  listed primitives, clusters within range, array shapes consistent).
+  against the manifest with the validators every stored row passes
+  (:mod:`skillbank.store._rows`: ids in ``1..2^53 - 1``, bounds within their
+  demonstration, members naming listed primitives, clusters within range,
+  array shapes consistent, clustering parameters a later add can use).
 
 Messages name the manifest entry (``demonstrations[3].file``) and never
 quote a file's bytes.
@@ -20,20 +28,21 @@ quote a file's bytes.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
-import stat
-import zipfile
-import zlib
 
 import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_array
+from ._arrays import content_hash
+from ._npz import load_arrays, measure_npz, open_confined
+from ._rows import MAX_ID, check_demonstration_record, check_version_params, check_version_record
 from ._schema import SCHEMA_VERSION
 
-__all__ = ["read_export", "check_manifest", "parse_manifest", "MANIFEST", "FORMAT", "MAX_MANIFEST_BYTES",
-           "MAX_DEPTH"]
+__all__ = ["read_export", "check_manifest", "parse_manifest", "max_import_bytes", "MANIFEST", "FORMAT",
+           "MAX_MANIFEST_BYTES", "MAX_DEPTH", "MAX_IMPORT_BYTES"]
 
 MANIFEST = "manifest.json"
 FORMAT = "skillbank-library"
@@ -41,13 +50,14 @@ FORMAT = "skillbank-library"
 MAX_MANIFEST_BYTES = 64 * 2 ** 20
 #: Deepest JSON nesting accepted (an export nests 6 deep plus the segmentation parameters).
 MAX_DEPTH = 64
-_MAX_ID = 2 ** 63 - 1  # SQLite's INTEGER
+#: Default bound of the bytes one import's arrays take once decompressed: 1 GiB (a few MB of archive can
+#: expand to gigabytes, each read twice, the largest held in memory). Raise it with ``max_bytes=``
+#: (``library import --max-bytes``) or ``$SKILLBANK_MAX_IMPORT_BYTES``.
+MAX_IMPORT_BYTES = 2 ** 30
+_MAX_ID = MAX_ID  # what every store holds and a later add can number on from (skillbank.store._rows)
 _MAX_PATH = 4096
-_ASSIGNED = ("fit", "incremental")
 _VERSION_ARRAYS = ("centers", "pca_mean", "pca_components", "member_ids", "member_clusters",
                    "member_features", "member_assigned")
-_READ_ERRORS = (ValueError, OSError, EOFError, KeyError, TypeError, RuntimeError, NotImplementedError,
-                MemoryError, zipfile.BadZipFile, zlib.error, UnicodeError)
 _JSON_TYPES = {str: "string", int: "integer", float: "number", bool: "boolean", list: "array",
                dict: "object", type(None): "null"}
 
@@ -197,7 +207,8 @@ def _version(item, where: str) -> dict:
     params = _object(_key(v, "params", where), f"{where}.params")
     # What a later add needs to featurise new primitives the way this version did.
     _text(_key(params, "features", f"{where}.params"), f"{where}.params.features")
-    _integer(_key(params, "n_points", f"{where}.params"), f"{where}.params.n_points", 2)
+    _key(params, "n_points", f"{where}.params")
+    check_version_params(params, f"{MANIFEST} {where}.params")
     n = _integer(_key(v, "n_clusters", where), f"{where}.n_clusters", 1, 2 ** 31)
     labels = [_object(lab, f"{where}.labels[{k}]")
               for k, lab in enumerate(_array(v.get("labels", []), f"{where}.labels"))]
@@ -278,101 +289,32 @@ def check_manifest(doc) -> dict:
 
 
 # -- files -----------------------------------------------------------------------------------------
-_KINDS = {stat.S_IFDIR: "a folder", stat.S_IFIFO: "a FIFO", stat.S_IFSOCK: "a socket",
-          stat.S_IFCHR: "a character device", stat.S_IFBLK: "a block device"}
-
-
 def _shown(where: str, entry: str) -> str:
     """How a message names a manifest entry and the path it holds."""
     return f"{MANIFEST} {where} {entry!r}" if len(entry) <= 80 else f"{MANIFEST} {where} {entry[:77]!r}..."
 
 
-def open_confined(root: str, entry: str, shown: str):
-    """Open ``entry`` for reading if it resolves to a regular file inside the folder ``root``.
+def max_import_bytes(max_bytes=None) -> int:
+    """The bound of one import's decompressed bytes: ``max_bytes``, else ``$SKILLBANK_MAX_IMPORT_BYTES``,
+    else :data:`MAX_IMPORT_BYTES`.
 
-    ``root`` is the folder's real path; ``shown`` starts every message.
-    Links are followed first, then the target is checked with ``os.stat``,
-    so a FIFO or device is refused without being opened; the file is then
-    opened without following links and must be the very file checked.
-
-    Returns
-    -------
-    binary file object
+    Examples
+    --------
+    >>> max_import_bytes(5e9)
+    5000000000
     """
-    real = os.path.realpath(os.path.join(root, entry))
-    if os.path.commonpath([root, real]) != root:
-        raise ValueError(f"{shown}: expected a file inside the export folder, got a path "
-                         "that leads outside it")
+    where, value = "max_bytes", max_bytes
+    if value is None:
+        where, value = "SKILLBANK_MAX_IMPORT_BYTES", os.environ.get("SKILLBANK_MAX_IMPORT_BYTES")
+        if value is None or not value.strip():
+            return MAX_IMPORT_BYTES
     try:
-        before = os.stat(real)
-    except FileNotFoundError:
-        raise ValueError(f"{shown}: expected a file of the export, got a missing file") from None
-    except OSError as exc:
-        raise ValueError(f"{shown}: expected a readable file, got {exc.strerror or type(exc).__name__}") \
-            from None
-    if not stat.S_ISREG(before.st_mode):
-        kind = _KINDS.get(stat.S_IFMT(before.st_mode), "something else")
-        raise ValueError(f"{shown}: expected a regular file, got {kind}")
-    # O_NONBLOCK: should the path be swapped for a FIFO meanwhile, opening it must not wait for a writer.
-    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) \
-        | getattr(os, "O_BINARY", 0)
-    try:
-        fd = os.open(real, flags)
-    except OSError as exc:
-        raise ValueError(f"{shown}: expected a readable file, got {exc.strerror or type(exc).__name__}") \
-            from None
-    after = os.fstat(fd)
-    if not stat.S_ISREG(after.st_mode) or (after.st_dev, after.st_ino) != (before.st_dev, before.st_ino):
-        os.close(fd)
-        raise ValueError(f"{shown}: expected a file that stays put, got one replaced while "
-                         "being imported")
-    return os.fdopen(fd, "rb")
-
-
-class _Refused(Exception):
-    """A reason of our own (quoting nothing from the file) to refuse an NPZ file."""
-
-
-def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
-    with zf.open(info) as fh:
-        version = np.lib.format.read_magic(fh)
-        if version == (1, 0):
-            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
-        else:
-            raise _Refused(f"a .npy member of format version {version}, which exports never write")
-    # Refused before numpy allocates: pickles, and headers promising more data than the member holds.
-    if dtype.hasobject:
-        raise _Refused("an array of Python objects, which are never unpickled")
-    if dtype.kind not in "biufU":
-        raise _Refused(f"an array of {dtype.kind}-kind values, neither numbers nor text")
-    if int(np.prod(shape, dtype=object)) * dtype.itemsize > info.file_size:
-        raise _Refused("an array header promising more data than its member holds")
-    with zf.open(info) as fh:
-        return np.lib.format.read_array(fh, allow_pickle=False)
-
-
-def load_arrays(root: str, entry: str, shown: str) -> dict:
-    """The arrays of an NPZ file of the export, read without unpickling; messages start with ``shown``."""
-    with open_confined(root, entry, shown) as fh:
-        if fh.read(4) not in (b"PK\x03\x04", b"PK\x05\x06"):
-            raise ValueError(f"{shown}: expected an NPZ archive, got a file that is not one")
-        fh.seek(0)
-        try:
-            arrays = {}
-            with zipfile.ZipFile(fh) as zf:
-                for info in zf.infolist():
-                    if not info.filename.endswith(".npy") or info.filename[:-4] in arrays:
-                        raise _Refused("a member that is not a .npy array, or one repeated")
-                    arrays[info.filename[:-4]] = _read_member(zf, info)
-        except _Refused as exc:
-            raise ValueError(f"{shown}: expected an NPZ archive of numeric arrays, "
-                             f"got {exc}") from None
-        except _READ_ERRORS as exc:  # their messages may quote the file's bytes: name the kind only
-            raise ValueError(f"{shown}: expected an NPZ archive written by 'library export', "
-                             f"got one that cannot be read ({type(exc).__name__})") from None
-    return arrays
+        number = float(value)
+    except (TypeError, ValueError):
+        number = float("nan")
+    if isinstance(value, bool) or not np.isfinite(number) or number < 1 or number != int(number):
+        raise ValueError(f"{where}: expected a whole number of bytes >= 1 (e.g. 4e9), got {value!r}"[:200])
+    return int(number)
 
 
 def _demo(arrays: dict, d: dict, shown: str) -> Demonstration:
@@ -423,10 +365,6 @@ def _version_arrays(arrays: dict, v: dict, primitives: set, shown: str) -> dict:
     centers = _floats(arrays, "centers", 2, shown)
     mean = _floats(arrays, "pca_mean", 1, shown)
     comps = _floats(arrays, "pca_components", 2, shown)
-    n, d = v["n_clusters"], comps.shape[0]
-    if centers.shape != (n, d) or comps.shape[1] != mean.shape[0] or d == 0:
-        raise ValueError(f"{shown}: expected centers ({n}, d), pca_components (d, f) and pca_mean "
-                         f"(f,) with d >= 1, got shapes {centers.shape}, {comps.shape} and {mean.shape}")
     m = arrays["member_ids"].shape
     if len(m) != 1:
         raise ValueError(f"{shown}: expected 'member_ids' as a 1-D array, got shape {m}")
@@ -434,33 +372,46 @@ def _version_arrays(arrays: dict, v: dict, primitives: set, shown: str) -> dict:
     clusters = _integers(arrays, "member_clusters", m, shown)
     features = _floats(arrays, "member_features", 2, shown)
     assigned = arrays["member_assigned"]
+    d = comps.shape[0]
     if features.shape != (m[0], d) or assigned.shape != m or assigned.dtype.kind != "U":
         raise ValueError(f"{shown}: expected member_features of shape {(m[0], d)} and "
                          f"member_assigned as {m[0]} strings, got shapes {features.shape} and "
                          f"{assigned.shape}")
-    ids, clusters, assigned = ids.tolist(), clusters.tolist(), assigned.tolist()
-    for name, expected, bad in (
-            ("member_ids", "ids of primitives the manifest lists", [i for i in ids if i not in primitives]),
-            ("member_clusters", f"clusters in 0..{n - 1}", [c for c in clusters if not 0 <= c < n]),
-            ("member_assigned", f"values in {list(_ASSIGNED)}", [a for a in assigned if a not in _ASSIGNED])):
-        if bad:  # a bad member_assigned string is file content: counted, not quoted
-            first = f" (first {bad[0]})" if name != "member_assigned" else ""
-            raise ValueError(f"{shown}: expected {name} to hold {expected}, got {len(bad)} that do "
-                             f"not{first}")
-    if len(set(ids)) != len(ids):
-        raise ValueError(f"{shown}: expected member_ids to be unique, got a primitive twice")
-    return {"centers": centers, "pca_mean": mean, "pca_components": comps, "member_ids": ids,
-            "member_clusters": clusters, "member_features": features, "member_assigned": assigned}
+    out = {"centers": centers, "pca_mean": mean, "pca_components": comps, "member_ids": ids.tolist(),
+           "member_clusters": clusters.tolist(), "member_features": features,
+           "member_assigned": assigned.tolist()}
+    check_version_record({**v, "arrays": out}, primitives, shown)  # what a copy checks too
+    return out
 
 
-def read_export(folder) -> dict:
+def _read_again(root, d, shown, identity) -> Demonstration:
+    """A demonstration of the export read again for the import's transaction: the very file checked."""
+    demo = _demo(load_arrays(root, d["file"], shown, identity), d, shown)
+    if content_hash(demo) != d["hash"]:
+        raise ValueError(f"{shown}: expected a file that stays put, got one changed while being imported")
+    return demo
+
+
+def read_export(folder, *, max_bytes=None) -> dict:
     """Read and check everything in an exported folder, changing nothing.
+
+    Parameters
+    ----------
+    folder : path-like
+    max_bytes : int, optional
+        The most bytes the export's arrays may take once decompressed, all
+        NPZ files together (default :func:`max_import_bytes`: 1 GiB, or
+        ``$SKILLBANK_MAX_IMPORT_BYTES``). Measured from the archives'
+        directories and headers before any array is read.
 
     Returns
     -------
     dict
         The normalised manifest (:func:`check_manifest`) with each
-        demonstration's ``"demo"`` (a Demonstration) and each version's
+        demonstration's ``"n_steps"``, ``"hash"`` (its :func:`content_hash`)
+        and ``"read"`` (a function returning it as a Demonstration, read
+        again and checked to be the file measured, so an import holds one
+        demonstration at a time, not the export) and each version's
         ``"arrays"`` (``centers``, ``pca_mean``, ``pca_components``,
         ``member_ids``, ``member_clusters``, ``member_features``,
         ``member_assigned``).
@@ -468,6 +419,7 @@ def read_export(folder) -> dict:
     Raises a one-line ValueError naming the folder or the manifest entry,
     never quoting a file's contents.
     """
+    bound = max_import_bytes(max_bytes)
     root = os.path.realpath(os.fspath(folder))
     if not os.path.isdir(root):
         raise ValueError(f"folder: expected a folder written by 'library export', got {str(folder)!r}, "
@@ -479,11 +431,35 @@ def read_export(folder) -> dict:
     if len(data) > MAX_MANIFEST_BYTES:
         raise ValueError(f"{MANIFEST}: expected at most {MAX_MANIFEST_BYTES} bytes, got a larger file")
     doc = check_manifest(parse_manifest(data))
+    entries = [(d, f"{d['where']}.file") for d in doc["demonstrations"]] + \
+              [(v, f"{v['where']}.file") for v in doc["versions"]]
+    # Measured first, all of it: the bound is known to hold before a single array is decompressed.
+    total, named, identity = 0, {}, {}
+    for item, where in entries:
+        shown = _shown(where, item["file"])
+        real = os.path.realpath(os.path.join(root, item["file"]))
+        if real in named:  # an export writes one file per entry; a shared one would be read again each time
+            raise ValueError(f"{shown}: expected a file no other entry names (an export writes one per "
+                             f"demonstration and version), got the file of {named[real]}")
+        named[real] = where
+        size, identity[where] = measure_npz(root, item["file"], shown)
+        total += size
+        if total > bound:
+            raise ValueError(f"folder: expected an export whose arrays take at most {bound} bytes once "
+                             f"decompressed (the import's bound), got at least {total} by {where}; if the "
+                             "export is trusted and memory allows, raise the bound with --max-bytes (Python: "
+                             "max_bytes=) or SKILLBANK_MAX_IMPORT_BYTES")
     for d in doc["demonstrations"]:
-        shown = _shown(f"{d['where']}.file", d["file"])
-        d["demo"] = _demo(load_arrays(root, d["file"], shown), d, shown)
+        where = f"{d['where']}.file"
+        shown = _shown(where, d["file"])
+        demo = _demo(load_arrays(root, d["file"], shown, identity[where]), d, shown)
+        check_demonstration_record({**d, "demo": demo}, f"{MANIFEST} {d['where']}")  # as a copy checks
+        d.update(n_steps=demo.n_steps, hash=content_hash(demo),
+                 read=functools.partial(_read_again, root, d, shown, identity[where]))
     primitives = {p["id"] for d in doc["demonstrations"] for p in d["primitives"]}
     for v in doc["versions"]:
-        shown = _shown(f"{v['where']}.file", v["file"])
-        v["arrays"] = _version_arrays(load_arrays(root, v["file"], shown), v, primitives, shown)
+        where = f"{v['where']}.file"
+        shown = _shown(where, v["file"])
+        v["arrays"] = _version_arrays(load_arrays(root, v["file"], shown, identity[where]), v, primitives,
+                                      shown)
     return doc

@@ -14,11 +14,12 @@ import contextlib
 
 from ..core import Demonstration
 from ._arrays import from_json, from_npy, to_json, to_npy
+from ._rows import damaged
 from ._schema import now
 from ._transfer import COUNTED, current_descriptions, demonstration_record, version_record
 
 __all__ = ["encode", "insert", "load_demonstrations", "primitive_demo", "chunks", "placeholders",
-           "SQLRecords"]
+           "SQLRecords", "stored_array", "stored_json", "orphan_check", "remedy"]
 
 _CHUNK = 500  # ids per IN (...) query (well under SQLite's variable limit), and demonstrations read at a time
 
@@ -105,23 +106,79 @@ def insert(db, encoded: list, *, demo_ids=None, primitive_ids=None) -> list:
     return out
 
 
+def remedy(location: str, did=None) -> str:
+    """What to do about a damaged row: a demonstration's can be removed, anything else restored."""
+    if did is None:
+        return "restore it from a backup"
+    return (f"remove demonstration {did} ('skillbank library remove {location} {did}') or restore the "
+            "library from a backup")
+
+
+def stored_array(db, blob, row: str, did=None):
+    """A stored ``.npy`` blob decoded; a damaged one is one line naming the library and ``row``."""
+    try:
+        return from_npy(blob)
+    except ValueError as exc:
+        raise damaged(db.store.location, row, str(exc), remedy(db.store.location, did)) from None
+
+
+def stored_json(db, text, row: str, did=None):
+    """Stored JSON text parsed; a damaged one is one line naming the library and ``row``."""
+    try:
+        return from_json(text)
+    except (ValueError, TypeError, RecursionError):  # what the text holds is not quoted
+        raise damaged(db.store.location, row, "expected JSON text, got text that is not",
+                      remedy(db.store.location, did)) from None
+
+
+def orphan_check(db) -> None:
+    """One line naming the first primitive whose demonstration the library lacks (foreign keys were off)."""
+    row = db.execute("SELECT p.id, p.demonstration_id FROM primitives p LEFT JOIN demonstrations d "
+                     "ON d.id = p.demonstration_id WHERE d.id IS NULL ORDER BY p.id LIMIT 1").fetchone()
+    if row is not None:
+        raise damaged(db.store.location, f"primitive {row[0]}",
+                      f"expected its demonstration {row[1]}, got none (an orphan primitive)")
+
+
 def load_demonstrations(db, ids) -> dict:
-    """Demonstrations by id, streams in their stored order; ValueError naming a missing one."""
+    """Demonstrations by id, streams in their stored order; ValueError naming a missing one.
+
+    A damaged row (a blob that is not ``.npy``, a header declaring more than
+    the blob holds, a stored ``n_steps`` other than its ``t``'s, arrays that
+    make no demonstration) is one line naming the library and the row.
+    """
     ids = sorted({int(i) for i in ids})
     rows, streams = {}, {}
     for part in chunks(ids):
         q = placeholders(len(part))
-        for did, t, meta in db.execute(f"SELECT id, t, metadata FROM demonstrations WHERE id IN ({q})",
-                                       part).fetchall():
-            rows[did] = (from_npy(t), from_json(meta))
+        for did, n, t, meta in db.execute(
+                f"SELECT id, n_steps, t, metadata FROM demonstrations WHERE id IN ({q})", part).fetchall():
+            t = stored_array(db, t, f"demonstration {did} (its t)", did)
+            if n != len(t):
+                raise damaged(db.store.location, f"demonstration {did}", f"expected n_steps {len(t)} (the "
+                              f"samples of its t), got {n!r}"[:200], remedy(db.store.location, did))
+            meta = stored_json(db, meta, f"demonstration {did} (its metadata)", did)
+            if not isinstance(meta, dict):
+                raise damaged(db.store.location, f"demonstration {did} (its metadata)", "expected a JSON "
+                              f"object, got a JSON {type(meta).__name__}", remedy(db.store.location, did))
+            rows[did] = (t, meta)
         for did, name, data in db.execute(
                 f"SELECT demonstration_id, name, data FROM streams WHERE demonstration_id IN ({q}) "
                 "ORDER BY demonstration_id, position", part).fetchall():
-            streams.setdefault(did, {})[name] = from_npy(data)
+            streams.setdefault(did, {})[name] = stored_array(db, data, f"demonstration {did} (stream "
+                                                             f"{str(name)[:40]!r})", did)
     missing = [i for i in ids if i not in rows]
     if missing:
         raise ValueError(f"demonstration: no demonstration with id {missing[0]} in the library")
-    return {did: Demonstration(t, streams.get(did, {}), meta) for did, (t, meta) in rows.items()}
+    out = {}
+    for did, (t, meta) in rows.items():
+        try:
+            out[did] = Demonstration(t, streams.get(did, {}), meta)
+        except ValueError as exc:  # keep the argument and the expectation, not the values it quotes
+            raise damaged(db.store.location, f"demonstration {did}", "expected a valid demonstration, got "
+                          f"one failing {str(exc).split(', got', 1)[0][:120]}",
+                          remedy(db.store.location, did)) from None
+    return out
 
 
 def primitive_demo(parent: Demonstration, pid: int, did: int, start: int, stop: int) -> Demonstration:
@@ -166,16 +223,19 @@ class SQLRecords:
     def demonstrations(self) -> tuple:
         """``(count, iterator of demonstration records by id)``, read one at a time."""
         db = self.db
-        rows = db.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created "
+        orphan_check(db)  # a primitive without its demonstration would be left out unseen
+        rows = db.execute("SELECT d.id, d.source, d.created, p.kind, p.params, p.created, d.n_steps "
                           "FROM demonstrations d LEFT JOIN provenance p ON p.id = d.provenance_id "
                           "ORDER BY d.id").fetchall()
 
         def records():
-            for did, source, created, kind, params, p_created in rows:
+            for did, source, created, kind, params, p_created, n in rows:
                 prims = db.execute("SELECT id, start, stop, label FROM primitives "
                                    "WHERE demonstration_id = ? ORDER BY id", (did,)).fetchall()
+                params = None if kind is None else to_json(stored_json(db, params, f"demonstration {did} "
+                                                                       "(its provenance)", did))
                 yield demonstration_record(did, source, created, (kind, params, p_created), prims,
-                                           load_demonstrations(db, [did])[did])
+                                           load_demonstrations(db, [did])[did], n)
 
         return len(rows), records()
 
@@ -189,7 +249,13 @@ class SQLRecords:
                                  "WHERE version = ? ORDER BY primitive_id", (v,)).fetchall()
             labels = db.execute("SELECT cluster, label FROM cluster_labels WHERE version = ? "
                                 "ORDER BY cluster", (v,)).fetchall()
-            yield version_record(v, created, params, n, (centers, mean, comps), members, labels)
+            row = f"clustering version {v}"
+            arrays = [stored_array(db, b, f"{row} (its {name})")
+                      for b, name in ((centers, "centers"), (mean, "pca_mean"), (comps, "pca_components"))]
+            members = [(p, c, stored_array(db, f, f"{row} member {p} (its features)"), s)
+                       for p, c, f, s in members]
+            yield version_record(v, created, to_json(stored_json(db, params, f"{row} (its params)")), n,
+                                 arrays, members, labels)
 
     def lengths(self, n_steps):
         """``{id: Demonstration}`` chunks of the stored demonstrations with one of the lengths ``n_steps``."""

@@ -34,10 +34,20 @@ from abc import abstractmethod
 import numpy as np
 
 from ..core._validation import check_id
-from ._arrays import from_json, from_npy, to_json, to_npy
+from ._arrays import from_json, to_json, to_npy
 from ._base import Primitive, Store, check_description, check_items
 from ._manifest import read_export
-from ._records import SQLRecords, encode, insert, load_demonstrations, primitive_demo
+from ._records import (
+    SQLRecords,
+    encode,
+    insert,
+    load_demonstrations,
+    primitive_demo,
+    remedy,
+    stored_array,
+    stored_json,
+)
+from ._rows import damaged
 from ._schema import now
 from ._transfer import import_records, write_export
 
@@ -232,18 +242,33 @@ class SQLStore(Store):
         where = " AND ".join(sql for sql, _ in given) or "1 = 1"
         with self._read() as db:
             version = self._current(db)
+            # LEFT JOIN: a primitive whose demonstration is gone (a damaged library) is named, not hidden
             rows = db.execute(
                 "SELECT p.id, p.demonstration_id, p.start, p.stop, m.cluster, COALESCE(p.label, l.label), "
-                "m.features FROM primitives p JOIN demonstrations d ON d.id = p.demonstration_id "
+                "m.features, d.id, d.n_steps FROM primitives p LEFT JOIN demonstrations d "
+                "ON d.id = p.demonstration_id "
                 "LEFT JOIN cluster_members m ON m.primitive_id = p.id AND m.version = ? "
                 "LEFT JOIN cluster_labels l ON l.version = m.version AND l.cluster = m.cluster "
                 f"WHERE {where} ORDER BY p.id",  # noqa: S608 - fixed clauses; every value is a parameter
                 [-1 if version is None else version, *(value for _, value in given)]).fetchall()
+            for pid, did, a, b, *_, found, n in rows:
+                if found is None:
+                    raise damaged(self.location, f"primitive {pid}",
+                                  f"expected its demonstration {did}, got none (an orphan primitive)")
+                if not isinstance(n, int) or n < 1:
+                    raise damaged(self.location, f"demonstration {did}",
+                                  f"expected n_steps >= 1, got {n!r}"[:200], remedy(self.location, did))
+                if not (isinstance(a, int) and isinstance(b, int) and 0 <= a < b <= n):
+                    raise damaged(self.location, f"primitive {pid}", f"expected 0 <= start < stop <= {n} "
+                                  f"(the samples of demonstration {did}), got start {a}, stop {b}",
+                                  remedy(self.location, did))
             parents = load_demonstrations(db, {r[1] for r in rows}) if load and rows else {}
+            feats = {r[0]: None if r[6] is None else
+                     stored_array(db, r[6], f"clustering version {version} member {r[0]} (its features)")
+                     for r in rows}
         return [Primitive(pid, did, a, b, c, lab,
-                          primitive_demo(parents[did], pid, did, a, b) if load else None,
-                          None if feats is None else from_npy(feats))
-                for pid, did, a, b, c, lab, feats in rows]
+                          primitive_demo(parents[did], pid, did, a, b) if load else None, feats[pid])
+                for pid, did, a, b, c, lab, *_ in rows]
 
     # -- clustering versions and labels -----------------------------------------------------------
     @staticmethod
@@ -254,14 +279,19 @@ class SQLStore(Store):
         return self._rows("SELECT MAX(version) FROM cluster_versions")[0][0]
 
     def version(self, version) -> dict:
-        rows = self._rows("SELECT params, n_clusters, centers, pca_mean, pca_components, created "
-                          "FROM cluster_versions WHERE version = ?", (check_id(version, name="version"),))
-        if not rows:
-            raise ValueError(f"version: no clustering version {version} in the library")
-        params, n, centers, mean, comps, created = rows[0]
-        return {"version": int(version), "params": from_json(params), "n_clusters": int(n),
-                "centers": from_npy(centers), "pca_mean": from_npy(mean), "pca_components": from_npy(comps),
-                "created": created}
+        with self._read() as db:
+            rows = db.execute("SELECT params, n_clusters, centers, pca_mean, pca_components, created "
+                              "FROM cluster_versions WHERE version = ?",
+                              (check_id(version, name="version"),)).fetchall()
+            if not rows:
+                raise ValueError(f"version: no clustering version {version} in the library")
+            params, n, centers, mean, comps, created = rows[0]
+            row = f"clustering version {int(version)}"
+            return {"version": int(version), "params": stored_json(db, params, f"{row} (its params)"),
+                    "n_clusters": int(n), "centers": stored_array(db, centers, f"{row} (its centers)"),
+                    "pca_mean": stored_array(db, mean, f"{row} (its pca_mean)"),
+                    "pca_components": stored_array(db, comps, f"{row} (its pca_components)"),
+                    "created": created}
 
     def versions(self) -> list:
         rows = self._rows("SELECT version, created, n_clusters, params FROM cluster_versions "
@@ -346,6 +376,6 @@ class SQLStore(Store):
     def export(self, folder, *, progress=None):
         return write_export(self.records(), folder, progress=progress)
 
-    def import_folder(self, folder) -> dict:
+    def import_folder(self, folder, *, max_bytes=None) -> dict:
         self._check_writable("import")  # before the folder is read
-        return import_records(self.records(), read_export(folder))
+        return import_records(self.records(), read_export(folder, max_bytes=max_bytes))

@@ -13,16 +13,17 @@ every pair of them.
 
 from __future__ import annotations
 
-import hashlib
+import contextlib
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
 
-from ..core import Demonstration
 from ..io import write_npz
-from ._arrays import from_json, from_npy, to_json
+from ._arrays import content_hash, from_json
 from ._manifest import FORMAT, MANIFEST
+from ._rows import MAX_ID, check_demonstration_record, check_version_record
 from ._schema import SCHEMA_VERSION, now
 
 __all__ = ["write_export", "import_records", "copy_library", "records_of", "content_hash", "MANIFEST",
@@ -79,10 +80,11 @@ def _merge_descriptions(records, imported, *, copy: bool) -> dict:
     return {d["label"]: d["revision"] for d in new}
 
 
-def demonstration_record(did, source, created, provenance, primitives, demo) -> dict:
-    """A demonstration record from rows: ``provenance`` is ``(kind, params JSON, created)``."""
+def demonstration_record(did, source, created, provenance, primitives, demo, n_steps=None) -> dict:
+    """A demonstration record from rows: ``provenance`` is ``(kind, params JSON, created)``; ``n_steps``
+    the sample count its row stores (checked against ``demo`` before a copy or export writes it)."""
     kind, params, p_created = provenance
-    return {"id": int(did), "source": source, "created": created, "demo": demo,
+    return {"id": int(did), "source": source, "created": created, "demo": demo, "n_steps": n_steps,
             "provenance": None if kind is None else {"kind": kind, "params": from_json(params),
                                                      "created": p_created},
             "primitives": [{"id": int(i), "start": int(a), "stop": int(b), "label": lab}
@@ -90,16 +92,40 @@ def demonstration_record(did, source, created, provenance, primitives, demo) -> 
 
 
 def version_record(version, created, params, n_clusters, arrays, members, labels) -> dict:
-    """A version record from rows: ``arrays`` the ``.npy`` bytes of centres, PCA mean and components;
-    ``members`` ``(primitive id, cluster, features .npy, assigned)``; ``labels`` ``(cluster, label)``."""
-    centers, mean, comps = (from_npy(b) for b in arrays)
+    """A version record from rows: ``arrays`` the centres, PCA mean and components (decoded);
+    ``members`` ``(primitive id, cluster, features, assigned)``; ``labels`` ``(cluster, label)``."""
+    centers, mean, comps = arrays
     return {"version": int(version), "created": created, "params": from_json(params),
             "n_clusters": int(n_clusters), "labels": [(int(c), lab) for c, lab in labels],
             "arrays": {"centers": centers, "pca_mean": mean, "pca_components": comps,
                        "member_ids": [int(m[0]) for m in members],
                        "member_clusters": [int(m[1]) for m in members],
-                       "member_features": [from_npy(m[2]) for m in members],
+                       "member_features": [m[2] for m in members],
                        "member_assigned": [m[3] for m in members]}}
+
+
+@contextlib.contextmanager
+def _checked(location: str, what: str):
+    """A row validator's ValueError as one line: which library is damaged, and what to do."""
+    try:
+        yield
+    except ValueError as exc:
+        if " is damaged: " in str(exc):
+            raise
+        raise ValueError(f"library {location!r} is damaged: {exc}; {what}; restore it from a backup"
+                         ) from None
+
+
+def check_source_demonstration(location: str, d: dict, what: str) -> None:
+    """A stored demonstration record checked as an import checks one (:mod:`skillbank.store._rows`)."""
+    with _checked(location, what):
+        check_demonstration_record(d, f"demonstration {d['id']}", n_steps=d.get("n_steps"))
+
+
+def check_source_version(location: str, v: dict, primitives, what: str) -> None:
+    """A stored clustering version record checked as an import checks one."""
+    with _checked(location, what):
+        check_version_record(v, primitives, f"clustering version {v['version']}")
 
 
 def records_of(store):
@@ -118,8 +144,12 @@ def write_export(records, folder, *, progress=None) -> Path:
     see :func:`skillbank.io.write_npz`), ``versions/version_<n>.npz`` (centres,
     PCA arrays, members, their clusters and features) and ``manifest.json``
     (everything else). Read in one snapshot (``records.snapshot()``), so it is
-    consistent even while other processes write. ``progress``, when given, is
-    called as ``progress(done, total)`` with the demonstrations written so far.
+    consistent even while other processes write. Every record is checked as
+    an import would check it (:mod:`skillbank.store._rows`), so a damaged
+    library gives one line instead of an export that cannot be imported; a
+    failed export leaves nothing in ``folder`` (nor ``folder`` itself when it
+    was new). ``progress``, when given, is called as ``progress(done, total)``
+    with the demonstrations written so far.
 
     Returns
     -------
@@ -131,6 +161,20 @@ def write_export(records, folder, *, progress=None) -> Path:
         raise ValueError(f"folder: expected a folder, got the file {str(folder)!r}")
     if folder.is_dir() and any(folder.iterdir()):
         raise ValueError(f"folder: expected a new or empty folder, {str(folder)!r} is not empty")
+    created = not folder.exists()
+    try:
+        return _write_export(records, folder, progress)
+    except BaseException:  # nothing half-written: the folder was new or empty, so all in it is ours
+        if created:
+            shutil.rmtree(folder, ignore_errors=True)
+        else:
+            for part in folder.iterdir():
+                shutil.rmtree(part, ignore_errors=True) if part.is_dir() else part.unlink(missing_ok=True)
+        raise
+
+
+def _write_export(records, folder: Path, progress) -> Path:
+    location, what = getattr(getattr(records, "store", None), "location", "?"), "nothing was exported"
     (folder / "demonstrations").mkdir(parents=True, exist_ok=True)
     (folder / "versions").mkdir(exist_ok=True)
     demos_doc, versions_doc = [], []
@@ -138,7 +182,10 @@ def write_export(records, folder, *, progress=None) -> Path:
         total, demos = records.demonstrations()
         if progress is not None:
             progress(0, total)
+        primitives = set()
         for done, d in enumerate(demos, 1):
+            check_source_demonstration(location, d, what)  # what an import would refuse is not written
+            primitives.update(p["id"] for p in d["primitives"])
             name = f"demonstrations/demo_{d['id']:06d}.npz"
             write_npz(d["demo"], folder / name)
             demos_doc.append({"id": d["id"], "file": name, "source": d["source"], "created": d["created"],
@@ -146,6 +193,7 @@ def write_export(records, folder, *, progress=None) -> Path:
             if progress is not None:
                 progress(done, total)
         for v in records.versions():
+            check_source_version(location, v, primitives, what)
             a = v["arrays"]
             feats, m = a["member_features"], len(a["member_ids"])
             width = feats[0].shape[0] if m else a["pca_components"].shape[0]
@@ -167,36 +215,6 @@ def write_export(records, folder, *, progress=None) -> Path:
     path = folder / MANIFEST
     path.write_text(json.dumps(manifest, indent=1, allow_nan=False))
     return path
-
-
-def content_hash(demo: Demonstration) -> str:
-    """SHA-256 over ``t``, every stream (name, dtype, shape, bytes, in order) and the metadata JSON.
-
-    Two demonstrations with the same hash hold the same samples, streams and
-    metadata; ``library import`` uses it to skip what a library already holds.
-
-    Examples
-    --------
-    >>> a = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 1})
-    >>> b = Demonstration(np.arange(3.0), {"position": np.zeros((3, 2))}, {"user": 2})
-    >>> content_hash(a) == content_hash(Demonstration(a.t, dict(a.streams), {"user": 1}))
-    True
-    >>> content_hash(a) == content_hash(b)
-    False
-    """
-    h = hashlib.sha256()
-
-    def field(data: bytes) -> None:  # length-prefixed, so field boundaries cannot be shifted
-        h.update(len(data).to_bytes(8, "little"))
-        h.update(data)
-
-    for name, arr in (("t", demo.t), *demo.streams.items()):
-        arr = np.ascontiguousarray(arr)
-        field(name.encode("utf-8"))
-        field(f"{arr.dtype.str} {arr.shape}".encode())
-        field(arr.tobytes())
-    field(to_json(demo.metadata).encode("utf-8"))
-    return h.hexdigest()
 
 
 def _existing_hashes(records, n_steps) -> dict:
@@ -228,18 +246,20 @@ def import_records(records, doc) -> dict:
         "primitives": {old: new}, "versions": {old: new},
         "skipped": {old demonstration id: id of the copy already stored}}``.
     """
-    hashes = {d["id"]: content_hash(d["demo"]) for d in doc["demonstrations"]}
+    hashes = {d["id"]: d["hash"] for d in doc["demonstrations"]}
     maps = {"mode": "copy", "demonstrations": {}, "primitives": {}, "versions": {}, "skipped": {}}
     with records.writing():
         empty = sum(records.counts()) == 0
-        lengths = [d["demo"].n_steps for d in doc["demonstrations"]]
+        lengths = [d["n_steps"] for d in doc["demonstrations"]]
         stored = {} if empty else _existing_hashes(records, lengths)
         maps["mode"] = "copy" if empty else "merge"
         for d in doc["demonstrations"]:
             if hashes[d["id"]] in stored:
                 maps["skipped"][d["id"]] = stored[hashes[d["id"]]]
                 continue
-            did, prims = records.insert_demonstration(d, keep_id=empty)
+            # read again here, one at a time (checked to be what was measured and hashed): memory holds
+            # one demonstration, not the export
+            did, prims = records.insert_demonstration(dict(d, demo=d["read"]()), keep_id=empty)
             maps["demonstrations"][d["id"]] = did
             maps["primitives"].update(prims)
         for v in doc["versions"] if empty else ():
@@ -259,7 +279,12 @@ def copy_library(source, destination, *, progress=None) -> dict:
     provenance), primitive (range, own label), clustering version (params,
     arrays, members with their features and how they joined, cluster
     labels) and the id counters are copied, so the next demonstration added
-    to either gets the same id.
+    to either gets the same id. Every row is checked as an import checks it
+    (:mod:`skillbank.store._rows`: sample counts, bounds inside their
+    demonstration, array shapes, finite values, ids and counters in
+    ``0..2^53 - 1``), and a damaged source (also a blob that is not ``.npy``
+    or an orphan primitive) raises one line naming the library and the row;
+    the destination stays empty.
 
     Parameters
     ----------
@@ -277,11 +302,13 @@ def copy_library(source, destination, *, progress=None) -> dict:
     ------
     ValueError
         When ``destination`` already holds demonstrations or clustering
-        versions (nothing is written; to merge, export and import).
+        versions (nothing is written; to merge, export and import), or when
+        ``source`` is damaged.
 
     Examples
     --------
     >>> import os, tempfile
+    >>> from skillbank import Demonstration
     >>> from skillbank.store import open_store
     >>> folder = tempfile.mkdtemp()
     >>> t = np.linspace(0.0, 1.0, 20)
@@ -302,8 +329,9 @@ def copy_library(source, destination, *, progress=None) -> dict:
         total, demos = src.demonstrations()
         if progress is not None:
             progress(0, total)
-        primitives = {}
+        primitives, where, what = {}, source.location, "nothing was copied"
         for done, d in enumerate(demos, 1):
+            check_source_demonstration(where, d, what)  # rows an import would refuse are not copied either
             _, prims = dst.insert_demonstration(d, keep_id=True)
             primitives.update(prims)
             counts["demonstrations"] = done
@@ -311,9 +339,15 @@ def copy_library(source, destination, *, progress=None) -> dict:
                 progress(done, total)
         counts["primitives"] = len(primitives)
         for v in src.versions():
+            check_source_version(where, v, primitives, what)
             dst.insert_version(v, primitives)
             counts["versions"] += 1
         described = getattr(src, "descriptions", None)
         _merge_descriptions(dst, described(history=True) if callable(described) else [], copy=True)
-        dst.set_counters(src.counters())
+        counters = src.counters()
+        for table, last in counters.items():  # the copy's next add numbers on from them
+            if not 0 <= int(last) <= MAX_ID:
+                raise ValueError(f"library {where!r} is damaged: its {table} id counter: expected an id in "
+                                 f"0..{MAX_ID} (2^53 - 1), got {last}; {what}; restore it from a backup")
+        dst.set_counters(counters)
     return counts

@@ -26,8 +26,8 @@ from skillbank.cli import _main
 from skillbank.io import write_npz
 from skillbank.store import SQLiteStore
 from skillbank.store import _manifest as manifest_module
+from skillbank.store._arrays import content_hash
 from skillbank.store._manifest import check_manifest, json_depth
-from skillbank.store._transfer import content_hash
 
 SECRET = "TOPSECRET-7f3a-do-not-print"
 
@@ -204,7 +204,7 @@ PATHS = [
                                         _set(D0 + ("file",), "elsewhere/secret.npz")), "leads outside"),
     ("symlink to inside folder", _then(_symlink(lambda f, o: f / "demonstrations", "dirlink"),
                                        _set(D0 + ("file",), "dirlink")),
-     r"demonstrations\[0\]\.file 'dirlink': expected a regular file, got a folder"),
+     r"demonstrations\[0\]\.file 'dirlink': expected a regular file, got a path through a symbolic link"),
     ("folder", _set(D0 + ("file",), "demonstrations"), "expected a regular file, got a folder"),
     ("export folder itself", _set(D0 + ("file",), "."), "expected a regular file, got a folder"),
     ("fifo", _then(_fifo("demonstrations/pipe.npz"), _set(D0 + ("file",), "demonstrations/pipe.npz")),
@@ -225,13 +225,13 @@ PATHS = [
      r"got one that cannot be read \(BadZipFile\)"),
     ("pickled array", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(
         t=np.linspace(0, 1, 40), position=np.array([{"x": SECRET}] * 40, dtype=object))),
-     "an array of Python objects, which are never unpickled"),
+     r"an array of Python objects: not a numeric \.npy array \(never unpickled\)"),
     ("text stream", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(
         t=np.linspace(0, 1, 40), position=np.array([SECRET] * 40))),
      "expected numeric arrays, got a text array"),
     ("header promises more", lambda doc, folder, outside: _crafted_npy_zip(
         folder / "demonstrations" / "demo_000001.npz", (10 ** 12,), 16),
-     "an array header promising more data than its member holds"),
+     "an array header declaring 8000000000000 bytes of data, while its member holds 16$"),
     ("no t", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(position=np.zeros((40, 2)))),
      "expected an array 't', got none"),
     ("t not increasing", _write("demonstrations/demo_000001.npz", lambda o: _npz_bytes(
@@ -278,8 +278,16 @@ SCHEMA = [
      "got integer 0"),
     ("start a float", _set(P0 + ("start",), 1.5), "start: expected an integer >= 0, got number 1.5"),
     ("id too large for SQLite", _set(D0 + ("id",), 2 ** 63),
-     r"demonstrations\[0\]\.id: expected an integer in 1\.\.9223372036854775807, "
+     r"demonstrations\[0\]\.id: expected an integer in 1\.\.9007199254740991, "
      "got integer 9223372036854775808"),
+    # an id a store holds, but from which a later add could not number on (SQLite's overflow)
+    ("id at SQLite's largest", _set(D0 + ("id",), 2 ** 63 - 1),
+     r"demonstrations\[0\]\.id: expected an integer in 1\.\.9007199254740991, "
+     "got integer 9223372036854775807"),
+    ("primitive id past 2^53", _set(P0 + ("id",), 2 ** 53),
+     r"primitives\[0\]\.id: expected an integer in 1\.\.9007199254740991, got integer 9007199254740992"),
+    ("version past 2^53", _set(V0 + ("version",), 2 ** 53),
+     r"versions\[0\]\.version: expected an integer in"),
     ("id a string", _set(D0 + ("id",), "1"),
      r"demonstrations\[0\]\.id: expected an integer >= 1, got string"),
     ("missing id", _delete(D0 + ("id",)), r"demonstrations\[0\]: expected a key 'id', got none"),
@@ -313,8 +321,8 @@ SCHEMA = [
     ("label clusters repeated", lambda d, f, o: d["versions"][0]["labels"].append(
         {"cluster": 0, "label": "again"}) and None, r"labels\[1\]: expected a unique cluster"),
     ("members name an unlisted primitive", lambda d, f, o: d["demonstrations"].pop() and None,
-     r"versions\[0\]\.file 'versions/version_0001\.npz': expected member_ids to hold ids of primitives the "
-     r"manifest lists, got 2 that do not \(first 5\)"),
+     r"versions\[0\]\.file 'versions/version_0001\.npz': expected member_ids to hold ids of primitives "
+     r"stored with it, got 2 that do not \(first 5\)"),
     ("member cluster out of range", lambda d, f, o: _version_file(f, member_clusters=np.full(6, 2)),
      r"expected member_clusters to hold clusters in 0\.\.1, got 6 that do not \(first 2\)"),
     ("centers of another shape", lambda d, f, o: _version_file(f, centers=np.zeros((3, 2))),
@@ -395,14 +403,20 @@ def test_the_untouched_export_imports(exported, tmp_path):
                      "skipped": {1: 1, 2: 2, 3: 3}, "descriptions": {}}
 
 
-def test_a_symlink_inside_the_folder_to_a_file_inside_is_followed(exported, tmp_path):
+def test_a_symlink_even_to_a_file_inside_the_folder_is_refused(exported, tmp_path, table_rows):
+    """An export made by skillbank holds no link: one is hand-made or hostile, so it is not followed."""
     folder = tmp_path / "linked"
     shutil.copytree(exported, folder)
     os.symlink(folder / "demonstrations" / "demo_000001.npz", folder / "alias.npz")
     doc = json.loads((folder / "manifest.json").read_text())
     doc["demonstrations"][0]["file"] = "alias.npz"
     (folder / "manifest.json").write_text(json.dumps(doc))
-    assert _import(_target(tmp_path, "empty"), folder)["demonstrations"] == {1: 1, 2: 2, 3: 3}
+    db = _target(tmp_path, "empty")
+    before = table_rows(db)
+    with pytest.raises(ValueError, match=r"^manifest\.json demonstrations\[0\]\.file 'alias\.npz': "
+                                         "expected a regular file, got a path through a symbolic link"):
+        _import(db, folder)
+    assert table_rows(db) == before
 
 
 def test_a_fifo_is_refused_without_being_opened(exported, tmp_path, outside, monkeypatch):
