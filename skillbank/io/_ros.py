@@ -113,6 +113,9 @@ def _bag_errors(path):
         raise FormatError(path, "unreadable ROS bag: its records contradict each other (a consistency check "
                           "of the reader failed), so the file is corrupt; 'rosbag reindex' may repair a "
                           "copy of it") from None
+    except MemoryError:  # a record's length field claims more than memory holds: read it, not trust it
+        raise FormatError(path, "unreadable ROS bag: a record claims more bytes than this machine can hold, "
+                          "far more than the file has, so the file is corrupt") from None
 
 
 def _open(p, stack):
