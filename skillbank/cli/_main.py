@@ -7,6 +7,7 @@ import os
 import sys
 
 from ..core import __version__
+from ..io import check_output_path
 from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment
 from ._options import join_negative_values
 from ._output import error_line, escaped_stdout
@@ -66,6 +67,22 @@ def _quiet_stdout() -> None:
         pass
 
 
+#: The options that name a file or folder a command writes.
+_OUTPUTS = ("out", "plot")
+
+
+def _check_outputs(args) -> None:
+    """Refuse an output that exists and is neither a regular file nor a folder, before any work.
+
+    Writing to a FIFO blocks and writing to a device clobbers it; each writer
+    also checks (``io.atomic_output``), but only once the work is done.
+    """
+    for option in _OUTPUTS:
+        value = getattr(args, option, None)
+        if isinstance(value, (str, os.PathLike)):
+            check_output_path(value, name=option)
+
+
 def main(argv=None) -> int:
     """Entry point; returns the exit status (2 on bad input, 0 when the reader closes the pipe)."""
     try:
@@ -76,6 +93,7 @@ def main(argv=None) -> int:
             sys.stdout.flush()  # --help and --version: a closed pipe is handled below, not at exit
             raise
         try:
+            _check_outputs(args)
             with escaped_stdout():  # user-given text (labels, file names) without raw terminal escapes
                 status = int(args.func(args) or 0)
         except (ValueError, ImportError, OSError) as exc:

@@ -21,7 +21,7 @@ Examples
 ['joints', 'position', 'orientation', 'force', 'torque', 'gripper']
 """
 
-from ._confine import atomic_output, check_input_file
+from ._confine import atomic_output, check_input_file, check_output_path
 from ._detect import detect_format, load, load_all
 from ._errors import FormatError
 from ._folders import load_folder, load_positions
@@ -48,6 +48,7 @@ __all__ = [
     "FormatError",
     "check_input_file",
     "atomic_output",
+    "check_output_path",
     "read_robot_h5",
     "read_handwriting_h5",
     "read_rosbag",

@@ -21,7 +21,8 @@ from pathlib import Path, PurePosixPath, PureWindowsPath
 
 from ._errors import FormatError, file_problem, kind_of
 
-__all__ = ["check_input_file", "check_input_folder", "atomic_output", "inside", "MAX_READ_BYTES",
+__all__ = ["check_input_file", "check_input_folder", "atomic_output", "check_output_path", "inside",
+           "MAX_READ_BYTES",
            "ReadBudget", "max_read_bytes"]
 
 def check_input_file(path, *, name: str = "input") -> Path:
@@ -123,6 +124,46 @@ def _default_mode() -> int:
     return 0o666 & ~mask
 
 
+def _output_target(path, *, name: str, folder_too: bool):
+    """``(path, real path, stat or None)`` if ``path`` is new, a regular file or (``folder_too``) a folder."""
+    try:
+        p = Path(path)
+    except TypeError:
+        raise ValueError(f"{name}: expected a file path, got {type(path).__name__}") from None
+    if not str(path):
+        raise ValueError(f"{name}: expected a file path, got ''")
+    target = Path(os.path.realpath(p))
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise ValueError(f"{name}: cannot inspect {str(p)!r}: {exc.strerror or exc}") from None
+    if st is not None and not (stat.S_ISREG(st.st_mode) or (folder_too and stat.S_ISDIR(st.st_mode))):
+        wanted = "a regular file or a folder" if folder_too else "a regular file"
+        raise ValueError(f"{name}: expected {wanted} to write (or a new one), got {str(p)!r}, "
+                         f"{kind_of(st.st_mode)}; give the path of a file")
+    return p, target, st
+
+
+def check_output_path(path, *, name: str = "out") -> Path:
+    """``path`` if it is new, a regular file or a folder: never a FIFO, a device or a socket.
+
+    Commands check their outputs with it before any work, so that a bad
+    target is refused before anything is computed or written
+    (:func:`atomic_output` checks again when the file is written).
+
+    Examples
+    --------
+    >>> check_output_path("/dev/null", name="out")
+    Traceback (most recent call last):
+    ...
+    ValueError: out: expected a regular file or a folder to write (or a new one), got '/dev/null', \
+a character device; give the path of a file
+    """
+    return _output_target(path, name=name, folder_too=True)[0]
+
+
 @contextmanager
 def atomic_output(path, *, name: str = "out"):
     """Write an output file whole or not at all: yields a temporary path in the same folder.
@@ -157,22 +198,7 @@ def atomic_output(path, *, name: str = "out"):
     >>> open(out).read()
     'done'
     """
-    try:
-        p = Path(path)
-    except TypeError:
-        raise ValueError(f"{name}: expected a file path, got {type(path).__name__}") from None
-    if not str(path):
-        raise ValueError(f"{name}: expected a file path, got ''")
-    target = Path(os.path.realpath(p))
-    try:
-        st = os.stat(target)
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise ValueError(f"{name}: cannot inspect {str(p)!r}: {exc.strerror or exc}") from None
-    if st is not None and not stat.S_ISREG(st.st_mode):
-        raise ValueError(f"{name}: expected a regular file to write (or a new one), got {str(p)!r}, "
-                         f"{kind_of(st.st_mode)}; give the path of a file")
+    p, target, st = _output_target(path, name=name, folder_too=False)
     folder = target.parent
     if not folder.is_dir():
         raise ValueError(f"{name}: the folder {str(p.parent)!r} of {str(p)!r} does not exist; "

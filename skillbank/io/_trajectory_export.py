@@ -43,6 +43,7 @@ import numpy as np
 
 from ..core import Demonstration
 from ..core._validation import check_positive
+from ._confine import atomic_output
 from ._tabular import write_npz
 
 __all__ = ["TRAJECTORY_FORMATS", "write_trajectory", "trajectory_format", "trajectory_columns",
@@ -201,17 +202,16 @@ def trajectory_columns(demo: Demonstration) -> list[str]:
     return names
 
 
-def _temporary(target: Path, directory: bool = False) -> Path:
-    """A fresh hidden name next to ``target`` (same file system, so the rename is atomic).
+def _temporary_folder(target: Path) -> Path:
+    """A fresh hidden folder next to ``target`` (same file system, so the rename is atomic).
 
-    Files are then created with the user's usual permissions (``tempfile.mkstemp`` would make them 0600).
+    Its files are created with the user's usual permissions (``tempfile.mkdtemp`` would make it 0700).
     """
     parent = target.parent
     if not parent.is_dir():
         raise ValueError(f"out: folder {str(parent)!r} does not exist")
     tmp = parent / f".{target.name}.{secrets.token_hex(6)}.tmp"
-    if directory:
-        tmp.mkdir()
+    tmp.mkdir()
     return tmp
 
 
@@ -466,7 +466,7 @@ def write_trajectory(demo, path, *, format=None, rate: float = 125.0, gripper_co
         start = _check_start_time(start_time, float(demo.t[-1] - demo.t[0]))
         if target.exists():
             raise ValueError(f"out: {str(target)!r} already exists; a ROS 2 bag is written to a new folder")
-        tmp = _temporary(target, directory=True)
+        tmp = _temporary_folder(target)
         bag = tmp / "bag"
         try:
             _rosbag(demo, bag, start, str(frame_id), topics)
@@ -479,16 +479,12 @@ def write_trajectory(demo, path, *, format=None, rate: float = 125.0, gripper_co
         gain = _check_servoj(gain, "gain")
         n, _, duration = _servo_times(demo, rate)
         check_export_samples(n, f"servoj steps ({duration:.6g} s at {rate:g} Hz)")
-    tmp = _temporary(target)
-    try:  # a failure leaves the target as it was
+    # whole or not at all; a FIFO or a device at the target is refused, not replaced
+    with atomic_output(target) as tmp:
         if kind == "csv":
             _csv(demo, tmp)
         elif kind == "npz":
             write_npz(demo, tmp)
         else:
             _urscript(demo, tmp, rate, gripper_command, lookahead_time, gain)
-        os.replace(tmp, target)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return target

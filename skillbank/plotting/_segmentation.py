@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
+from ..io import atomic_output
 from ..segmentation import SegmentationResult
 
 __all__ = ["figure_path", "plot_jerk_profile", "plot_segments"]
@@ -83,7 +84,8 @@ def _save(fig: Figure, path) -> Path:
     """Write ``fig`` (parents created) and return the file written; every plotting module saves here."""
     path = figure_path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI, bbox_inches="tight")
+    with atomic_output(path, name="plot") as tmp:  # whole or not at all; never onto a FIFO or a device
+        fig.savefig(tmp, dpi=_DPI, bbox_inches="tight")
     return path
 
 

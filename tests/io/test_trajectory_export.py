@@ -257,7 +257,7 @@ def _no_rosbags(monkeypatch):
 @pytest.mark.parametrize(("change", "kwargs", "match"), [
     (None, {"format": "bag"}, r"format: expected one of \['csv', 'npz', 'urscript', 'rosbag'\], got 'bag'"),
     (None, {"path": "out.xlsx"}, r"out: expected a file name ending in .csv"),
-    (None, {"path": "missing/out.csv"}, r"out: folder '.*missing' does not exist"),
+    (None, {"path": "missing/out.csv"}, r"out: the folder '.*missing' of .* does not exist; create it first"),
     (None, {"path": "arm.script", "rate": 0}, r"rate: expected a number > 0"),
     (None, {"path": "arm.script", "rate": 1000},
      r"rate: expected servoj steps per second in \[1, 500\] Hz \(the e-Series controller runs at 500 Hz, the "
