@@ -219,7 +219,8 @@ def test_damaged_files_give_one_line_or_demonstrations(kind, originals, data):
 # JSON values a field of a metadata file may be replaced with: every JSON type, and the edges
 _LEAVES = (st.none() | st.booleans() | st.integers(-(2**70), 2**70)
            | st.sampled_from([0, -1, 10**400, 2**63 - 1]) | st.floats(allow_nan=False) | st.text(max_size=20)
-           | st.sampled_from(["../../../outside/x.parquet", "/etc/passwd", "{episode_index:>1000000000}", "3"]))
+           | st.sampled_from(["../../../outside/x.parquet", "/etc/passwd", "{episode_index:>1000000000}",
+                             "3"]))
 JSON_VALUES = (_LEAVES | st.lists(_LEAVES, max_size=3)
                | st.dictionaries(st.text(max_size=8), _LEAVES | st.lists(_LEAVES, max_size=2), max_size=3))
 
