@@ -42,7 +42,8 @@ def _saved_figures(monkeypatch) -> dict:
     saved, real = {}, Figure.savefig
 
     def spy(self, path, *args, **kwargs):
-        saved[Path(path).name] = self
+        name = Path(path).name  # figures are written to ".NAME.<random>.part.SUFFIX", then renamed NAME
+        saved[name[1:].rsplit(".part", 1)[0].rsplit(".", 1)[0] if ".part" in name else name] = self
         return real(self, path, *args, **kwargs)
 
     monkeypatch.setattr(Figure, "savefig", spy)
