@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import signal
 
@@ -13,7 +12,7 @@ from skillbank import Demonstration
 from skillbank.io import write_csv
 from skillbank.pipeline import Library
 
-_CTX = multiprocessing.get_context("fork")
+from ._processes import writer_process
 
 
 def _wave(n=200, k=1.0):
@@ -101,7 +100,7 @@ def test_primitives_left_by_an_interrupted_recluster_are_listed_and_clustered(ne
         lib.add_many(demos[:4] + demos[6:10], segment=False)
         first = lib.cluster()
         assert lib.summary()["unassigned"] == {"count": 0, "ids": []}
-    proc = _CTX.Process(target=_kill_before_recluster, args=(path, demos[4:6] + demos[10:]))
+    proc = writer_process(_kill_before_recluster, (path, demos[4:6] + demos[10:]))
     proc.start()
     proc.join(60)
     assert proc.exitcode == -signal.SIGKILL

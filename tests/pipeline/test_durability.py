@@ -7,6 +7,7 @@ import multiprocessing
 import os
 import signal
 import sqlite3
+import threading
 import time
 
 import numpy as np
@@ -15,7 +16,7 @@ import pytest
 from skillbank import Demonstration
 from skillbank.pipeline import Library
 
-_CTX = multiprocessing.get_context("fork")
+from ._processes import writer_process
 
 
 def _small_demo(worker: int, k: int) -> Demonstration:
@@ -36,8 +37,8 @@ def _writer(path, worker, n, errors):
 def test_four_processes_add_fifty_demonstrations_each(tmp_path):
     path = tmp_path / "shared.db"
     Library(path).close()
-    errors = _CTX.Queue()
-    procs = [_CTX.Process(target=_writer, args=(path, w, 50, errors)) for w in range(4)]
+    errors = multiprocessing.get_context("fork").Queue()
+    procs = [writer_process(_writer, (path, w, 50, errors)) for w in range(4)]
     for p in procs:
         p.start()
     for p in procs:
@@ -161,7 +162,7 @@ def test_process_killed_in_the_middle_of_an_add(tmp_path):
         # Closing the last connection checkpoints and deletes the WAL, so whatever the WAL holds at
         # the kill was written by this child alone.
         assert not wal.exists()
-        proc = _CTX.Process(target=_add_forever, args=(path, trial))
+        proc = writer_process(_add_forever, (path, trial))
         proc.start()
         try:
             assert _wait_for(lambda: _wal_frames(wal)[0] > 0, 30), "the child never started writing"
@@ -206,7 +207,7 @@ def test_process_killed_in_the_middle_of_an_add_on_postgres(postgres_server, pos
             return admin.execute(writing, (db,)).fetchone()[0]
 
         for trial in range(6):
-            proc = _CTX.Process(target=_add_forever, args=(postgres_url, trial))
+            proc = writer_process(_add_forever, (postgres_url, trial))
             proc.start()
             try:
                 assert _wait_for(lambda: transactions_open() > 0, 30), "the child never started writing"
@@ -340,3 +341,29 @@ def test_migrates_a_version_1_library(tmp_path):
         assert lib.primitives(demonstration=did)[0].cluster == 1
     with Library(path) as lib:  # opening again is a no-op
         assert lib.summary()["n_demonstrations"] == 2
+
+
+def _hold_the_progress_lock(ready):
+    from tqdm import tqdm
+
+    with tqdm.get_lock():
+        ready.set()
+        time.sleep(60)
+
+
+def test_a_writer_killed_while_it_holds_the_progress_lock_does_not_hang_this_process():
+    # the hang the kill tests above met once in CI-like runs: a forked child killed inside tqdm
+    from tqdm import tqdm
+
+    tqdm.get_lock()  # made here before the fork, as by any add with a progress bar, so the child inherits it
+    ready = multiprocessing.get_context("fork").Event()
+    proc = writer_process(_hold_the_progress_lock, (ready,))
+    proc.start()
+    assert ready.wait(30)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.join(10)
+    done = []
+    worker = threading.Thread(target=lambda: done.append(list(tqdm(range(3), disable=True))), daemon=True)
+    worker.start()
+    worker.join(10)
+    assert done == [[0, 1, 2]]
