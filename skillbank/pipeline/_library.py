@@ -356,7 +356,7 @@ class Library(Adding):
             prims = self.primitives(label=_check_label(skill, "skill"))
             what = f"label {skill!r}"
         elif isinstance(skill, (int, np.integer)) and not isinstance(skill, bool):
-            prims = self.primitives(cluster=int(skill))
+            prims = self.primitives(cluster=check_id(skill, name="skill"))  # a 64-bit id, else one line
             what = f"cluster {int(skill)}"
         else:
             raise ValueError(f"skill: expected a label (str) or a cluster id (int), got {skill!r}")
