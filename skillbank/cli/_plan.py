@@ -81,6 +81,8 @@ def _plan(args) -> int:
                            random_state=args.seed, progress=tick)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
+    if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
+        return _empty(args, result, scene)
     if args.out is not None:
         io.write_trajectory(result.trajectory, args.out, format=kind)
     written = [args.out] if args.out is not None else []
@@ -107,4 +109,21 @@ def _plan(args) -> int:
                     orientation=any(s.goal_orientation is not None for s in result.steps))
     for path in written:
         print(f"  wrote {path}")
+    return 0
+
+
+def _empty(args, result, scene) -> int:
+    """Report a plan of no steps (exit 0): nothing is reproduced, so --out and --plot write nothing."""
+    notes = list(result.notes)
+    asked = [f"--{name}" for name in ("out", "plot") if getattr(args, name) is not None]
+    if asked:
+        notes.append(f"{' and '.join(asked)}: nothing written (a plan of no steps has no trajectory)")
+    if args.json:
+        doc = result.to_dict()
+        doc.update(notes=notes, written=[])
+        print(json.dumps(doc, allow_nan=False))
+        return 0
+    print(f"{args.db}: plan of 0 step(s) for {len(scene.goal)} goal fact(s)")
+    for note in notes:
+        print(f"  note: {note}")
     return 0

@@ -423,7 +423,8 @@ class Library(Adding):
     def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False):
         """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
 
-        See :func:`skillbank.planning.plan_task`; ``progress`` shows a tqdm bar over the steps.
+        See :func:`skillbank.planning.plan_task`: ``scene`` is a scene file, a dict of the same content
+        or a :class:`~skillbank.planning.Scene`; ``progress`` shows a tqdm bar over the steps.
 
         Returns
         -------

@@ -1,0 +1,136 @@
+"""Planning at the edges (issue 23, items 7-9): an empty plan, start joints beyond the limits, a dict scene.
+
+Before: a goal already true in ``init`` ended in an IndexError (the planner's answer, no steps, is a
+valid one); start joints outside the robot's limits were shifted by 2π without a word; and
+``Library.plan(dict)`` raised a TypeError from ``pathlib``.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from skillbank.planning import EMPTY_PLAN, plan_task, scene_from_dict
+from skillbank.planning import _plan as plan_module
+from skillbank.planning._chain import _start_joints
+
+from .conftest import BUTTONS_DOC, DOWN, PRESS, button_scene, write_scene
+
+BUTTONS = [[0.2, 0.0, 0.0], [0.2, 0.2, 0.0]]
+
+
+def _already_pressed():
+    doc = button_scene(BUTTONS, goal=["b1"])
+    doc["init"] = ["(pressed b1)", "(free b2)"]
+    return doc
+
+
+def test_a_goal_that_holds_in_init_is_an_empty_plan(described_library):
+    res = plan_task(described_library.store, scene_from_dict(_already_pressed()))
+    assert res.plan == [] and res.steps == [] and res.trajectory is None
+    assert res.notes == [EMPTY_PLAN] and not res.collision and res.constraint_error == 0.0
+    assert "(pressed b1)" in res.problem and "(:action press" in res.domain
+    doc = res.to_dict()
+    assert (doc["plan"], doc["steps"], doc["t"], doc["streams"]) == ([], [], [], {})
+    json.dumps(doc, allow_nan=False)
+
+
+def test_cli_plan_of_a_goal_already_true_prints_zero_steps_and_writes_nothing(described_library, synthetic_db,
+                                                                               tmp_path, cli):
+    described_library.close()
+    folder = tmp_path / "task"
+    folder.mkdir()
+    scene = write_scene(folder, _already_pressed())
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--json", "--out", folder / "plan.csv",
+                         "--plot", folder / "plan.png")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["plan"] == [] and doc["steps"] == [] and doc["written"] == [] and doc["t"] == []
+    assert doc["notes"] == [EMPTY_PLAN, "--out and --plot: nothing written (a plan of no steps has no "
+                                        "trajectory)"]
+    assert sorted(p.name for p in folder.iterdir()) == ["scene.json"]
+    code, out, err = cli("plan", synthetic_db, "--scene", scene)
+    assert code == 0 and err == ""
+    head, note = out.splitlines()
+    assert head.endswith(": plan of 0 step(s) for 1 goal fact(s)") and note == f"  note: {EMPTY_PLAN}"
+
+
+def test_library_plan_takes_a_dict_a_scene_or_a_path_and_says_what_else(described_library, tmp_path):
+    from skillbank.planning import load_scene  # the same scene three ways
+
+    path = write_scene(tmp_path, BUTTONS_DOC)
+    plans = [described_library.plan(s).plan for s in (BUTTONS_DOC, load_scene(path), path, str(path))]
+    assert plans[0] == [("press", ("b1",)), ("press", ("b2",))] or plans[0] == [("press", ("b2",)),
+                                                                               ("press", ("b1",))]
+    assert all(p == plans[0] for p in plans)
+    for bad, what in ((5, "the number 5"), ([BUTTONS_DOC], "a list of 1 item"), (None, "null")):
+        with pytest.raises(ValueError, match=r"^scene: expected a Scene, a dict \(a scene's content, as in a "
+                                             rf"scene file\) or the path of a scene file, got {what}"):
+            described_library.plan(bad)
+    with pytest.raises(ValueError, match=r"^objects\['b1'\]\.type: expected a PDDL type name"):
+        described_library.plan(dict(BUTTONS_DOC, objects={"b1": {"type": 5}}))
+
+
+def test_a_domain_file_is_read_up_to_its_bound(described_library, tmp_path, monkeypatch):
+    scene = scene_from_dict(BUTTONS_DOC)
+    path = tmp_path / "d.pddl"
+    path.write_text("(define (domain d) (:requirements :strips :typing) (:types button) "
+                    "(:predicates (free ?b - button) (pressed ?b - button))" + PRESS + ")")
+    assert len(plan_task(described_library.store, scene, domain=path).plan) == 2
+    monkeypatch.setattr(plan_module, "MAX_DOMAIN_BYTES", path.stat().st_size - 1)
+    with pytest.raises(ValueError, match=rf"^domain: expected a file of at most {path.stat().st_size - 1} "
+                                         r"bytes, got a larger one"):
+        plan_task(described_library.store, scene, domain=path)
+    path.write_bytes(b"(define \xff)")
+    monkeypatch.undo()
+    with pytest.raises(ValueError, match=r"^domain '.*d\.pddl': expected UTF-8 text, got invalid start byte "
+                                         r"at byte 8$"):
+        plan_task(described_library.store, scene, domain=path)
+
+
+def test_start_joints_outside_the_limits_are_refused_and_inside_them_kept_exactly():
+    from skillbank.robots import robot_model  # the robot layer, for its limits
+
+    robot = robot_model("ur5e")
+    q = np.array([0.5, -1.2, 1.0, -1.4, 1.57, 0.0])
+    for k, value, shown in ((0, 0.5 + 2 * np.pi, r"shoulder_pan_joint = 6\.78319 rad, outside \[-2π, 2π\]"),
+                            (5, -7.0, r"wrist_3_joint = -7 rad, outside \[-2π, 2π\]"),
+                            (2, 3.5, r"elbow_joint = 3\.5 rad, outside \[-π, π\]")):
+        bad = q.copy()
+        bad[k] = value
+        with pytest.raises(ValueError, match=r"^start\.joints: expected joint angles within the limits of "
+                                             rf"robot ur5e, got {shown} \(1 joint\(s\) outside\); wrap "
+                                             r"it by a multiple of 2π into the limits if that is the "
+                                             r"configuration meant$"):
+            _start_joints(robot, bad)
+    edge = np.array([2 * np.pi, -2 * np.pi, np.pi, 0.5 - 2 * np.pi, 0.0, -2 * np.pi])
+    np.testing.assert_array_equal(_start_joints(robot, edge), edge)  # the limits themselves: kept as given
+
+
+def test_plan_refuses_start_joints_outside_the_limits_before_any_step(described_library):
+    doc = button_scene(BUTTONS, goal=["b1"], orientation=DOWN)
+    doc["start"] = {"joints": [7.0, -1.2, 1.0, -1.4, 1.57, 0.0]}
+    with pytest.raises(ValueError, match=r"^start\.joints: expected joint angles within the limits of robot "
+                                         r"ur5e, got shoulder_pan_joint = 7 rad"):
+        plan_task(described_library.store, scene_from_dict(doc), robot="ur5e")
+    doc["init"] = ["(pressed b1)"]  # refused even when there is no step to take
+    with pytest.raises(ValueError, match=r"^start\.joints: expected joint angles within the limits"):
+        plan_task(described_library.store, scene_from_dict(doc), robot="ur5e")
+
+
+def test_a_start_shifted_by_2pi_within_the_limits_is_followed_not_moved(button_library):
+    """The start the user gives is the first sample of the joint path, even 2π away from the IK's."""
+    from skillbank.robots import robot_model  # the robot layer, for the start configuration
+
+    robot = robot_model("ur5e")
+    orientation = np.array([0.038, 0.955, -0.283, 0.078]) / np.linalg.norm([0.038, 0.955, -0.283, 0.078])
+    start = robot.ik_all(np.array([[-0.356, -0.416, 0.176]]), orientation[None])[0, 0]
+    shifted = start.copy()
+    shifted[5] += 2 * np.pi if shifted[5] < 0 else -2 * np.pi
+    doc = button_scene([[-0.3, -0.45, 0.12], [0.0, -0.6, 0.1]], goal=["b2"],
+                       orientation=[0.0, 0.94, -0.33, 0.08])
+    doc["start"] = {"joints": shifted.tolist()}
+    res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e")
+    np.testing.assert_allclose(res.trajectory["joints"][0], shifted, atol=1e-12)
