@@ -35,6 +35,9 @@ def add_parser(sub):
     p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
                    help="slow each step down uniformly until no joint moves faster (needs --robot)")
     p.add_argument("--seed", type=int, default=None, help="random seed (for methods that sample)")
+    p.add_argument("--max-groundings", type=int, default=None, metavar="N",
+                   help="ground actions (an action bound to objects) the planner may build before it "
+                        "searches (default 100000, checked before it starts)")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
@@ -77,8 +80,9 @@ def _plan(args) -> int:
             def tick(done, total):
                 bar.total = total
                 bar.update(done - bar.n)
+        bound = {} if args.max_groundings is None else {"max_groundings": args.max_groundings}
         result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
-                           random_state=args.seed, progress=tick)
+                           random_state=args.seed, progress=tick, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
     if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write

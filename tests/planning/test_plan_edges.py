@@ -134,3 +134,79 @@ def test_a_start_shifted_by_2pi_within_the_limits_is_followed_not_moved(button_l
     doc["start"] = {"joints": shifted.tolist()}
     res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e")
     np.testing.assert_allclose(res.trajectory["joints"][0], shifted, atol=1e-12)
+
+
+TYPED = """(define (domain typed) (:requirements :strips :typing) (:types button lever - device)
+  (:predicates (free ?d - device) (pressed ?d - device))
+  (:action press :parameters (?b - button) :precondition (free ?b) :effect (pressed ?b))
+  (:action pull :parameters (?l - lever ?d - device) :effect (pressed ?d))
+  (:action touch :parameters (?x - object ?y) :effect (pressed ?x)))
+"""
+
+
+def test_ground_actions_are_counted_by_type_with_its_subtypes():
+    from skillbank.planning import check_groundings, parse_domain  # the count, on a typed domain
+
+    domain = parse_domain(TYPED)
+    objects = {"b1": "button", "b2": "button", "b3": "button", "l1": "lever", "t1": "table"}
+    # press: 3 buttons; pull: 1 lever x 4 devices; touch: 5 x 5 objects
+    assert check_groundings(domain, objects) == 3 + 4 + 25
+    with pytest.raises(ValueError, match=r"^domain: expected at most max_groundings=31 ground actions \(the "
+                                         r"planner builds each before it searches\), got 32 in this scene "
+                                         r"\(action touch: 2 parameter\(s\) over 5 object\(s\), 25\); give "
+                                         r"fewer objects or parameters, or raise the bound \(--max-groundings"):
+        check_groundings(domain, objects, max_groundings=31)
+    with pytest.raises(ValueError, match=r"^max_groundings: expected an integer > 0"):
+        check_groundings(domain, objects, max_groundings=0)
+
+
+def test_a_count_too_large_to_write_is_capped_in_the_message():
+    from skillbank.planning import check_groundings, domain_text, parse_action  # the count, capped
+
+    params = " ".join(f"?x{k}" for k in range(400))
+    domain = domain_text([parse_action(f"(:action a :parameters ({params} - t) :effect (p ?x0))")])
+    with pytest.raises(ValueError, match=r"got over 1e\+18 in this scene \(action a: 400 parameter\(s\) over "
+                                         r"1000 object\(s\), over 1e\+18\)") as info:
+        check_groundings(domain, {f"o{k}": "t" for k in range(1000)})
+    assert len(str(info.value)) < 400
+
+
+def _wide_task(folder, n_objects=20, n_params=6):
+    params = " ".join(f"?x{k}" for k in range(n_params))
+    (folder / "wide.pddl").write_text(
+        "(define (domain wide) (:requirements :strips :typing) (:types button)\n"
+        "  (:predicates (free ?b - button) (pressed ?b - button))\n"
+        f"  (:action press :parameters ({params} - button)\n"
+        "    :precondition (and " + " ".join(f"(free ?x{k})" for k in range(n_params)) + ")\n"
+        "    :effect (pressed ?x0)))\n")
+    doc = button_scene([[0.01 * k, 0.0, 0.0] for k in range(n_objects)], goal=["b1"])
+    return write_scene(folder, doc), folder / "wide.pddl"
+
+
+def test_cli_plan_of_64_million_ground_actions_is_refused_before_grounding(described_library, synthetic_db,
+                                                                          tmp_path, limited):
+    """Without the bound the planner grounds 20^6 actions: hours and gigabytes. Now one line, at once."""
+    described_library.close()
+    folder = tmp_path / "task"
+    folder.mkdir()
+    scene, domain = _wide_task(folder)
+    code, out, err = limited("plan", synthetic_db, "--scene", scene, "--domain", domain, "--out",
+                             folder / "plan.csv", memory=1 << 30, timeout=120)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith("skillbank plan: error: domain: expected at most max_groundings=100000 ground "
+                          "actions (the planner builds each before it searches), got 64000000 in this scene "
+                          "(action press: 6 parameter(s) over 20 object(s), 64000000)"), err
+    assert sorted(p.name for p in folder.iterdir()) == ["scene.json", "wide.pddl"]
+
+
+def test_max_groundings_is_the_way_past_the_bound(described_library, synthetic_db, tmp_path, cli):
+    described_library.close()
+    folder = tmp_path / "task"
+    folder.mkdir()
+    scene, domain = _wide_task(folder, n_objects=3, n_params=2)  # 9 ground actions
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--domain", domain, "--max-groundings", "8")
+    assert code == 2 and out == "" and "got 9 in this scene" in err and err.count("\n") == 1
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--domain", domain, "--max-groundings", "9",
+                         "--json")
+    assert code == 0, err
+    assert [step["action"] for step in json.loads(out)["plan"]] == ["press"]
