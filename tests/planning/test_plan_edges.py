@@ -154,7 +154,8 @@ def test_ground_actions_are_counted_by_type_with_its_subtypes():
     with pytest.raises(ValueError, match=r"^domain: expected at most max_groundings=31 ground actions \(the "
                                          r"planner builds each before it searches\), got 32 in this scene "
                                          r"\(action touch: 2 parameter\(s\) over 5 object\(s\), 25\); give "
-                                         r"fewer objects or parameters, or raise the bound \(--max-groundings"):
+                                         r"fewer objects or parameters, or raise the bound "
+                                         r"\(--max-groundings"):
         check_groundings(domain, objects, max_groundings=31)
     with pytest.raises(ValueError, match=r"^max_groundings: expected an integer > 0"):
         check_groundings(domain, objects, max_groundings=0)
