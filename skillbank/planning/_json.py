@@ -97,8 +97,8 @@ def check_depth(doc, name: str) -> None:
             continue
         if depth > MAX_JSON_DEPTH:
             raise ValueError(f"{name}: expected lists and objects nested at most {MAX_JSON_DEPTH} levels "
-                             "deep (a scene needs 4), got deeper nesting (or a structure that contains "
-                             "itself)")
+                             "deep (a scene needs 4, a binding 3), got deeper nesting (or a structure that "
+                             "contains itself)")
         if deepest.get(id(value), 0) >= depth:
             continue
         deepest[id(value)] = depth

@@ -230,3 +230,31 @@ def test_cli_plan_on_bad_input_is_exit_2_one_line_and_writes_nothing(described_l
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert re.search(r"^skillbank plan: error: " + match, err), err
     assert sorted(p.name for p in folder.iterdir()) == before
+
+
+@pytest.mark.parametrize("doc, message", [
+    ({"method": ["lte"]}, r"^binding\.method: expected one of \[.*\], got a list of 1 item\(s\)$"),
+    ({"velocity": {}}, r"^binding\.velocity: expected 'zero' or 'free', got an object$"),
+    ({"goal": [1]}, r"^binding\.goal: expected a parameter of the action \(\['\?b'\]\), got a list of 1"),
+    ({"offset": [0, 0, True]}, r"^binding\.offset\[2\]: expected a number, got true$"),
+    ({"offset": [0, HUGE, 0]}, r"^binding\.offset\[1\]: expected a number of magnitude at most 1e\+100, got "
+                               r"an integer of 401 digits$"),
+    ({"offset": "up"}, r"^binding\.offset: expected a list of 3 numbers, got the string 'up'$"),
+    ({"orientation": [0, 0, 0, float("inf")]}, r"^binding\.orientation\[3\]: expected a finite number"),
+    ({"gripper": {"start": True}}, r"^binding\.gripper\.start: expected a number, got true$"),
+    ({"gripper": {"end": -HUGE}}, r"^binding\.gripper\.end: expected a number of magnitude at most 1e\+100"),
+    ({"gripper": [1]}, r"^binding\.gripper: expected an object with 'start' and/or 'end', got a list of 1"),
+    ({"obstacles": "o" * 500}, r"^binding\.obstacles: expected 'all' or a list of obstacle names, got the "
+                               r"string 'ooo+\.\.\.'$"),
+    ({"k": HUGE}, r"^binding\.k: expected an integer > 0 of magnitude at most 1e\+100, got an integer "
+                  r"of 401"),
+    ({"duration": True}, r"^binding\.duration: expected a number > 0, got bool True$"),
+    ({"obstacles": json.loads("[" * 900 + "]" * 900)}, r"^binding: expected lists and objects nested at most "
+                                                       r"16 levels deep"),
+])
+def test_bad_binding_values_are_one_line_naming_the_key(doc, message):
+    from skillbank.planning import check_binding  # the binding checker
+
+    with pytest.raises(ValueError, match=message) as info:
+        check_binding(doc, [("?b", "button")])
+    _one_line(info)
