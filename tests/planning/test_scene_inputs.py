@@ -258,3 +258,27 @@ def test_bad_binding_values_are_one_line_naming_the_key(doc, message):
     with pytest.raises(ValueError, match=message) as info:
         check_binding(doc, [("?b", "button")])
     _one_line(info)
+
+
+@pytest.mark.parametrize("body", ["[" * (15 * 2 ** 20), '{"goal": [' + "1" * (15 * 2 ** 20) + "]}",
+                                  '{"objects": ' + '{"a": ' * (2 * 2 ** 20)],
+                         ids=["15 MiB of [", "an integer of 15 million digits", "2 million nested objects"])
+def test_cli_plan_of_a_15_mib_scene_built_to_hurt_is_one_line_within_1_gib(tmp_path, limited, body):
+    path = tmp_path / "scene.json"
+    path.write_text(body)
+    code, out, err = limited("plan", tmp_path / "lib.db", "--scene", path, memory=1 << 30, timeout=120)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert re.match(r"skillbank plan: error: scene '.*scene\.json': expected JSON", err), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
+
+
+def test_a_scene_file_above_the_size_bound_is_refused_unread(tmp_path):
+    from skillbank.planning._scene import MAX_SCENE_BYTES  # the documented bound
+
+    path = tmp_path / "scene.json"
+    path.write_bytes(b" " * (MAX_SCENE_BYTES + 1))
+    with pytest.raises(ValueError, match=rf"^scene: expected a file of at most {MAX_SCENE_BYTES} bytes, got "
+                                         r"a larger one"):
+        load_scene(path)
+    path.write_bytes(b'{"goal": ["(p)"]}' + b" " * (MAX_SCENE_BYTES - 17))
+    assert load_scene(path).goal == [("p", ())]
