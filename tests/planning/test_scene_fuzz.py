@@ -122,3 +122,39 @@ def test_the_same_value_read_from_a_file_gives_the_same_outcome(tmp_path_factory
     if path == ("domain",) and isinstance(value, str):
         return  # a file name: from a dict there is no folder, from a file there is one
     assert outcomes[0] == outcomes[1], (path, outcomes)
+
+
+def _depth(value) -> int:
+    if isinstance(value, list):
+        return 1 + max((_depth(v) for v in value), default=0)
+    if isinstance(value, dict):
+        return 1 + max((_depth(v) for v in value.values()), default=0)
+    return 0
+
+
+TRICKY = st.text(alphabet='[]{}"\\\n a', max_size=6)  # brackets, quotes and backslashes inside strings
+NESTED = st.recursive(TRICKY | st.integers() | st.none(), lambda inner: st.lists(inner, max_size=3)
+                      | st.dictionaries(TRICKY, inner, max_size=3), max_leaves=30)
+
+
+@FUZZ
+@given(NESTED, st.booleans(), st.sampled_from([1, 2, 3, 7, 2 ** 20]))
+def test_the_depth_read_from_the_text_is_the_depth_of_the_document(value, ascii_only, chunk):
+    """The text check refuses exactly the documents deeper than the bound, for any strings inside."""
+    import skillbank.planning._json as reader  # its bound and chunk size, set for the property
+
+    text = json.dumps(value, ensure_ascii=ascii_only)
+    depth = _depth(value)
+    saved = reader.MAX_JSON_DEPTH, reader._CHUNK
+    try:
+        reader._CHUNK = chunk
+        for bound in {max(depth - 1, 0), depth, depth + 1}:
+            reader.MAX_JSON_DEPTH = bound
+            try:
+                reader.text_depth(text, "scene")
+                refused = False
+            except ValueError:
+                refused = True
+            assert refused == (depth > bound), (text, bound)
+    finally:
+        reader.MAX_JSON_DEPTH, reader._CHUNK = saved

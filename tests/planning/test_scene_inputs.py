@@ -282,3 +282,13 @@ def test_a_scene_file_above_the_size_bound_is_refused_unread(tmp_path):
         load_scene(path)
     path.write_bytes(b'{"goal": ["(p)"]}' + b" " * (MAX_SCENE_BYTES - 17))
     assert load_scene(path).goal == [("p", ())]
+
+
+def test_the_depth_check_is_linear_on_strings_of_escaped_quotes(tmp_path, limited):
+    """A string of 7 million escaped quotes, never closed: a regular expression that rescans from each
+    quote is quadratic here (2 s for 10^4, 29 s for 4 * 10^4); the vectorised pass reads it once."""
+    path = tmp_path / "scene.json"
+    path.write_text('{"goal": ["' + '\\"' * (7 * 2 ** 20))
+    code, out, err = limited("plan", tmp_path / "lib.db", "--scene", path, memory=1 << 30, timeout=120)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert re.match(r"skillbank plan: error: scene '.*': expected JSON, got Unterminated string", err), err
