@@ -38,6 +38,8 @@ def add_parser(sub):
     p.add_argument("--max-groundings", type=int, default=None, metavar="N",
                    help="ground actions (an action bound to objects) the planner may build before it "
                         "searches (default 100000, checked before it starts)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="seconds the planner may search before it gives up (default 600)")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
@@ -80,7 +82,8 @@ def _plan(args) -> int:
             def tick(done, total):
                 bar.total = total
                 bar.update(done - bar.n)
-        bound = {} if args.max_groundings is None else {"max_groundings": args.max_groundings}
+        bound = {k: v for k, v in (("max_groundings", args.max_groundings), ("time_limit", args.time_limit))
+                 if v is not None}
         result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
                            random_state=args.seed, progress=tick, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \

@@ -11,7 +11,7 @@ from ._chain import PlanResult, _Skill, reproduce_plan
 from ._json import describe
 from ._pddl import Domain, domain_text, parse_action, parse_domain, problem_text
 from ._scene import Scene, load_scene, scene_from_dict
-from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, check_groundings, solve
+from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve
 
 __all__ = ["describe_skill", "skill_domain", "plan_task", "write_pddl", "MAX_DOMAIN_BYTES"]
 
@@ -139,7 +139,7 @@ def _scene(scene) -> Scene:
 
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
               max_expansions: int = MAX_EXPANSIONS, max_groundings: int = MAX_GROUNDINGS,
-              progress=None) -> PlanResult:
+              time_limit: float = TIME_LIMIT, progress=None) -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
 
     1. The domain: ``domain`` (a :class:`Domain`, PDDL text or a file; used as
@@ -166,6 +166,8 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     max_groundings : int
         Ground actions the planner may build (checked before it starts; see
         :data:`~skillbank.planning.MAX_GROUNDINGS`).
+    time_limit : float
+        Seconds the planner may search before giving up.
     progress : callable, optional
         ``progress(done, total)`` over the steps reproduced.
 
@@ -187,7 +189,7 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     objects = {name: obj.type for name, obj in scene.objects.items()}
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
     check_groundings(dom, objects, max_groundings=max_groundings)
-    steps = solve(dom.text, problem, max_expansions=max_expansions)
+    steps = solve(dom.text, problem, max_expansions=max_expansions, time_limit=time_limit)
     result = reproduce_plan(scene, steps, _skills(store, dom), robot=robot, limits=limits,
                             random_state=random_state, progress=progress)
     result.domain, result.problem = dom.text, problem

@@ -211,3 +211,43 @@ def test_max_groundings_is_the_way_past_the_bound(described_library, synthetic_d
                          "--json")
     assert code == 0, err
     assert [step["action"] for step in json.loads(out)["plan"]] == ["press"]
+
+
+CHAIN = """(define (domain chain) (:requirements :strips :typing) (:types place)
+  (:predicates (at ?p - place) (next ?a ?b - place))
+  (:action go :parameters (?a ?b - place) :precondition (and (at ?a) (next ?a ?b)) :effect (at ?b)))
+"""
+
+
+def test_reachability_along_a_chain_listed_backwards_names_what_lies_past_a_broken_link():
+    from skillbank.planning import solve  # the planner adapter
+
+    n = 120
+    objects = " ".join(f"p{k}" for k in range(n))
+    links = " ".join(f"(next p{k} p{k + 1})" for k in reversed(range(n - 1)) if k != 100)  # no 100 -> 101
+    problem = (f"(define (problem p) (:domain chain) (:objects {objects} - place) (:init (at p0) {links}) "
+               f"(:goal (and (at p{n - 1}) (at p100) (at p101))))")
+    with pytest.raises(ValueError, match=rf"^goal: no plan reaches \(at p101\), \(at p{n - 1}\): "
+                                         r"no sequence"):
+        solve(CHAIN, problem)
+
+
+def test_the_search_gives_up_at_its_time_limit_or_state_budget_and_says_which():
+    from skillbank.planning import solve  # the planner adapter
+
+    objects = " ".join(f"p{k}" for k in range(6))
+    links = " ".join(f"(next p{k} p{k + 1})" for k in range(5))
+    problem = (f"(define (problem p) (:domain chain) (:objects {objects} - place) (:init (at p0) {links}) "
+               "(:goal (and (at p5))))")
+    assert len(solve(CHAIN, problem)) == 5
+    with pytest.raises(ValueError, match=r"^goal: the planner gave up after 1 states without a plan "
+                                         r"\(max_expansions\)$"):
+        solve(CHAIN, problem, max_expansions=1)
+    # a deadline of a nanosecond has passed by the first check, which follows the first heuristic
+    with pytest.raises(ValueError, match=r"^goal: the planner gave up after 1e-09 s without a plan \(0 "
+                                         r"states\); raise the bound if the task is meant \(--time-limit"):
+        solve(CHAIN, problem, time_limit=1e-9)
+    for kwargs, match in (({"time_limit": 0}, r"^time_limit: expected a number > 0, got 0$"),
+                          ({"max_expansions": 2.5}, r"^max_expansions: expected an integer > 0, got 2\.5$")):
+        with pytest.raises(ValueError, match=match):
+            solve(CHAIN, problem, **kwargs)
