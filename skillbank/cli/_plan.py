@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 from ._library import _DB_READ, _location, _target, check_robot, output_format, print_execution
@@ -68,6 +71,8 @@ def _plan(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
+    for name in ("out", "plot"):
+        _check_folder(getattr(args, name), name)
     scene = load_scene(args.scene)
     if args.domain is not None and not args.domain.is_file():
         raise ValueError(f"domain: expected a PDDL domain file, got {str(args.domain)!r}, which is not "
@@ -90,15 +95,15 @@ def _plan(args) -> int:
             if args.plot is not None else {}
     if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
         return _empty(args, result, scene)
-    if args.out is not None:
-        io.write_trajectory(result.trajectory, args.out, format=kind)
-    written = [args.out] if args.out is not None else []
-    if args.plot is not None:
-        from ..plotting import plot_plan  # matplotlib only when a figure is asked for
+    with _all_or_nothing(args) as written:
+        if args.out is not None:
+            io.write_trajectory(result.trajectory, args.out, format=kind)
+            written.append(args.out)
+        if args.plot is not None:
+            from ..plotting import plot_plan  # matplotlib only when a figure is asked for
 
-        stem = args.plot.with_suffix("") if args.plot.suffix else args.plot
-        written += list(write_pddl(result, stem))
-        written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
+            written += list(write_pddl(result, _stem(args.plot)))
+            written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
     if args.json:
         doc = result.to_dict()
         doc["written"] = [str(p) for p in written]
@@ -117,6 +122,39 @@ def _plan(args) -> int:
     for path in written:
         print(f"  wrote {path}")
     return 0
+
+
+def _check_folder(path, name: str) -> None:
+    """An output's folder must exist: found before the plan is computed, not after part is written."""
+    if path is not None and not Path(path).parent.is_dir():
+        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
+                         f"{str(Path(path).parent)!r} does not exist")
+
+
+def _stem(plot: Path) -> Path:
+    return plot.with_suffix("") if plot.suffix else plot
+
+
+@contextmanager
+def _all_or_nothing(args):
+    """Outputs are written all or not at all: a failure part-way removes those this command created."""
+    targets = [] if args.out is None else [Path(args.out)]
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        stem = _stem(args.plot)
+        targets += [figure_path(args.plot, name="plot"), stem.with_name(stem.name + ".domain.pddl"),
+                    stem.with_name(stem.name + ".problem.pddl")]
+    new = [p for p in targets if not os.path.lexists(p)]
+    try:
+        yield []
+    except BaseException:
+        for path in new:
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path, ignore_errors=True)  # a ROS 2 bag is a folder
+            elif os.path.lexists(path):
+                path.unlink()
+        raise
 
 
 def _empty(args, result, scene) -> int:

@@ -251,3 +251,25 @@ def test_the_search_gives_up_at_its_time_limit_or_state_budget_and_says_which():
                           ({"max_expansions": 2.5}, r"^max_expansions: expected an integer > 0, got 2\.5$")):
         with pytest.raises(ValueError, match=match):
             solve(CHAIN, problem, **kwargs)
+
+
+def test_cli_plan_writes_all_its_outputs_or_none(described_library, synthetic_db, tmp_path, cli):
+    described_library.close()
+    folder = tmp_path / "task"
+    folder.mkdir()
+    scene = write_scene(folder, BUTTONS_DOC)
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--out", folder / "plan.csv", "--plot",
+                         folder / "missing" / "plan.png")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "plot: expected a file in an existing folder, got " in err and "missing' does not exist" in err
+    (folder / "plan.domain.pddl").mkdir()  # the PDDL beside the figure cannot be written: after the CSV was
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--out", folder / "plan.csv", "--plot",
+                         folder / "plan.png")
+    assert code == 2 and out == "" and err.count("\n") == 1 and "plan.domain.pddl" in err, err
+    assert sorted(p.name for p in folder.iterdir()) == ["plan.domain.pddl", "scene.json"]
+    (folder / "plan.domain.pddl").rmdir()
+    code, out, err = cli("plan", synthetic_db, "--scene", scene, "--out", folder / "plan.csv", "--plot",
+                         folder / "plan.png")
+    assert code == 0, err
+    assert sorted(p.name for p in folder.iterdir()) == ["plan.csv", "plan.domain.pddl", "plan.png",
+                                                        "plan.problem.pddl", "scene.json"]
