@@ -22,6 +22,9 @@ _CONNECTIVES = ("and", "not")
 #: could take.
 MAX_PDDL_DEPTH = 32
 _NAME_CHARS = set("abcdefghijklmnopqrstuvwxyz0123456789-_")
+#: PDDL's logical words: a predicate of one of these names would be read as the connective by a planner.
+_RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either", "define", "domain",
+                       "problem"})
 
 
 def _tokens(text: str, name: str) -> list:
@@ -97,6 +100,9 @@ def _check_name(value, what: str, name: str) -> str:
     if not isinstance(value, str) or not value or not value[0].isalpha() or not set(value) <= _NAME_CHARS:
         raise ValueError(f"{name}: expected {what} (a letter, then letters, digits, '-' or '_'), "
                          f"got {_shown(value)}")
+    if what == "a predicate name" and value in _RESERVED:
+        raise ValueError(f"{name}: expected {what}, got {value!r}, a word of PDDL's logic (rename the "
+                         "predicate)")
     return value
 
 

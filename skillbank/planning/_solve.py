@@ -170,7 +170,7 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
         (Path(tmp) / "problem.pddl").write_text(problem)
         try:
             task = jp.build_task(str(Path(tmp) / "domain.pddl"), str(Path(tmp) / "problem.pddl"))
-        except (jp.PDDLError, ValueError, KeyError, TypeError, RecursionError) as exc:
+        except (jp.PDDLError, ValueError, IndexError, KeyError, TypeError, RecursionError) as exc:
             # the planner's own reader, on PDDL skillbank's reader let through: one line, not its traceback
             detail = " ".join(str(exc).split())[:200] or type(exc).__name__
             raise ValueError(f"planner: the PDDL was refused: {detail}") from None
@@ -178,7 +178,12 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
     if missing:
         raise ValueError(f"goal: no plan reaches {summarise(missing)}: no sequence of the skills' actions "
                          f"makes {'it' if len(missing) == 1 else 'them'} true from the initial facts")
-    result = jp.solve_task(task, "astar", "lmcut", max_expansions=max_expansions, time_limit=time_limit)
+    try:
+        result = jp.solve_task(task, "astar", "lmcut", max_expansions=max_expansions, time_limit=time_limit)
+    except (ValueError, IndexError, KeyError, TypeError, RecursionError) as exc:  # the planner's, not ours
+        detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise ValueError(f"planner: the search failed on this task ({type(exc).__name__}: {detail})") \
+            from None
     if not result.solved:
         if result.stats.truncated and result.stats.expanded >= max_expansions:
             raise ValueError(f"goal: the planner gave up after {max_expansions} states without a plan "

@@ -292,3 +292,28 @@ def test_the_depth_check_is_linear_on_strings_of_escaped_quotes(tmp_path, limite
     code, out, err = limited("plan", tmp_path / "lib.db", "--scene", path, memory=1 << 30, timeout=120)
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert re.match(r"skillbank plan: error: scene '.*': expected JSON, got Unterminated string", err), err
+
+
+@pytest.mark.parametrize("word", ["and", "or", "not", "forall", "exists", "when", "imply", "either"])
+def test_a_predicate_named_like_a_pddl_connective_is_refused_before_the_planner_sees_it(word):
+    """jupyddl read ``(forall b1)`` in a goal as a quantifier and failed with an IndexError."""
+    with pytest.raises(ValueError, match=rf"^goal\[0\]: expected a predicate name, got '{word}', a word of "
+                                         r"PDDL's logic \(rename the predicate\)$"):
+        scene_from_dict(_scene(goal=[f"({word} b1)"]))
+    if word not in ("and", "not"):  # those two are read as the connectives they are
+        with pytest.raises(ValueError, match=rf"^action a effect: expected a predicate name, got '{word}'"):
+            parse_action(f"(:action a :parameters (?x) :effect (and (p ?x) ({word} ?x)))").atoms()
+
+
+def test_pddl_the_planner_refuses_or_fails_on_is_one_line_naming_the_planner():
+    """Past skillbank's reader (problem text written directly), jupyddl 2.4 raised an IndexError on a
+    goal (forall b1) and a bare ValueError on (and): now one line naming the planner (or the goal)."""
+    from skillbank.planning import domain_text, problem_text, solve  # written directly, past the checks
+
+    domain = domain_text([parse_action("(:action press :parameters (?b - button) :effect (pressed ?b))")])
+    for goal in (("forall", ("b1",)), ("exists", ()), ("and", ())):
+        problem = problem_text({"b1": "button"}, [], [goal], domain=domain.name)
+        with pytest.raises(ValueError, match=r"^(planner: the PDDL was refused: |planner: the search "
+                                             r"failed on this task \(|goal: )") as info:
+            solve(domain.text, problem)
+        _one_line(info)
