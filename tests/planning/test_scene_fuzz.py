@@ -158,3 +158,28 @@ def test_the_depth_read_from_the_text_is_the_depth_of_the_document(value, ascii_
             assert refused == (depth > bound), (text, bound)
     finally:
         reader.MAX_JSON_DEPTH, reader._CHUNK = saved
+
+
+TOKENS = st.sampled_from(["(", ")", "(", ")", ":action", ":parameters", ":precondition", ":effect", "and",
+                          "not", "or", "forall", "-", "?b", "?c", "b1", "button", "define", "domain", "(domain",
+                          ":types", ":predicates", ":requirements", ";", "\n", "3x", "press", "pressed"])
+
+
+@FUZZ
+@given(st.lists(TOKENS, max_size=40), st.booleans())
+def test_any_pddl_token_soup_is_an_action_or_one_line(tokens, as_domain):
+    """parse_action and parse_domain: a parsed schema whose atoms all read, or one ValueError line."""
+    from skillbank.planning import parse_action, parse_domain  # the PDDL readers
+
+    text = " ".join(tokens)
+    try:
+        if as_domain:
+            domain = parse_domain(text)
+            for action in domain.actions.values():
+                action.atoms()
+        else:
+            parse_action(text).atoms()
+    except ValueError as exc:
+        message = str(exc)
+        assert "\n" not in message and len(message) < 400, message
+        assert message.startswith(("action", "domain")), message
