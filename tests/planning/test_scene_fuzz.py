@@ -161,8 +161,9 @@ def test_the_depth_read_from_the_text_is_the_depth_of_the_document(value, ascii_
 
 
 TOKENS = st.sampled_from(["(", ")", "(", ")", ":action", ":parameters", ":precondition", ":effect", "and",
-                          "not", "or", "forall", "-", "?b", "?c", "b1", "button", "define", "domain", "(domain",
-                          ":types", ":predicates", ":requirements", ";", "\n", "3x", "press", "pressed"])
+                          "not", "or", "forall", "-", "?b", "?c", "b1", "button", "define", "domain",
+                          "(domain", ":types", ":predicates", ":requirements", ";", "\n", "3x", "press",
+                          "pressed"])
 
 
 @FUZZ
