@@ -177,3 +177,30 @@ def test_distances(distance, data):
     P = data.draw(arrays(max_n=10))
     Q = data.draw(arrays(d=P.shape[1], max_n=10))
     _outcome(lambda: distance(P, Q), lambda value: [value])
+
+
+# Python numbers of any size (issue 23, item 8): ints beyond float64 overflowed in the cast.
+NUMBERS = st.integers(-10 ** 500, 10 ** 500) | st.sampled_from([10 ** 101, -10 ** 400, 2 ** 63]) | st.floats()
+_GEOMETRY_HEAD = re.compile(r"^(goal|start|start_velocity|via\[0\]|sphere center|sphere radius|box lower|"
+                            r"box upper|box|obstacle( '[^']*')?|ViaPoint index|via position|constraints): ")
+
+
+@FUZZ
+@given(st.lists(NUMBERS, min_size=1, max_size=3), NUMBERS, st.integers(-10 ** 30, 10 ** 30),
+       st.sampled_from(["goal", "start_velocity", "via", "sphere", "box", "spec", "index"]))
+def test_geometry_from_python_numbers_of_any_size(point, number, index, kind):
+    from skillbank.core import Box, ViaPoint, parse_obstacle  # the geometry constructors fuzzed here
+
+    calls = {"goal": lambda: Constraints(goal=point, start=[0.0] * len(point)),
+             "start_velocity": lambda: Constraints(start_velocity=point),
+             "via": lambda: Constraints(via=[(0.5, point)]),
+             "sphere": lambda: Sphere(point, number),
+             "box": lambda: Box(point, [number] * len(point)),
+             "spec": lambda: parse_obstacle("sphere:" + ",".join(map(str, point)) + f",{number}"),
+             "index": lambda: ViaPoint(point, index=index).sample(10)}
+    try:
+        calls[kind]()
+    except ValueError as exc:
+        message = str(exc)
+        assert "\n" not in message and len(message) < 300, message
+        assert _GEOMETRY_HEAD.match(message), message

@@ -188,7 +188,8 @@ def test_check_time_bounds_and_collapsed_stamps():
     [
         (1e101, {}, r"^w: expected a number > 0 and at most 1e\+100 \(larger ones overflow the solvers\), "
                     r"got 1e\+101$"),
-        (10**400, {"integer": True}, r"^w: expected an integer > 0, got an integer of 401 digits$"),
+        (10**400, {"integer": True}, r"^w: expected an integer > 0 of magnitude at most 1e\+100, got an "
+                                     r"integer of 401 digits$"),
         (1 + 2j, {}, r"^w: expected a real number, got complex \(1\+2j\)$"),
         (np.complex128(1.0), {}, r"^w: expected a real number, got complex"),
     ],

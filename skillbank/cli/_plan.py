@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 from ._library import _DB_READ, _location, _target, check_robot, output_format, print_execution
@@ -32,6 +35,11 @@ def add_parser(sub):
                         "'library describe')")
     add_robot_options(p, what="each step")  # --robot, --max-joint-velocity/-acceleration, --branch
     p.add_argument("--seed", type=int, default=None, help="random seed (for methods that sample)")
+    p.add_argument("--max-groundings", type=int, default=None, metavar="N",
+                   help="ground actions (an action bound to objects) the planner may build before it "
+                        "searches (default 100000, checked before it starts)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="seconds the planner may search before it gives up (default 600)")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
@@ -60,6 +68,8 @@ def _plan(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
+    for name in ("out", "plot"):
+        _check_folder(getattr(args, name), name)
     scene = load_scene(args.scene)
     if branch is not None:
         scene.branch = branch  # the command line's branch over the scene's
@@ -76,19 +86,23 @@ def _plan(args) -> int:
             def tick(done, total):
                 bar.total = total
                 bar.update(done - bar.n)
+        bound = {k: v for k, v in (("max_groundings", args.max_groundings), ("time_limit", args.time_limit))
+                 if v is not None}
         result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
-                           random_state=args.seed, progress=tick)
+                           random_state=args.seed, progress=tick, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
-    if args.out is not None:
-        io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
-    written = [args.out] if args.out is not None else []
-    if args.plot is not None:
-        from ..plotting import plot_plan  # matplotlib only when a figure is asked for
+    if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
+        return _empty(args, result, scene)
+    with _all_or_nothing(args) as written:
+        if args.out is not None:
+            io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
+            written.append(args.out)
+        if args.plot is not None:
+            from ..plotting import plot_plan  # matplotlib only when a figure is asked for
 
-        stem = args.plot.with_suffix("") if args.plot.suffix else args.plot
-        written += list(write_pddl(result, stem))
-        written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
+            written += list(write_pddl(result, _stem(args.plot)))
+            written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
     if args.json:
         doc = result.to_dict()
         doc["written"] = [str(p) for p in written]
@@ -106,4 +120,54 @@ def _plan(args) -> int:
                     orientation=any(s.goal_orientation is not None for s in result.steps))
     for path in written:
         print(f"  wrote {path}")
+    return 0
+
+
+def _check_folder(path, name: str) -> None:
+    """An output's folder must exist: found before the plan is computed, not after part is written."""
+    if path is not None and not Path(path).parent.is_dir():
+        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
+                         f"{str(Path(path).parent)!r} does not exist")
+
+
+def _stem(plot: Path) -> Path:
+    return plot.with_suffix("") if plot.suffix else plot
+
+
+@contextmanager
+def _all_or_nothing(args):
+    """Outputs are written all or not at all: a failure part-way removes those this command created."""
+    targets = [] if args.out is None else [Path(args.out)]
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        stem = _stem(args.plot)
+        targets += [figure_path(args.plot, name="plot"), stem.with_name(stem.name + ".domain.pddl"),
+                    stem.with_name(stem.name + ".problem.pddl")]
+    new = [p for p in targets if not os.path.lexists(p)]
+    try:
+        yield []
+    except BaseException:
+        for path in new:
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path, ignore_errors=True)  # a ROS 2 bag is a folder
+            elif os.path.lexists(path):
+                path.unlink()
+        raise
+
+
+def _empty(args, result, scene) -> int:
+    """Report a plan of no steps (exit 0): nothing is reproduced, so --out and --plot write nothing."""
+    notes = list(result.notes)
+    asked = [f"--{name}" for name in ("out", "plot") if getattr(args, name) is not None]
+    if asked:
+        notes.append(f"{' and '.join(asked)}: nothing written (a plan of no steps has no trajectory)")
+    if args.json:
+        doc = result.to_dict()
+        doc.update(notes=notes, written=[])
+        print(json.dumps(doc, allow_nan=False))
+        return 0
+    print(f"{args.db}: plan of 0 step(s) for {len(scene.goal)} goal fact(s)")
+    for note in notes:
+        print(f"  note: {note}")
     return 0

@@ -18,7 +18,7 @@ import numpy as np
 
 from ._obstacles import Obstacle
 from ._rotations import check_quaternions, quaternion_angle
-from ._validation import check_array, check_fraction, check_positive, check_time, summarise
+from ._validation import _digits, check_array, check_fraction, check_positive, check_time, summarise
 
 __all__ = ["Constraints", "ViaPoint"]
 
@@ -64,6 +64,9 @@ class ViaPoint:
             if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
                 raise ValueError(f"ViaPoint index: expected an integer sample index, got {index!r}")
             index = int(index)
+            if abs(index) >= 2 ** 63:  # no trajectory has that many samples; keep the message short
+                raise ValueError(f"ViaPoint index: expected a sample index within the signed 64-bit range, "
+                                 f"got an integer of {_digits(index)}")
         else:
             phase = check_fraction(phase, name="ViaPoint phase")
         self.index = index

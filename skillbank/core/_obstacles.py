@@ -323,16 +323,23 @@ class Box(Obstacle):
 OBSTACLES: dict[str, type[Obstacle]] = {"sphere": Sphere, "box": Box}
 
 
+def _short(text: str, limit: int = 40) -> str:
+    """``repr`` of user text, cut so that a message stays one short line."""
+    text = text.strip()
+    return repr(text if len(text) <= limit else text[:limit - 3] + "...")
+
+
 def _number(text: str, whole: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise ValueError(f"obstacle: expected a number, got {text.strip()!r} in {whole!r}") from None
-    if not np.isfinite(value):
-        raise ValueError(f"obstacle: expected a finite number, got {text.strip()!r} in {whole!r}")
-    if abs(value) > MAX_MAGNITUDE:
+        raise ValueError(f"obstacle: expected a number, got {_short(text, 20)} in {_short(whole)}") from None
+    literal = text.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
+    if literal:
+        raise ValueError(f"obstacle: expected a finite number, got {_short(text, 20)} in {_short(whole)}")
+    if not np.isfinite(value) or abs(value) > MAX_MAGNITUDE:  # inf here: a literal beyond float64
         raise ValueError(f"obstacle: expected numbers of magnitude at most {MAX_MAGNITUDE:g} (larger ones "
-                         f"overflow the solvers), got {text.strip()!r} in {whole!r}")
+                         f"overflow the solvers), got {_short(text, 20)} in {_short(whole)}")
     return value
 
 
@@ -356,12 +363,12 @@ def parse_obstacle(text) -> Obstacle:
     kind = kind.strip().lower()
     usage = " or ".join(f"'{cls.usage}'" for cls in OBSTACLES.values())
     if not sep or kind not in OBSTACLES:
-        raise ValueError(f"obstacle: expected {usage}, got {text!r}")
+        raise ValueError(f"obstacle: expected {usage}, got {_short(text)}")
     parts = coords.split(",")
     if not coords.strip() or any(not p.strip() for p in parts):
-        raise ValueError(f"obstacle: expected comma-separated numbers after '{kind}:', got {text!r}")
+        raise ValueError(f"obstacle: expected comma-separated numbers after '{kind}:', got {_short(text)}")
     values = [_number(p, text) for p in parts]
     try:
         return OBSTACLES[kind].from_values(values)
     except ValueError as exc:
-        raise ValueError(f"obstacle {text!r}: {exc}") from None
+        raise ValueError(f"obstacle {_short(text)}: {exc}") from None

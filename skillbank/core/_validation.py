@@ -81,8 +81,31 @@ def _index(bad: np.ndarray):
     return first if len(first) != 1 else first[0]
 
 
-def _check_range(arr: np.ndarray, name: str) -> None:
-    """NaN, inf and magnitudes above MAX_MAGNITUDE, each reported with its first index and count."""
+def _digits(value: int) -> str:
+    """``"31 digits"`` of an int; estimated past 3000 digits, where ``str`` is slow or refuses (4300)."""
+    bits = abs(value).bit_length()
+    if bits <= 10_000:
+        return f"{len(str(abs(value)))} digits"
+    return f"about {int(bits * 0.30102999566398120) + 1} digits"
+
+
+def _check_huge_integers(raw: np.ndarray, name: str) -> None:
+    """Python ints above MAX_MAGNITUDE in an object array, reported before float64 overflows on them."""
+    for k, v in enumerate(raw.flat):
+        if isinstance(v, (int, np.integer)) and not isinstance(v, bool) and abs(int(v)) > MAX_MAGNITUDE:
+            where = np.unravel_index(k, raw.shape) if raw.ndim else ()
+            index = f" at index {where[0] if len(where) == 1 else tuple(int(i) for i in where)}" if where \
+                else ""
+            raise ValueError(f"{name}: expected values of magnitude at most {MAX_MAGNITUDE:g} (larger ones "
+                             f"overflow the solvers; rescale the data), got an integer of "
+                             f"{_digits(int(v))}{index}")
+
+
+def _check_range(arr: np.ndarray, name: str, raw: np.ndarray | None = None) -> None:
+    """NaN, inf and magnitudes above MAX_MAGNITUDE, each reported with its first index and count.
+
+    ``raw`` is the input before the cast: a string such as ``"1e400"`` that became inf is shown as written.
+    """
     if arr.size == 0:
         return
     lo, hi = arr.min(), arr.max()  # two reductions; NaN propagates and fails the test below
@@ -92,6 +115,10 @@ def _check_range(arr: np.ndarray, name: str) -> None:
     if not finite.all():
         bad = np.argwhere(~finite)
         kind = "NaN" if np.isnan(arr[tuple(bad[0])]) else "inf"
+        if raw is not None and raw.dtype.kind in "USO" and raw.shape == arr.shape:
+            written = str(raw[tuple(bad[0])]).strip()
+            if written.lower().lstrip("+-") not in ("nan", "inf", "infinity"):
+                kind = f"{written[:30]!r}, beyond float64's range,"
         raise ValueError(
             f"{name}: expected finite values, got {len(bad)} non-finite value(s) "
             f"({kind} first at index {_index(bad)})"
@@ -151,6 +178,8 @@ def check_array(
         if _is_complex(raw):
             # Casting would drop the imaginary part with only a ComplexWarning.
             raise ValueError(f"{name}: expected real numbers, got complex values ({_describe(raw)})")
+        if raw.dtype == object:
+            _check_huge_integers(raw, name)  # a Python int beyond float64 raises OverflowError in the cast
         arr = raw.astype(np.float64, copy=False)
     except (TypeError, ValueError) as exc:
         if str(exc).startswith(f"{name}: "):
@@ -173,7 +202,7 @@ def check_array(
         raise ValueError(f"{name}: expected {n_dims} columns, got {arr.shape[1]}")
     if arr.ndim == 2 and arr.shape[1] == 0:
         raise ValueError(f"{name}: expected at least one column, got shape {arr.shape}")
-    _check_range(arr, name)
+    _check_range(arr, name, raw)
     return arr
 
 
@@ -228,21 +257,34 @@ def _real_scalar(value, name: str, expected: str) -> float:
     try:
         return float(value)
     except OverflowError:  # a Python int beyond float64
-        raise ValueError(f"{name}: expected {expected}, got an integer of {len(str(abs(value)))} digits") \
-            from None
+        raise ValueError(f"{name}: expected {expected} of magnitude at most {MAX_MAGNITUDE:g}, got an "
+                         f"integer of {_digits(int(value))}") from None
+
+
+#: Ids are signed 64-bit integers in every store (SQLite INTEGER, PostgreSQL BIGINT): no larger one exists.
+_ID_RANGE = (-2 ** 63, 2 ** 63 - 1)
 
 
 def check_id(value, *, name: str) -> int:
-    """Check an integer id (a bool is not one).
+    """Check an integer id (a bool is not one) within the signed 64-bit range every store holds.
 
     Examples
     --------
     >>> check_id(3, name="demo_id")
     3
+    >>> try:
+    ...     check_id(10 ** 30, name="cluster")
+    ... except ValueError as exc:
+    ...     print(str(exc)[-39:])
+    2**63 - 1], got an integer of 31 digits
     """
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name}: expected an integer id, got {value!r}")
-    return int(value)
+    number = int(value)
+    if not _ID_RANGE[0] <= number <= _ID_RANGE[1]:
+        raise ValueError(f"{name}: expected an integer id within the signed 64-bit range "
+                         f"[-2**63, 2**63 - 1], got an integer of {_digits(number)}")
+    return number
 
 
 def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool = False):

@@ -9,7 +9,7 @@ from tqdm import tqdm
 from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
 from ..core import Demonstration
 from ..core._validation import check_id, check_positive
-from ..planning import describe_skill, plan_task
+from ..planning import MAX_GROUNDINGS, TIME_LIMIT, describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ..store._rows import MAX_N_POINTS
@@ -357,7 +357,7 @@ class Library(Adding):
             prims = self.primitives(label=_check_label(skill, "skill"))
             what = f"label {skill!r}"
         elif isinstance(skill, (int, np.integer)) and not isinstance(skill, bool):
-            prims = self.primitives(cluster=int(skill))
+            prims = self.primitives(cluster=check_id(skill, name="skill"))  # a 64-bit id, else one line
             what = f"cluster {int(skill)}"
         else:
             raise ValueError(f"skill: expected a label (str) or a cluster id (int), got {skill!r}")
@@ -421,10 +421,13 @@ class Library(Adding):
         """Skill descriptions ``{"label", "revision", "created", "action", "binding"}`` (current ones)."""
         return self.store.descriptions(history=history)
 
-    def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False):
+    def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False,
+             max_groundings: int = MAX_GROUNDINGS, time_limit: float = TIME_LIMIT):
         """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
 
-        See :func:`skillbank.planning.plan_task`; ``progress`` shows a tqdm bar over the steps.
+        See :func:`skillbank.planning.plan_task`: ``scene`` is a scene file, a dict of the same content
+        or a :class:`~skillbank.planning.Scene`; ``progress`` shows a tqdm bar over the steps;
+        ``max_groundings`` bounds the ground actions the planner may build, ``time_limit`` its search.
 
         Returns
         -------
@@ -438,7 +441,8 @@ class Library(Adding):
         """
         with tqdm(desc="plan steps", unit="step", disable=not progress) as bar:
             return plan_task(self.store, scene, domain=domain, robot=robot, limits=limits,
-                             random_state=random_state, progress=_ticker(bar) if progress else None)
+                             random_state=random_state, progress=_ticker(bar) if progress else None,
+                             max_groundings=max_groundings, time_limit=time_limit)
 
     def export(self, folder, *, progress: bool = False):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

@@ -20,16 +20,16 @@ Examples
 """
 
 from ._binding import BINDING_KEYS, DEFAULT_METHOD, Binding, check_binding
-from ._chain import PlanResult, PlanStep, reproduce_plan
+from ._chain import EMPTY_PLAN, PlanResult, PlanStep, reproduce_plan
 from ._pddl import Action, Domain, domain_text, parse_action, parse_atom, parse_domain, problem_text
 from ._plan import describe_skill, plan_task, skill_domain, write_pddl
 from ._scene import Scene, SceneObject, load_scene, scene_from_dict
-from ._solve import INSTALL, solve
+from ._solve import INSTALL, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve
 
 __all__ = [
     "Scene", "SceneObject", "load_scene", "scene_from_dict", "Action", "Domain", "parse_action",
     "parse_domain", "parse_atom", "domain_text", "problem_text", "Binding", "check_binding", "BINDING_KEYS",
     "DEFAULT_METHOD",
     "solve", "INSTALL", "PlanResult", "PlanStep", "reproduce_plan", "describe_skill", "skill_domain",
-    "plan_task", "write_pddl",
+    "plan_task", "write_pddl", "EMPTY_PLAN", "MAX_GROUNDINGS", "TIME_LIMIT", "check_groundings",
 ]

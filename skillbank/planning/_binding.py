@@ -30,8 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._rotations import check_quaternions
-from ..core._validation import check_array, check_positive
+from ..core._validation import check_positive
 from ..representations import REPRESENTATIONS
+from ._json import check_depth, describe, number, numbers, short
 
 __all__ = ["Binding", "check_binding", "BINDING_KEYS", "DEFAULT_METHOD"]
 
@@ -102,48 +103,50 @@ def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
     if not isinstance(doc, dict):
         raise ValueError(f"{name}: expected a JSON object with keys among {list(BINDING_KEYS)}, got "
                          f"{type(doc).__name__}")
+    check_depth(doc, name)  # before any message shows a part of it
     extra = sorted(set(doc) - set(BINDING_KEYS), key=str)
     if extra:
-        raise ValueError(f"{name}: unknown key {extra[0]!r}; expected keys among {list(BINDING_KEYS)}")
+        raise ValueError(f"{name}: unknown key {short(extra[0])}; expected keys among {list(BINDING_KEYS)}")
     out = Binding()
     names = [p for p, _ in parameters]
     if doc.get("goal") is not None:
         goal = doc["goal"]
         goal = goal.lower() if isinstance(goal, str) else goal
         if goal not in names:
-            raise ValueError(f"{name}.goal: expected a parameter of the action ({names}), "
-                             f"got {doc['goal']!r}")
+            got = short(doc["goal"]) if isinstance(doc["goal"], str) else describe(doc["goal"])
+            raise ValueError(f"{name}.goal: expected a parameter of the action ({names}), got {got}")
         out.goal = goal
     if doc.get("offset") is not None:
-        out.offset = check_array(doc["offset"], name=f"{name}.offset", ndim=1, min_samples=1)
-        if out.offset.shape[0] != 3:
-            raise ValueError(f"{name}.offset: expected 3 numbers (dx, dy, dz), got {out.offset.shape[0]}")
+        out.offset = numbers(doc["offset"], f"{name}.offset", 3)
     orientation = doc.get("orientation", "object")
     if isinstance(orientation, str):
         if orientation not in ("object", "none"):
             raise ValueError(f"{name}.orientation: expected 'object', 'none' or a quaternion [x, y, z, w], "
-                             f"got {orientation!r}")
+                             f"got {short(orientation)}")
         out.orientation = orientation
     else:
-        q = check_array(orientation, name=f"{name}.orientation", ndim=1, min_samples=1)
-        if q.shape[0] != 4:
-            raise ValueError(f"{name}.orientation: expected a quaternion of 4 numbers, got {q.shape[0]}")
+        if isinstance(orientation, (list, tuple)) and len(orientation) != 4:
+            raise ValueError(f"{name}.orientation: expected a quaternion of 4 numbers, got "
+                             f"{len(orientation)}")
+        q = numbers(orientation, f"{name}.orientation", 4)
         out.orientation = check_quaternions(q, name=f"{name}.orientation")
     obstacles = doc.get("obstacles", "all")
     if obstacles != "all" and (not isinstance(obstacles, list)
                                or not all(isinstance(o, str) for o in obstacles)):
-        raise ValueError(f"{name}.obstacles: expected 'all' or a list of obstacle names, got {obstacles!r}")
+        raise ValueError(f"{name}.obstacles: expected 'all' or a list of obstacle names, got "
+                         f"{describe(obstacles)}")
     out.obstacles = obstacles
     gripper = doc.get("gripper", {})
     if not isinstance(gripper, dict) or set(gripper) - {"start", "end"}:
-        raise ValueError(f"{name}.gripper: expected an object with 'start' and/or 'end', got {gripper!r}")
+        raise ValueError(f"{name}.gripper: expected an object with 'start' and/or 'end', got "
+                         f"{describe(gripper)}")
     for key in ("start", "end"):
         if gripper.get(key) is not None:
-            value = float(check_array([gripper[key]], name=f"{name}.gripper.{key}", ndim=1)[0])
+            value = number(gripper[key], f"{name}.gripper.{key}")
             setattr(out, f"gripper_{key}", value)
     method = doc.get("method", DEFAULT_METHOD)
-    if method not in REPRESENTATIONS:
-        raise ValueError(f"{name}.method: expected one of {list(REPRESENTATIONS)}, got {method!r}")
+    if not isinstance(method, str) or method not in REPRESENTATIONS:
+        raise ValueError(f"{name}.method: expected one of {list(REPRESENTATIONS)}, got {describe(method)}")
     out.method = method
     if doc.get("k") is not None:
         out.k = check_positive(doc["k"], name=f"{name}.k", integer=True)
@@ -151,6 +154,6 @@ def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
         out.duration = check_positive(doc["duration"], name=f"{name}.duration")
     velocity = doc.get("velocity", "zero")
     if velocity not in ("zero", "free"):
-        raise ValueError(f"{name}.velocity: expected 'zero' or 'free', got {velocity!r}")
+        raise ValueError(f"{name}.velocity: expected 'zero' or 'free', got {describe(velocity)}")
     out.velocity = velocity
     return out

@@ -21,7 +21,10 @@ from ..robots import RobotModel, robot_model
 from ..selection import reuse
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
-__all__ = ["PlanStep", "PlanResult", "reproduce_plan"]
+__all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN"]
+
+#: The note of a plan of no steps.
+EMPTY_PLAN = "the goal already holds in the initial facts: the plan has no steps and nothing is reproduced"
 
 _TASK_LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration")
 
@@ -82,10 +85,12 @@ class PlanResult:
     plan : list of (str, tuple)
         The planner's actions with their arguments.
     steps : list of PlanStep
-    trajectory : Demonstration
+    trajectory : Demonstration or None
         One time base from 0; ``position``, and where every step has them
         ``orientation``, ``gripper`` (carried across steps), other recorded
-        streams; ``joints`` with a robot.
+        streams; ``joints`` with a robot. None when the plan has no steps
+        (the goal already holds in the initial facts: an empty plan is the
+        answer, and there is nothing to reproduce).
     collision : bool
         Whether the whole path touches any obstacle of the scene.
     constraint_error : float
@@ -116,11 +121,12 @@ class PlanResult:
         """
         traj = self.trajectory
         doc = {"plan": [{"action": a, "args": list(args)} for a, args in self.plan],
-               "steps": [s.to_dict() for s in self.steps], "t": traj.t.tolist(),
-               "streams": {k: v.tolist() for k, v in traj.streams.items()}, "collision": bool(self.collision),
+               "steps": [s.to_dict() for s in self.steps], "t": [] if traj is None else traj.t.tolist(),
+               "streams": {} if traj is None else {k: v.tolist() for k, v in traj.streams.items()},
+               "collision": bool(self.collision),
                "constraint_error": float(self.constraint_error),
                "join_error": {k: float(v) for k, v in self.join_error.items()}, "notes": list(self.notes)}
-        if "joints" in traj.streams:
+        if traj is not None and "joints" in traj.streams:
             doc["joint_names"] = list(traj.metadata.get("joint_names", []))
         return doc
 
@@ -131,6 +137,29 @@ class _Skill:
     parameters: list
     binding: object
     primitives: list
+
+
+def _angle(value: float) -> str:
+    """An angle limit as a multiple of pi when it is one (``2π``), else in radians."""
+    turns = value / np.pi
+    if abs(turns - round(turns)) < 1e-12 and round(turns) != 0:
+        k = abs(round(turns))
+        return f"{'-' if value < 0 else ''}{'' if k == 1 else k}π"
+    return f"{value:.6g}"
+
+
+def _start_joints(model, joints) -> np.ndarray:
+    """The scene's start joints, refused outside the robot's limits rather than shifted by 2π to fit."""
+    q = model.check_joints(joints, name="start.joints")[0]
+    lo, hi = model.limits.T
+    bad = np.flatnonzero((q < lo) | (q > hi))
+    if bad.size:
+        j = int(bad[0])
+        raise ValueError(f"start.joints: expected joint angles within the limits of robot {model.name}, "
+                         f"got {model.joint_names[j]} = {q[j]:.6g} rad, outside [{_angle(lo[j])}, "
+                         f"{_angle(hi[j])}] ({bad.size} joint(s) outside); wrap it by a multiple of 2π into "
+                         "the limits if that is the configuration meant")
+    return q
 
 
 def _goal_object(scene, args, params, binding, where):
@@ -275,8 +304,11 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         if model is None:
             raise ValueError("start.joints: a start given as joints needs a robot (robot='ur5e', "
                              "--robot ur5e)")
-        joints = model.check_joints(joints, name="start.joints")[0]
+        joints = _start_joints(model, joints)
         position, orientation = model.fk(joints)
+    if not plan:  # the goal holds already: the empty plan is the answer, with nothing to reproduce
+        return PlanResult(plan=[], steps=[], trajectory=None, collision=False, constraint_error=0.0,
+                          join_error={}, notes=[EMPTY_PLAN])
     pieces, steps, notes = [], [], []
     branch = getattr(scene, "branch", None)
     if model is not None:

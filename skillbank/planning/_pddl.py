@@ -11,11 +11,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ._json import describe
+
 __all__ = ["Action", "Domain", "parse_sexpr", "parse_action", "parse_domain", "parse_atom", "format_sexpr",
            "domain_text", "problem_text", "atoms_of"]
 
 _CONNECTIVES = ("and", "not")
+#: Deepest nesting of parentheses read. A STRIPS domain needs 5 ((define (:action :effect (and (not (p)))))):
+#: the bound is far above that and far below what a recursive reader (skillbank's own, or the planner's)
+#: could take.
+MAX_PDDL_DEPTH = 32
 _NAME_CHARS = set("abcdefghijklmnopqrstuvwxyz0123456789-_")
+#: PDDL's logical words: a predicate of one of these names would be read as the connective by a planner.
+_RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either", "define", "domain",
+                       "problem"})
 
 
 def _tokens(text: str, name: str) -> list:
@@ -44,10 +53,13 @@ def parse_sexpr(text: str, name: str = "pddl"):
         raise ValueError(f"{name}: expected PDDL text (a string), got {type(text).__name__}")
     tokens = _tokens(text, name)
     if tokens[0] != "(":
-        raise ValueError(f"{name}: expected an expression starting with '(', got {tokens[0]!r}")
+        raise ValueError(f"{name}: expected an expression starting with '(', got {_shown(tokens[0])}")
     stack: list = [[]]
     for k, tok in enumerate(tokens):
         if tok == "(":
+            if len(stack) > MAX_PDDL_DEPTH:
+                raise ValueError(f"{name}: expected parentheses nested at most {MAX_PDDL_DEPTH} deep (STRIPS "
+                                 f"needs 5), got deeper nesting at token {k + 1}")
             stack.append([])
         elif tok == ")":
             if len(stack) == 1:
@@ -77,10 +89,20 @@ def format_sexpr(expr) -> str:
     return "(" + " ".join(format_sexpr(e) for e in expr) + ")"
 
 
+def _shown(value) -> str:
+    """A name or an expression as it reads in a message, cut to a short line."""
+    text = format_sexpr(value) if isinstance(value, (str, list)) else f"{type(value).__name__} {value!r}"
+    text = text if isinstance(value, list) else repr(text) if isinstance(value, str) else text
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def _check_name(value, what: str, name: str) -> str:
     if not isinstance(value, str) or not value or not value[0].isalpha() or not set(value) <= _NAME_CHARS:
         raise ValueError(f"{name}: expected {what} (a letter, then letters, digits, '-' or '_'), "
-                         f"got {format_sexpr(value) if not isinstance(value, str) else repr(value)}")
+                         f"got {_shown(value)}")
+    if what == "a predicate name" and value in _RESERVED:
+        raise ValueError(f"{name}: expected {what}, got {value!r}, a word of PDDL's logic (rename the "
+                         "predicate)")
     return value
 
 
@@ -97,9 +119,9 @@ def _typed_list(items, name: str, *, variables: bool) -> list:
             pending, k = [], k + 2
             continue
         if not isinstance(tok, str):
-            raise ValueError(f"{name}: expected names, got {format_sexpr(tok)}")
+            raise ValueError(f"{name}: expected names, got {_shown(tok)}")
         if variables and not tok.startswith("?"):
-            raise ValueError(f"{name}: expected parameters written ?name, got {tok!r}")
+            raise ValueError(f"{name}: expected parameters written ?name, got {_shown(tok)}")
         _check_name(tok[1:] if variables else tok, "a name", name)
         pending.append(tok)
         k += 1
@@ -115,7 +137,7 @@ def atoms_of(expr, name: str) -> list:
     [(False, 'free', ('?b',)), (True, 'pressed', ('?b',))]
     """
     if isinstance(expr, str):
-        raise ValueError(f"{name}: expected an atom or (and ...), got {expr!r}")
+        raise ValueError(f"{name}: expected an atom or (and ...), got {_shown(expr)}")
     if not expr:
         return []
     head = expr[0]
@@ -123,11 +145,11 @@ def atoms_of(expr, name: str) -> list:
         return [a for e in expr[1:] for a in atoms_of(e, name)]
     if head == "not":
         if len(expr) != 2 or isinstance(expr[1], str) or expr[1][:1] in (["and"], ["not"]):
-            raise ValueError(f"{name}: expected (not ATOM), got {format_sexpr(expr)}")
+            raise ValueError(f"{name}: expected (not ATOM), got {_shown(expr)}")
         return [(True, *atoms_of(expr[1], name)[0][1:])]
     if not isinstance(head, str) or any(not isinstance(a, str) for a in expr[1:]):
         raise ValueError(f"{name}: expected atoms (predicate arg ...) combined with 'and' and 'not' "
-                         f"(STRIPS with negative preconditions), got {format_sexpr(expr)}")
+                         f"(STRIPS with negative preconditions), got {_shown(expr)}")
     return [(False, _check_name(head, "a predicate name", name), tuple(expr[1:]))]
 
 
@@ -181,13 +203,13 @@ def _action(expr, name: str) -> Action:
         raise ValueError(f"{where}: expected ':key value' pairs after the name, got an odd number of items")
     for key, value in zip(rest[::2], rest[1::2], strict=True):
         if key not in (":parameters", ":precondition", ":effect"):
-            raise ValueError(f"{where}: expected keys :parameters, :precondition, :effect, got {key!r}")
+            raise ValueError(f"{where}: expected keys :parameters, :precondition, :effect, got {_shown(key)}")
         keys[key] = value
     if ":effect" not in keys:
         raise ValueError(f"{where}: expected an :effect, got none")
     params = keys.get(":parameters", [])
     if isinstance(params, str):
-        raise ValueError(f"{where}: expected :parameters (?x - type ...), got {params!r}")
+        raise ValueError(f"{where}: expected :parameters (?x - type ...), got {_shown(params)}")
     parameters = _typed_list(params, f"{where} :parameters", variables=True)
     names = [p for p, _ in parameters]
     if len(set(names)) != len(names):
@@ -290,7 +312,7 @@ def parse_domain(text: str, name: str = "domain") -> Domain:
     types, preds, actions = [], {}, {}
     for part in expr[2:]:
         if isinstance(part, str) or not part:
-            raise ValueError(f"{name}: expected (:section ...), got {format_sexpr(part)!r}")
+            raise ValueError(f"{name}: expected (:section ...), got {_shown(part)}")
         head = part[0]
         if head == ":types":
             types = sorted({t for pair in _typed_list(part[1:], f"{name} :types", variables=False)
@@ -298,7 +320,7 @@ def parse_domain(text: str, name: str = "domain") -> Domain:
         elif head == ":predicates":
             for p in part[1:]:
                 if isinstance(p, str) or not p:
-                    raise ValueError(f"{name} :predicates: expected (name ?x - type ...), got {p!r}")
+                    raise ValueError(f"{name} :predicates: expected (name ?x - type ...), got {_shown(p)}")
                 pname = _check_name(p[0], "a predicate name", f"{name} :predicates")
                 preds[pname] = [t for _, t in _typed_list(p[1:], f"{name} :predicates", variables=True)]
         elif head == ":action":
@@ -306,7 +328,7 @@ def parse_domain(text: str, name: str = "domain") -> Domain:
             actions[act.name] = act
         elif head not in (":requirements", ":constants"):
             raise ValueError(f"{name}: expected :requirements, :types, :predicates, :constants or :action "
-                             f"sections, got {head!r}")
+                             f"sections, got {_shown(head)}")
     if not actions:
         raise ValueError(f"{name}: expected at least one (:action ...), got none")
     for act in actions.values():
@@ -332,11 +354,11 @@ def parse_atom(text, name: str) -> tuple:
     ValueError: goal[0]: expected a ground atom (predicate object ...), got '(on ?x table)'
     """
     if not isinstance(text, str):
-        raise ValueError(f"{name}: expected an atom like '(pressed b1)', got {type(text).__name__}")
+        raise ValueError(f"{name}: expected an atom like '(pressed b1)', got {describe(text)}")
     expr = parse_sexpr(text, name)
     if (isinstance(expr, str) or not expr or any(not isinstance(e, str) for e in expr)
             or any(e.startswith("?") for e in expr)):
-        raise ValueError(f"{name}: expected a ground atom (predicate object ...), got {text!r}")
+        raise ValueError(f"{name}: expected a ground atom (predicate object ...), got {_shown(text)}")
     return _check_name(expr[0], "a predicate name", name), tuple(expr[1:])
 
 

@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from ..store import Store
 from ._binding import check_binding
 from ._chain import PlanResult, _Skill, reproduce_plan
+from ._json import describe
 from ._pddl import Domain, domain_text, parse_action, parse_domain, problem_text
-from ._scene import Scene, load_scene
-from ._solve import MAX_EXPANSIONS, solve
+from ._scene import Scene, load_scene, scene_from_dict
+from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve
 
-__all__ = ["describe_skill", "skill_domain", "plan_task", "write_pddl"]
+__all__ = ["describe_skill", "skill_domain", "plan_task", "write_pddl", "MAX_DOMAIN_BYTES"]
+
+#: Largest domain file read (a domain of a thousand actions is far smaller).
+MAX_DOMAIN_BYTES = 16 * 2 ** 20
 
 
 def describe_skill(store: Store, label: str, action, binding=None) -> int:
@@ -100,16 +105,41 @@ def _domain(store, scene, domain) -> Domain:
         return skill_domain(store, scene)
     if isinstance(domain, Domain):
         return domain
-    if isinstance(domain, Path) or (isinstance(domain, str) and not domain.lstrip().startswith("(")):
-        path = Path(domain)
-        if not path.is_file():
-            raise ValueError(f"domain: expected a PDDL domain file, got {str(path)!r}, which is not a file")
-        return parse_domain(path.read_text(encoding="utf-8"), f"domain {path.name}")
+    if isinstance(domain, os.PathLike) or (isinstance(domain, str) and not domain.lstrip().startswith("(")):
+        return parse_domain(_read_domain(Path(domain)), f"domain {Path(domain).name}")
     return parse_domain(domain)
 
 
+def _read_domain(path: Path) -> str:
+    """The text of a domain file: at most MAX_DOMAIN_BYTES of UTF-8."""
+    if not path.is_file():
+        raise ValueError(f"domain: expected a PDDL domain file, got {str(path)!r}, which is not a file")
+    with path.open("rb") as fh:
+        data = fh.read(MAX_DOMAIN_BYTES + 1)
+    if len(data) > MAX_DOMAIN_BYTES:
+        raise ValueError(f"domain: expected a file of at most {MAX_DOMAIN_BYTES} bytes, got a larger one "
+                         f"({str(path)!r})")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"domain {str(path)!r}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") \
+            from None
+
+
+def _scene(scene) -> Scene:
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, dict):
+        return scene_from_dict(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    raise ValueError(f"scene: expected a Scene, a dict (a scene's content, as in a scene file) or the path "
+                     f"of a scene file, got {describe(scene)}")
+
+
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
-              max_expansions: int = MAX_EXPANSIONS, progress=None) -> PlanResult:
+              max_expansions: int = MAX_EXPANSIONS, max_groundings: int = MAX_GROUNDINGS,
+              time_limit: float = TIME_LIMIT, progress=None) -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
 
     1. The domain: ``domain`` (a :class:`Domain`, PDDL text or a file; used as
@@ -122,8 +152,9 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     Parameters
     ----------
     store : Store
-    scene : Scene, dict-free path, or str
-        A :class:`Scene` or a scene file.
+    scene : Scene, dict, str or path
+        A :class:`Scene`, a dict with a scene file's content (without
+        ``domain``, which names a file beside a scene file), or a scene file.
     domain : Domain, str or path, optional
     robot : str or RobotModel, optional
         ``"ur5e"``: one continuous joint trajectory.
@@ -132,6 +163,11 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     random_state : int, optional
     max_expansions : int
         States the planner may expand before giving up.
+    max_groundings : int
+        Ground actions the planner may build (checked before it starts; see
+        :data:`~skillbank.planning.MAX_GROUNDINGS`).
+    time_limit : float
+        Seconds the planner may search before giving up.
     progress : callable, optional
         ``progress(done, total)`` over the steps reproduced.
 
@@ -147,12 +183,13 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
         step and the reasons), a step that cannot avoid an obstacle (naming
         the step and the obstacle).
     """
-    scene = scene if isinstance(scene, Scene) else load_scene(scene)
+    scene = _scene(scene)
     dom = _domain(store, scene, domain)
     _check_scene_against(dom, scene)
     objects = {name: obj.type for name, obj in scene.objects.items()}
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
-    steps = solve(dom.text, problem, max_expansions=max_expansions)
+    check_groundings(dom, objects, max_groundings=max_groundings)
+    steps = solve(dom.text, problem, max_expansions=max_expansions, time_limit=time_limit)
     result = reproduce_plan(scene, steps, _skills(store, dom), robot=robot, limits=limits,
                             random_state=random_state, progress=progress)
     result.domain, result.problem = dom.text, problem

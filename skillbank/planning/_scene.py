@@ -19,7 +19,6 @@ optional ``branch`` names the robot's inverse-kinematics branch for every step
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +28,7 @@ import numpy as np
 from ..core import parse_obstacle
 from ..core._constraints import Constraints
 from ..core._rotations import check_quaternions
-from ..core._validation import check_array
+from ._json import check_depth, describe, load_json, number, numbers, short
 from ._pddl import _check_name, parse_atom
 
 __all__ = ["Scene", "SceneObject", "load_scene", "scene_from_dict", "SCENE_KEYS", "MAX_SCENE_BYTES"]
@@ -98,31 +97,26 @@ class Scene:
 def _unknown(doc: dict, allowed, where: str) -> None:
     extra = sorted(set(doc) - set(allowed), key=str)
     if extra:
-        raise ValueError(f"{where}: unknown key {extra[0]!r}; expected keys among {list(allowed)}")
-
-
-def _vector(value, where: str, n: int) -> np.ndarray:
-    v = check_array(value, name=where, ndim=1, min_samples=1)
-    if v.shape[0] != n:
-        raise ValueError(f"{where}: expected {n} numbers, got {v.shape[0]}")
-    return v
+        raise ValueError(f"{where}: unknown key {short(extra[0])}; expected keys among {list(allowed)}")
 
 
 def _quaternion(value, where: str) -> np.ndarray:
-    return check_quaternions(_vector(value, where, 4), name=where)
+    return check_quaternions(numbers(value, where, 4), name=where)
 
 
 def _object(name, doc, where: str) -> SceneObject:
     _check_name(str(name).lower(), "an object name", where)
     if not isinstance(doc, dict):
         raise ValueError(f"{where}: expected an object with 'type' and optionally 'position' and "
-                         f"'orientation', got {type(doc).__name__}")
+                         f"'orientation', got {describe(doc)}")
     _unknown(doc, _OBJECT_KEYS, where)
     if "type" not in doc:
         raise ValueError(f"{where}.type: expected a PDDL type name, got none")
-    kind = _check_name(str(doc["type"]).lower() if isinstance(doc["type"], str) else doc["type"],
-                       "a PDDL type name", f"{where}.type")
-    position = None if doc.get("position") is None else _vector(doc["position"], f"{where}.position", 3)
+    if not isinstance(doc["type"], str):
+        raise ValueError(f"{where}.type: expected a PDDL type name (a string such as 'button'), got "
+                         f"{describe(doc['type'])}")
+    kind = _check_name(doc["type"].lower(), "a PDDL type name", f"{where}.type")
+    position = None if doc.get("position") is None else numbers(doc["position"], f"{where}.position", 3)
     orientation = None if doc.get("orientation") is None else _quaternion(doc["orientation"],
                                                                            f"{where}.orientation")
     return SceneObject(str(name).lower(), kind, position, orientation)
@@ -135,30 +129,32 @@ def _obstacles(value) -> tuple[dict, dict]:
         items = [(str(k), v) for k, v in value.items()]
     else:
         raise ValueError(f"obstacles: expected a list (or an object) of specs like 'sphere:X,Y,Z,R', got "
-                         f"{type(value).__name__}")
+                         f"{describe(value)}")
     obstacles, specs = {}, {}
     for name, spec in items:
-        where = name if name.startswith("obstacles[") else f"obstacles[{name!r}]"
+        where = name if name.startswith("obstacles[") else f"obstacles[{short(name)}]"
+        if not isinstance(spec, str):
+            raise ValueError(f"{where}: expected a spec string like 'sphere:X,Y,Z,R', got {describe(spec)}")
         try:
             ob = parse_obstacle(spec)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
         if ob.n_dims != 3:
-            raise ValueError(f"{where}: expected a 3-D obstacle, got a {ob.n_dims}-D {spec!r}")
+            raise ValueError(f"{where}: expected a 3-D obstacle, got a {ob.n_dims}-D {short(spec)}")
         obstacles[name], specs[name] = ob, spec
     return obstacles, specs
 
 
 def _atoms(value, key: str, objects: dict) -> list:
     if not isinstance(value, list):
-        raise ValueError(f"{key}: expected a list of atoms like '(pressed b1)', got {type(value).__name__}")
+        raise ValueError(f"{key}: expected a list of atoms like '(pressed b1)', got {describe(value)}")
     out = []
     for k, text in enumerate(value):
         pred, args = parse_atom(text, f"{key}[{k}]")
         unknown = [a for a in args if a not in objects]
         if unknown:
-            raise ValueError(f"{key}[{k}]: {text!r} names {unknown[0]!r}, which is not an object of the "
-                             f"scene (objects {list(objects)[:8]})")
+            raise ValueError(f"{key}[{k}]: {short(text)} names {short(unknown[0])}, which is not an object "
+                             f"of the scene (objects {list(objects)[:8]})")
         out.append((pred, args))
     return out
 
@@ -166,34 +162,35 @@ def _atoms(value, key: str, objects: dict) -> list:
 def _start(value) -> dict:
     if not isinstance(value, dict):
         raise ValueError(f"start: expected an object with 'position' and 'orientation' or 'joints', got "
-                         f"{type(value).__name__}")
+                         f"{describe(value)}")
     _unknown(value, _START_KEYS, "start")
     out = dict.fromkeys(_START_KEYS)
     if value.get("position") is not None:
-        out["position"] = _vector(value["position"], "start.position", 3)
+        out["position"] = numbers(value["position"], "start.position", 3)
     if value.get("orientation") is not None:
         out["orientation"] = _quaternion(value["orientation"], "start.orientation")
     if value.get("joints") is not None:
-        out["joints"] = check_array(value["joints"], name="start.joints", ndim=1, min_samples=1)
+        out["joints"] = numbers(value["joints"], "start.joints")
         if out["position"] is not None or out["orientation"] is not None:
             raise ValueError("start: expected a pose (position, orientation) or joints, got both")
     if value.get("gripper") is not None:
-        out["gripper"] = float(check_array([value["gripper"]], name="start.gripper", ndim=1)[0])
+        out["gripper"] = number(value["gripper"], "start.gripper")
     return out
 
 
 def _confined(folder: Path | None, entry, key: str) -> Path:
     if not isinstance(entry, str) or not entry or "\x00" in entry:
-        raise ValueError(f"{key}: expected a file name relative to the scene's folder, got {entry!r}")
+        raise ValueError(f"{key}: expected a file name relative to the scene's folder, got {describe(entry)}")
     if folder is None:
-        raise ValueError(f"{key}: a scene read from a dict has no folder for {entry!r}; load it from a file")
+        raise ValueError(f"{key}: a scene read from a dict has no folder for {short(entry)}; load it from a "
+                         "file")
     root = os.path.realpath(folder)
     real = os.path.realpath(os.path.join(root, entry))
     if os.path.commonpath([root, real]) != root:
-        raise ValueError(f"{key}: expected a file inside the scene's folder, got {entry!r}, which leads "
-                         "outside it")
+        raise ValueError(f"{key}: expected a file inside the scene's folder, got {short(entry)}, which "
+                         "leads outside it")
     if not os.path.isfile(real):
-        raise ValueError(f"{key}: expected a file beside the scene, got {entry!r}, which is not a file")
+        raise ValueError(f"{key}: expected a file beside the scene, got {short(entry)}, which is not a file")
     return Path(real)
 
 
@@ -219,21 +216,24 @@ def scene_from_dict(doc, *, folder=None) -> Scene:
     """
     if not isinstance(doc, dict):
         raise ValueError(f"scene: expected a JSON object with keys {list(SCENE_KEYS)}, "
-                         f"got {type(doc).__name__}")
+                         f"got {describe(doc)}")
+    check_depth(doc, "scene")  # before anything walks it: a deep or self-containing dict is one line
     _unknown(doc, SCENE_KEYS, "scene")
     raw = doc.get("objects", {})
     if not isinstance(raw, dict):
         raise ValueError(f"objects: expected an object of name -> {{type, position, orientation}}, got "
-                         f"{type(raw).__name__}")
+                         f"{describe(raw)}")
     objects = {}
     for name, value in raw.items():
-        obj = _object(name, value, f"objects[{name!r}]")
+        obj = _object(name, value, f"objects[{short(name)}]")
         if obj.name in objects:
-            raise ValueError(f"objects[{name!r}]: expected unique names (case-insensitive), got it twice")
+            raise ValueError(f"objects[{short(name)}]: expected unique names (case-insensitive), got it "
+                             "twice")
         objects[obj.name] = obj
     obstacles, specs = _obstacles(doc.get("obstacles", []))
-    if "goal" not in doc or not doc["goal"]:
-        raise ValueError("goal: expected a non-empty list of atoms like '(pressed b1)', got none")
+    if doc.get("goal") is None or doc["goal"] == []:
+        raise ValueError("goal: expected a non-empty list of atoms like '(pressed b1)', got "
+                         f"{'none' if doc.get('goal') is None else 'an empty list'}")
     folder = None if folder is None else Path(folder)
     branch = doc.get("branch")
     if branch is not None and (not isinstance(branch, str) or not branch.strip()):
@@ -260,12 +260,5 @@ def load_scene(path) -> Scene:
     ['b1']
     """
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"scene: expected a JSON scene file, got {str(path)!r}, which is not a file")
-    if path.stat().st_size > MAX_SCENE_BYTES:
-        raise ValueError(f"scene: expected at most {MAX_SCENE_BYTES} bytes, got a larger file")
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"scene {str(path)!r}: expected JSON, got {' '.join(str(exc).split())}") from None
+    doc = load_json(path, "scene", MAX_SCENE_BYTES)
     return scene_from_dict(doc, folder=path.resolve().parent)
