@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import skillbank.io as sio
+from skillbank import Demonstration
 from skillbank.cli import main
 from skillbank.experiments import synthetic_multistream
 
@@ -184,3 +185,48 @@ def test_plot_reports_the_file_written(capsys, tmp_path):
     assert (tmp_path / "fig.png").read_bytes()[:4] == b"\x89PNG"
     code, out, err = _run(capsys, "segment", str(path), "--plot", str(tmp_path / "fig.bmp"))
     assert code == 2 and out == "" and "plot: expected a figure file name ending in one of" in err
+
+
+def test_a_constant_stream_is_set_aside_with_a_note(cli, tmp_path):
+    # was: exit 2, "the computation overflowed or became undefined"
+    demo = synthetic_multistream()
+    zero = sio.write_npz(type(demo)(demo.t, {**demo.streams, "torque": np.zeros((demo.n_steps, 3))}),
+                         tmp_path / "zero.npz")
+    plain = sio.write_npz(demo, tmp_path / "plain.npz")
+    code, out, err = cli("segment", zero, "--json")
+    assert code == 0
+    assert err == ("skillbank segment: set aside stream 'torque' (constant: every value is 0), which carries "
+                   "no information; the other streams were segmented as usual\n")
+    doc = json.loads(out)
+    assert doc["set_aside"] == {"torque": "constant: every value is 0"}
+    assert doc["constant_columns"] == {"force": [0, 1]}  # the synthetic force pushes along z only
+    code, out_plain, err_plain = cli("segment", plain, "--json")
+    assert code == 0 and err_plain == ""
+    assert doc["keypoints"] == json.loads(out_plain)["keypoints"] != []
+    # text output: the same note, once
+    code, out, err = cli("segment", zero)
+    assert code == 0 and err.count("\n") == 1 and "set aside stream 'torque'" in err
+
+
+def test_constant_columns_and_an_all_constant_recording_are_noted(cli, tmp_path):
+    t = np.linspace(0.0, 4.0, 400)
+    moving = np.column_stack([np.minimum(t, 1.0), np.clip(t - 2.0, 0.0, 1.0), np.full(400, 0.25)])
+    path = sio.write_npz(Demonstration(t, {"position": moving}), tmp_path / "held_z.npz")
+    code, out, err = cli("segment", path, "--json")
+    assert code == 0 and json.loads(out)["constant_columns"] == {"position": [2]}
+    assert err == ""  # reported, not noted
+    still = sio.write_npz(Demonstration(t, {"position": np.zeros((400, 3))}), tmp_path / "still.npz")
+    code, out, err = cli("segment", still, "--json")
+    assert code == 0 and json.loads(out)["n_segments"] == 1
+    assert err == ("skillbank segment: every stream is constant: stream 'position' (constant: every value is "
+                   "0); nothing to segment, the demonstration is one segment\n")
+
+
+def test_library_add_takes_a_recording_with_a_zero_force_sensor(cli, tmp_path):
+    demo = synthetic_multistream()
+    path = sio.write_npz(type(demo)(demo.t, {**demo.streams, "force": np.zeros((demo.n_steps, 3))}),
+                         tmp_path / "zero_force.npz")
+    assert cli("library", "init", tmp_path / "lib.db")[0] == 0
+    code, out, err = cli("library", "add", tmp_path / "lib.db", path, "--json")
+    assert code == 0, err
+    assert len(json.loads(out)["primitives"][0]) == 3
