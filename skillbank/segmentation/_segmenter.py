@@ -85,6 +85,10 @@ COMBINES = ("evidence", "product")
 #: (a turn is at most 180 degrees).
 NO_TURN = 181.0
 
+#: ``mode="sampling"`` draws at most this many samples per round: the draws
+#: are sorted and grouped, so ten times the default's 20 000 is still quick.
+MAX_DRAWS = 10**6
+
 #: With ``combine="evidence"``, events of lower confidence are left out: a
 #: tenth is a pen slowing to a sixth of its speed, or sensor noise at rest.
 MIN_CONFIDENCE = 0.1
@@ -317,8 +321,10 @@ class MultimodalSegmenter(Params):
             needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
             if n < needed:
                 raise ValueError(
-                    f"demo: expected at least {needed} samples to segment stream "
-                    f"{name!r} with min_size={p['min_size']}, got {n}")
+                    f"demo: expected at least {_size_text(needed)} samples to segment stream "
+                    f"{name!r} with min_size={_size_text(p['min_size'])}, got {n}; give a smaller min_size "
+                    f"(or window)")
+            _check_sizes(p, n)
             Y = demo[name]
             # a constant column has no boundary to show, and every measure below divides by its
             # spread: it is left out before any of them, and a stream of only such columns set aside
@@ -413,8 +419,10 @@ class MultimodalSegmenter(Params):
                                                     min_size=min_size)
         else:
             n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
+            if n_samples > MAX_DRAWS:
+                raise ValueError(f"n_samples: expected at most {MAX_DRAWS} draws per round, got {n_samples}")
             min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
-            rng = np.random.default_rng(self.random_state)
+            rng = np.random.default_rng(_check_random_state(self.random_state))
             draw = prob
             if evidence:
                 # the evidence is a per-sample probability, not a distribution: normalise it to draw
@@ -422,6 +430,30 @@ class MultimodalSegmenter(Params):
             keypoints = keypoints_sampling(draw, n_samples=n_samples, min_hits=min_hits, window=window,
                                            min_size=min_size, rng=rng)
         return prob, support, keypoints
+
+
+def _size_text(value: int) -> str:
+    """A number of samples for a message: exact when short, in powers of ten when long."""
+    return str(value) if value < 10**12 else f"{float(value):.3g}"
+
+
+def _check_sizes(params: dict, n: int) -> None:
+    """A window leaves room for a cut (two windows), and a grace period is within the demonstration."""
+    window, grace = params["window"], params["grace"]
+    if window > n // MIN_SEGMENTS:
+        raise ValueError(f"window: expected at most {n // MIN_SEGMENTS} samples (half the demonstration's "
+                         f"{n}), got {_size_text(window)}; give a smaller window")
+    if grace > n:
+        raise ValueError(f"grace: expected at most the demonstration's {n} samples, got {_size_text(grace)}")
+
+
+def _check_random_state(value):
+    """``random_state``: None, an integer >= 0 or a numpy Generator (numpy's own message names neither)."""
+    if value is None or isinstance(value, np.random.Generator):
+        return value
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"random_state: expected None, an integer >= 0 or a numpy Generator, got {value!r}")
+    return int(value)
 
 
 def _nothing(name: str, params: dict, n: int, kind: str, floor: float) -> StreamSegmentation:
