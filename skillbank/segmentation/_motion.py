@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import Demonstration
-from ._events import rest_events
+from ._events import MAX_CONFIDENCE, rest_events
 from ._gate import chord_angles
 from ._profile import TYPICAL_PERCENTILE
 
@@ -16,6 +16,20 @@ __all__ = ["MIN_MOTION_SHARE", "TURN_CONFIDENCE", "motion_evidence", "moves", "t
 #: movement, cut off by the operator's hand on the force sensor): it is merged
 #: into its neighbour.
 MIN_MOTION_SHARE = 0.05
+
+#: A rest is a reversal where the motion leaves it at more than this angle to
+#: the way it came (in degrees): the two chords' dot product is negative, so
+#: the motion turns back along some direction, whichever axis "down" is.
+REVERSAL_DEGREES = 90.0
+
+#: A reversal displaces the pauses near it when it is a stop by the rest
+#: rule's own measure: its speed falls to ``HALF_REST_RATIO`` (a twentieth) of
+#: the movements', where a rest is as likely a boundary as not.
+STOP_CONFIDENCE = 0.5 * MAX_CONFIDENCE
+
+#: Rests less confident than this take no part in the reversal rule: they are
+#: below the segmenter's ``MIN_CONFIDENCE`` and left out of the evidence anyway.
+MIN_DISPLACED = 0.1
 
 #: With ``combine="evidence"``, a turn of the stop-or-turn gate (a corner
 #: where the motion does not stop) is a boundary on its own, but a weaker
@@ -51,7 +65,7 @@ def moves(t, Y, speed) -> bool:
     return path > np.sqrt(np.finfo(float).eps) * scale
 
 
-def motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarray]:
+def motion_evidence(speed, turns, *, window: int, Y=None, min_size=None) -> tuple[np.ndarray, np.ndarray]:
     """A motion stream's events and confidences: its rests, and the stop-or-turn gate's ``turns``.
 
     The gate's events are the turns of a stroke that never rests (a letter's
@@ -76,6 +90,9 @@ def motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarra
     ([100, 200], [0.0, 0.9])
     """
     rests, confidence, _ = rest_events(speed, typical=float(np.percentile(speed, TYPICAL_PERCENTILE)))
+    if Y is not None:
+        rests, confidence = _reversals_first(Y, rests, confidence, window=window,
+                                             min_size=window if min_size is None else min_size)
     turns = np.asarray(turns, dtype=int)
     gap = np.abs(rests[:, None] - turns[None, :])
     near = gap <= window
@@ -91,6 +108,44 @@ def motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarra
     confidence = np.concatenate([confidence, np.full(alone.size, TURN_CONFIDENCE)])
     order = np.argsort(events, kind="stable")
     return events[order], confidence[order]
+
+
+def _reversals_first(Y, rests, confidence, *, window: int, min_size: int):
+    """Drop the rests that a reversal closer than ``min_size`` displaces.
+
+    A rest is a reversal where the motion leaves it back against the way it
+    came: the chords over the ``window`` samples before and after it point
+    more than ``REVERSAL_DEGREES`` apart (their dot product is negative), so
+    that along some direction the motion turns back (a press, a place, a touch:
+    down, then up again). Two rests closer than a minimum segment cannot both be
+    boundaries; where one of them is a reversal that stops (a rest's confidence
+    of at least ``STOP_CONFIDENCE``: its speed falls to a twentieth), it is the
+    boundary (the goal of the movement, reached), and a pause on the way there
+    or back (a hesitation above the button) is dropped, however full a stop:
+    every full stop is as confident as one stream gets. No axis is assumed:
+    "down" is whichever way the motion came.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 3.0, 301)
+    >>> z = np.interp(t, [0.0, 0.8, 1.0, 1.5, 2.0, 3.0], [1.0, 0.5, 0.5, 0.0, 0.0, 1.0])  # pause, press
+    >>> at, _ = _reversals_first(z[:, None], np.array([90, 175]), np.full(2, 0.9), window=40, min_size=100)
+    >>> at.tolist()  # the pause at 0.9 s goes, the press at 1.75 s stays
+    [175]
+    """
+    rests = np.asarray(rests, dtype=int)
+    confidence = np.asarray(confidence, dtype=float)
+    Y = np.asarray(Y, dtype=float).reshape(np.shape(Y)[0], -1)
+    # only rests that can matter (the weakest are left out of the evidence anyway): few, real stops
+    strong = np.flatnonzero(confidence >= MIN_DISPLACED)
+    if strong.size < 2:
+        return rests, confidence
+    back = chord_angles(Y, rests[strong], window) > REVERSAL_DEGREES
+    keep = np.ones(rests.size, dtype=bool)
+    for i in strong[back & (confidence[strong] >= STOP_CONFIDENCE)]:
+        near = strong[~back][np.abs(rests[strong[~back]] - rests[i]) < min_size]
+        keep[near] = False
+    return rests[keep], confidence[keep]
 
 
 def merge_motionless(keypoints, prob, demo: Demonstration, speeds: dict) -> np.ndarray:

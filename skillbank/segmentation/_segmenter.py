@@ -366,7 +366,8 @@ class MultimodalSegmenter(Params):
                         # peak; as evidence those are rests (judged by the rest finder) or nothing:
                         # only events where the direction turns, within a window, are turns
                         cps = cps[turning(Y, cps, window=p["window"], min_turn=p["min_turn"])]
-                    cps, confidence = motion_evidence(v, cps, window=p["window"]) if moves(t, Y, v) \
+                    cps, confidence = motion_evidence(v, cps, window=p["window"], Y=Y,
+                                                      min_size=p["min_size"]) if moves(t, Y, v) \
                         else (np.array([], dtype=int), np.array([], dtype=float))
                     strength = confidence
             elif kinds[name] == "contact":
