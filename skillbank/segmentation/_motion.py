@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import Demonstration
-from ._events import MAX_CONFIDENCE, rest_events
+from ._events import HALF_REST_RATIO, MAX_CONFIDENCE, REST_EXPONENT, rest_events
 from ._gate import chord_angles
 from ._profile import TYPICAL_PERCENTILE
 
@@ -22,10 +22,14 @@ MIN_MOTION_SHARE = 0.05
 #: the motion turns back along some direction, whichever axis "down" is.
 REVERSAL_DEGREES = 90.0
 
-#: A reversal displaces the pauses near it when it is a stop by the rest
-#: rule's own measure: its speed falls to ``HALF_REST_RATIO`` (a twentieth) of
-#: the movements', where a rest is as likely a boundary as not.
-STOP_CONFIDENCE = 0.5 * MAX_CONFIDENCE
+#: A reversal displaces the pauses near it when it is a full stop: its speed
+#: falls below a fiftieth of the movements', where by the rest rule every stop
+#: is as good as a full one (``REST_EXPONENT``). A rest that only slows to a
+#: twentieth (an orientation that turns back while the tool glides on) is no
+#: goal reached, and whether it clears a lower bar is at the mercy of the
+#: sensor's rate: a pose logged at 125 Hz moved two presses by 6 and 12 samples.
+FULL_STOP_RATIO = 1.0 / 50.0
+STOP_CONFIDENCE = MAX_CONFIDENCE / (1.0 + (FULL_STOP_RATIO / HALF_REST_RATIO) ** REST_EXPONENT)
 
 #: Rests less confident than this take no part in the reversal rule: they are
 #: below the segmenter's ``MIN_CONFIDENCE`` and left out of the evidence anyway.
@@ -118,9 +122,9 @@ def _reversals_first(Y, rests, confidence, *, window: int, min_size: int):
     more than ``REVERSAL_DEGREES`` apart (their dot product is negative), so
     that along some direction the motion turns back (a press, a place, a touch:
     down, then up again). Two rests closer than a minimum segment cannot both be
-    boundaries; where one of them is a reversal that stops (a rest's confidence
-    of at least ``STOP_CONFIDENCE``: its speed falls to a twentieth), it is the
-    boundary (the goal of the movement, reached), and a pause on the way there
+    boundaries; where one of them is a reversal that fully stops (a rest's
+    confidence of at least ``STOP_CONFIDENCE``: its speed falls below a
+    fiftieth), it is the boundary (the goal of the movement, reached), and a pause on the way there
     or back (a hesitation above the button) is dropped, however full a stop:
     every full stop is as confident as one stream gets. No axis is assumed:
     "down" is whichever way the motion came.

@@ -229,7 +229,16 @@ def test_library_add_takes_a_recording_with_a_zero_force_sensor(cli, tmp_path):
     assert cli("library", "init", tmp_path / "lib.db")[0] == 0
     code, out, err = cli("library", "add", tmp_path / "lib.db", path, "--json")
     assert code == 0, err
-    assert len(json.loads(out)["primitives"][0]) == 3
+    report = json.loads(out)
+    assert len(report["primitives"][0]) == 3  # as without the sensor
+    assert report["set_aside"] == {"1": {"force": "constant: every value is 0"}}
+    assert err == ("skillbank library add: set aside stream 'force' (constant: every value is 0) in "
+                   "demonstration [1], which carries no information; the others were segmented as usual\n")
+    # the provenance of the cut says so too
+    from skillbank.pipeline import Library
+
+    with Library(tmp_path / "lib.db") as lib:
+        assert lib.provenance(1)["set_aside"] == {"force": "constant: every value is 0"}
 
 
 def _ros_helpers():
