@@ -305,3 +305,15 @@ def test_a_bag_with_a_zero_torque_sensor_is_segmented(tmp_path, cli):
     assert doc["constant_columns"] == {"force": [1, 2]}
     assert err == ("skillbank segment: set aside stream 'torque' (constant: every value is 0), which carries "
                    "no information; the other streams were segmented as usual\n")
+
+
+@pytest.mark.parametrize(("rate", "match"), [
+    ("nan", r"rate: expected a number > 0, got nan"),
+    ("inf", r"rate: expected a number > 0, got inf"),
+    ("-100", r"rate: expected a number > 0, got -100\.0"),
+    ("0", r"rate: expected a number > 0, got 0\.0"),
+])
+def test_a_rate_that_is_no_rate_is_refused(button_bag, cli, rate, match):
+    code, out, err = cli("segment", button_bag, f"--rate={rate}")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert re.search(match, err), err
