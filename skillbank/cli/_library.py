@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._text import printable
+from ..core._validation import summarise
 from ._options import (
     add_constraint_options,
     add_execution_options,
@@ -244,6 +245,25 @@ def _init(args) -> int:
     return 0
 
 
+def set_aside_line(set_aside: dict) -> str:
+    """One line on the streams an add set aside as constant: each stream, why, and in which demonstrations.
+
+    Examples
+    --------
+    >>> zero = {"torque": "constant: every value is 0"}
+    >>> set_aside_line({3: zero, 4: zero}).split(", which")[0]
+    "set aside stream 'torque' (constant: every value is 0) in demonstrations [3, 4]"
+    """
+    where: dict = {}
+    for did, streams in set_aside.items():
+        for stream, why in streams.items():
+            where.setdefault((stream, why), []).append(did)
+    parts = [f"stream {stream!r} ({why}) in demonstration{'s' if len(ids) > 1 else ''} [{summarise(ids)}]"
+             for (stream, why), ids in where.items()]
+    verb = "carry" if len(parts) > 1 else "carries"
+    return f"set aside {'; '.join(parts)}, which {verb} no information; the others were segmented as usual"
+
+
 def _add(args) -> int:
     segmentation = {"streams": args.stream, **segmentation_params(args)}
     with _open(args) as lib:
@@ -255,6 +275,8 @@ def _add(args) -> int:
     command = getattr(args, "command_name", "skillbank library add")
     for path, reason in report["failed"].items():
         print(printable(f"{command}: skipped {path}: {reason}"), file=sys.stderr)  # a file name may hold ESC
+    if report.get("set_aside"):
+        print(printable(f"{command}: {set_aside_line(report['set_aside'])}"), file=sys.stderr)
     if args.json:
         print(json.dumps(report))
     else:

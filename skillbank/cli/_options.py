@@ -195,7 +195,8 @@ def add_reader_options(p) -> None:
     g.add_argument("--reference", default=None, metavar="STREAM",
                    help="the stream whose clock is the time base (default: joints, else the busiest topic)")
     g.add_argument("--rate", type=float, default=None, metavar="HZ",
-                   help="resample every stream at this rate instead of the reference stream's clock")
+                   help="resample every stream at this rate instead of the reference stream's clock (at "
+                        "most 10^7 samples; the variable SKILLBANK_MAX_SAMPLES sets another bound)")
     g.add_argument("--max-gap", type=float, default=None, metavar="SECONDS",
                    help="a stamped topic silent longer than this is an error (default 0.5 s)")
     g.add_argument("--parent-frame", default=None, help="with /tf: the parent frame of the pose")
@@ -230,7 +231,8 @@ def add_segmentation_options(p) -> None:
                    help="sliding-window width, samples or seconds like '0.1s' (default auto: 4 %% of the "
                         "length, at least 8 samples)")
     p.add_argument("--min-size", type=size, default=keep,
-                   help="minimum segment length, samples or seconds like '0.5s' (default two windows)")
+                   help="minimum segment length, samples or seconds like '0.5s' (default one window; two "
+                        "windows with --combine product)")
     p.add_argument("--threshold", type=float, default=keep, help="minimum jerk-event prominence in (0, 1]")
     p.add_argument("--grace", type=margin, default=keep,
                    help="samples or seconds like '0.1s' ignored at each end of a stream (default one window)")

@@ -7,9 +7,10 @@ import re
 import sys
 from pathlib import Path
 
+from ..core._text import printable
 from ._options import add_reader_options, add_segmentation_options, reader_options, segmentation_params
 
-__all__ = ["add_parser", "run", "segment_file_names"]
+__all__ = ["add_parser", "run", "segment_file_names", "set_aside_note"]
 
 
 def add_parser(sub):
@@ -77,13 +78,41 @@ def _write_segments(io, result, folder: Path, stem: str, fmt: str) -> tuple[list
     return [str(p) for p in written], [str(p) for p in removed]
 
 
+def set_aside_note(result) -> str:
+    """One line on the streams a segmentation set aside as constant; empty if none.
+
+    Constant columns of an informative stream (a simulated force along z only)
+    are reported by ``--json`` (``constant_columns``), not noted.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skillbank import Demonstration
+    >>> from skillbank.segmentation import segment
+    >>> t = np.linspace(0.0, 4.0, 400)
+    >>> demo = Demonstration(t, {"position": np.c_[np.minimum(t, 1.0), np.clip(t - 2.0, 0.0, 1.0)],
+    ...                          "torque": np.zeros((400, 3))})
+    >>> set_aside_note(segment(demo))[:69]
+    "set aside stream 'torque' (constant: every value is 0), which carries"
+    """
+    parts = [f"stream {name!r} ({why})" for name, why in result.set_aside.items()]
+    if not parts:
+        return ""
+    if len(parts) == len(result.streams):
+        return (f"every stream is constant: {', '.join(parts)}; nothing to segment, the demonstration is "
+                "one segment")
+    verb = "carry" if len(parts) > 1 else "carries"
+    return (f"set aside {', '.join(parts)}, which {verb} no information; the other streams were segmented "
+            "as usual")
+
+
 def _pick(demos: list, index, path: str) -> int:
     """The index of the demonstration to segment, counted from 0."""
     n = len(demos)
     if index is None:
         if n > 1:
-            print(f"skillbank segment: {path} holds {n} demonstrations; segmenting demonstration 0 "
-                  f"(--demo 0..{n - 1} picks another)", file=sys.stderr)
+            print(printable(f"skillbank segment: {path} holds {n} demonstrations; segmenting demonstration 0 "
+                            f"(--demo 0..{n - 1} picks another)"), file=sys.stderr)  # a name may hold ESC
         return 0
     if not -n <= index < n:
         raise ValueError(f"demo: expected an index in 0..{n - 1} ({path} holds {n} demonstration"
@@ -106,6 +135,9 @@ def run(args) -> int:
     index = _pick(demos, args.demo, args.input)
     demo = demos[index]
     result = MultimodalSegmenter(**segmentation_params(args)).fit(demo, args.stream).result_
+    note = set_aside_note(result)
+    if note:
+        print(printable(f"skillbank segment: {note}"), file=sys.stderr)
     written, removed = [], []
     if args.out is not None:
         written, removed = _write_segments(io, result, args.out, Path(args.input).stem, args.format)

@@ -24,6 +24,7 @@ from ._parallel import (
     file_reason,
     prepare,
     read_file,
+    set_aside,
 )
 
 __all__ = ["Adding", "ASSIGN", "check_label"]
@@ -230,6 +231,8 @@ class Adding:
         dict
             ``{"demonstrations": [ids], "primitives": [[ids] per demonstration],
             "failed": {file: reason}, "unclustered": {demonstration id: reason},
+            "set_aside": {demonstration id: {stream: reason}} (streams without
+            information the segmenter set aside),
             "version": the new clustering version (assign="recluster") or None}``;
             a parallel add adds ``"scheduler"``, the address of the cluster used.
 
@@ -285,7 +288,7 @@ class Adding:
                   "failed": dict(sorted(failed.items(), key=lambda kv: order[kv[0]])),
                   "unclustered": {did: why for (did, _), (_, why) in zip(written, prepared, strict=True)
                                   if why is not None},
-                  "version": None}
+                  "set_aside": set_aside(written, prepared), "version": None}
         if assign == "recluster" and written:
             report["version"] = self._recluster(progress)
         return report

@@ -111,9 +111,11 @@ def bounds(demo, segment, segmentation):
     params = dict(segmentation or {})
     streams = params.pop("streams", None)
     result = MultimodalSegmenter(**params).fit(demo, streams).result_
+    # the streams without information that took no part in the cut, and why (none: no key)
+    aside = {"set_aside": dict(result.set_aside)} if result.set_aside else {}
     return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
                            "streams": streams, "requested": params, "resolved": result.params,
-                           "mode": result.mode, "skillbank_version": __version__}
+                           "mode": result.mode, "skillbank_version": __version__, **aside}
 
 
 def assignment(parts, snapshot):
@@ -147,6 +149,13 @@ def assignment(parts, snapshot):
     X = (F - snapshot["pca_mean"]) @ snapshot["pca_components"].T
     clusters = nearest_centre(X, snapshot["centers"]).tolist()
     return {"version": version, "clusters": clusters, "features": X}, None
+
+
+def set_aside(written, prepared) -> dict:
+    """``{demonstration id: {stream: reason}}`` of the streams the segmenter set aside as constant."""
+    pairs = zip(written, prepared, strict=True)
+    return {did: item["provenance"]["set_aside"] for (did, _), (item, _) in pairs
+            if "set_aside" in item["provenance"]}
 
 
 def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> tuple:
@@ -286,7 +295,7 @@ class _Job:
         self.lib, self.client, self.dist, self.files, self.args = lib, client, dist, files, args
         self.keep_going, self.batch_size, self.chunk, self.window = keep_going, batch_size, chunk, window
         self.report = {"demonstrations": [], "primitives": [], "failed": {}, "unclustered": {},
-                       "version": None, "scheduler": client.scheduler.address}
+                       "set_aside": {}, "version": None, "scheduler": client.scheduler.address}
         self.pending, self.done, self.inflight = [], {}, {}
         self.queue = dist.as_completed(loop=client.loop)
         self.submitted = self.consumed = 0
@@ -309,6 +318,7 @@ class _Job:
             self.report["primitives"] += [pids for _, pids in written]
             self.report["unclustered"].update({did: why for (did, _), (_, why)
                                                in zip(written, self.pending, strict=True) if why is not None})
+            self.report["set_aside"].update(set_aside(written, self.pending))
             self.pending.clear()
 
     def collect(self, future, bar) -> None:

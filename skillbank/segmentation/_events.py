@@ -205,6 +205,11 @@ def contact_events(Y, *, window: int) -> tuple[np.ndarray, np.ndarray]:
     w = int(window)
     if n < 2 * w + 1 or w < 2:
         return np.array([], dtype=int), np.array([], dtype=float)
+    spread = float(np.max(Y.max(axis=0) - Y.min(axis=0)))
+    if 0.0 < spread < np.inf:
+        # effect sizes do not depend on the unit: a power of two (exact) brings the spread to about
+        # one, so that the variance floor of a stream of tiny values does not underflow to 0 / 0
+        Y = np.ldexp(Y, -int(np.frexp(spread)[1]))
     # a single sample of white noise is 3 robust deviations out once in a few hundred,
     # 6 once in 10^9: an impact counts on the steps' scale at half its size
     d = np.maximum(_step_effect(Y, w), _impulse_effect(Y, w) / IMPULSE_SCALE)

@@ -148,7 +148,7 @@ def evidence_curve(events, confidence, n_steps: int, sigma: float) -> np.ndarray
         return out
     # each Gaussian only within 8 sigma of its event (beyond, below 1.3e-14 of its height):
     # the cost grows with the events times their width, not times the whole stream
-    reach = int(np.ceil(GAUSSIAN_REACH * sigma))
+    reach = min(int(np.ceil(GAUSSIAN_REACH * sigma)), n_steps)  # never wider than the stream
     offsets = np.arange(-reach, reach + 1)
     pos = np.rint(at).astype(int)[:, None] + offsets[None, :]
     inside = (pos >= 0) & (pos < n_steps)

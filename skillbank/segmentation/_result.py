@@ -81,6 +81,12 @@ class SegmentationResult:
         Each stream's settings, by stream name.
     combine : str
         ``"product"`` (the paper's rule) or ``"evidence"``.
+    set_aside : dict of str to str
+        The streams that carried no information (constant, or constant to
+        within their round-off), each with the reason: they took no part in
+        the keypoints (their entry in :attr:`streams` has no events).
+    constant_columns : dict of str to list of int
+        Per stream, the constant columns left out of an otherwise informative stream.
     """
 
     demonstration: Demonstration
@@ -91,6 +97,8 @@ class SegmentationResult:
     mode: str
     params: dict = field(default_factory=dict)
     combine: str = "product"
+    set_aside: dict = field(default_factory=dict)
+    constant_columns: dict = field(default_factory=dict)
 
     @property
     def changepoints(self) -> dict:
@@ -153,4 +161,7 @@ class SegmentationResult:
             "n_segments": self.n_segments,
             # > 1 where the stream's round-off made the jerk be taken over a stride of samples
             "jerk_step": {k: int(v.jerk_step) for k, v in self.streams.items()},
+            # streams that carried no information, with the reason, and constant columns left out
+            "set_aside": dict(self.set_aside),
+            "constant_columns": {k: [int(c) for c in v] for k, v in self.constant_columns.items()},
         }

@@ -11,8 +11,9 @@ from ..core import Demonstration
 from ..core._params import Params
 from ..core._validation import check_fraction, check_positive, numerical_errors
 from ._changepoints import detect_changepoints, refine_to_jerk_centre
-from ._events import contact_events, discrete_events, rest_events, rest_speed, stream_kind
-from ._gate import _gate_changepoints, chord_angles
+from ._constant import constant_columns, why_constant
+from ._events import contact_events, discrete_events, rest_speed, stream_kind
+from ._gate import _gate_changepoints
 from ._keypoints import (
     changepoint_probability,
     combine_evidence,
@@ -21,7 +22,8 @@ from ._keypoints import (
     keypoints_deterministic,
     keypoints_sampling,
 )
-from ._profile import TYPICAL_PERCENTILE, _stream_jerk, speed_norm
+from ._motion import merge_motionless, motion_evidence, moves, turning
+from ._profile import _stream_jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
@@ -77,23 +79,15 @@ SUPPORT_SLACK = 0.25
 #: probability where a boundary is more likely than not.
 KEYPOINT_PROBABILITY = 0.5
 
-#: A segment whose motion streams travel less than this fraction of the median
-#: segment's path holds no movement of its own (the rest before the first
-#: movement, cut off by the operator's hand on the force sensor): it is merged
-#: into its neighbour.
-MIN_MOTION_SHARE = 0.05
-
 COMBINES = ("evidence", "product")
 
 #: ``min_turn=None``: no change of direction makes a boundary without a stop
 #: (a turn is at most 180 degrees).
 NO_TURN = 181.0
 
-#: With ``combine="evidence"``, a turn of the stop-or-turn gate (a corner
-#: where the motion does not stop) is a boundary on its own, but a weaker
-#: witness than a stop: more likely than not, and outweighed where a stop or
-#: another kind of stream places the boundary elsewhere.
-TURN_CONFIDENCE = 0.6
+#: ``mode="sampling"`` draws at most this many samples per round: the draws
+#: are sorted and grouped, so ten times the default's 20 000 is still quick.
+MAX_DRAWS = 10**6
 
 #: With ``combine="evidence"``, events of lower confidence are left out: a
 #: tenth is a pen slowing to a sixth of its speed, or sensor noise at rest.
@@ -209,6 +203,14 @@ class MultimodalSegmenter(Params):
     ----------
     result_ : SegmentationResult
         Set by :meth:`fit`.
+    set_aside_ : dict of str to str
+        The streams set aside because they carry no information (every column
+        constant, or constant to within its round-off: a force sensor reading 0
+        throughout), each with the reason. They take no part in the keypoints:
+        the other streams are cut exactly as they would be without them. When
+        every stream is set aside, the demonstration is one segment.
+    constant_columns_ : dict of str to list of int
+        Per stream, the constant columns left out of an otherwise informative stream.
 
     Examples
     --------
@@ -313,15 +315,27 @@ class MultimodalSegmenter(Params):
         # the paper's product rule treats every stream as motion, as the paper does
         kinds = {name: stream_kind(name, self.stream_kinds) if evidence else "motion" for name in names}
         t, n = demo.t, demo.n_steps
-        per_stream, speeds = {}, {}
+        per_stream, speeds, set_aside, constant = {}, {}, {}, {}
         for name in names:
             p = self._stream_settings(name, t)
             needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
             if n < needed:
                 raise ValueError(
-                    f"demo: expected at least {needed} samples to segment stream "
-                    f"{name!r} with min_size={p['min_size']}, got {n}")
+                    f"demo: expected at least {_size_text(needed)} samples to segment stream "
+                    f"{name!r} with min_size={_size_text(p['min_size'])}, got {n}; give a smaller min_size "
+                    f"(or window)")
+            _check_sizes(p, n)
             Y = demo[name]
+            # a constant column has no boundary to show, and every measure below divides by its
+            # spread: it is left out before any of them, and a stream of only such columns set aside
+            still = constant_columns(Y)
+            if still.all():
+                set_aside[name] = why_constant(Y)
+                per_stream[name] = _nothing(name, p, n, kinds[name], 0.0 if evidence else floor)
+                continue
+            if still.any():
+                constant[name] = np.flatnonzero(still).tolist()
+                Y = Y[:, ~still]
             # the jerk norm serves the profile and the refinement, the speed
             # the relative scale, the time stamps' round-off and the gate: each is computed once
             speed = speed_norm(t, Y)
@@ -351,8 +365,9 @@ class MultimodalSegmenter(Params):
                         # the gate also keeps events where the speed merely dips below half its
                         # peak; as evidence those are rests (judged by the rest finder) or nothing:
                         # only events where the direction turns, within a window, are turns
-                        cps = cps[_turning(Y, cps, window=p["window"], min_turn=p["min_turn"])]
-                    cps, confidence = _motion_evidence(v, cps, window=p["window"]) if _moves(t, Y, v) \
+                        cps = cps[turning(Y, cps, window=p["window"], min_turn=p["min_turn"])]
+                    cps, confidence = motion_evidence(v, cps, window=p["window"], Y=Y,
+                                                      min_size=p["min_size"]) if moves(t, Y, v) \
                         else (np.array([], dtype=int), np.array([], dtype=float))
                     strength = confidence
             elif kinds[name] == "contact":
@@ -369,137 +384,84 @@ class MultimodalSegmenter(Params):
                 changepoint_probability(cps, n, sigma=sigma, floor=floor)
             per_stream[name] = StreamSegmentation(name, p, j, prof, cps, strength, curve, jerk_step=step,
                                                   kind=kinds[name], floor=0.0 if evidence else floor)
-        min_size = min(s.params["min_size"] for s in per_stream.values())
-        window = min(s.params["window"] for s in per_stream.values())
+        active = {k: v for k, v in per_stream.items() if k not in set_aside}
+        if active:
+            prob, support, keypoints = self._keypoints(active, kinds, floor, n)
+        else:
+            # nothing moves, touches or switches: the demonstration is one segment
+            prob, support, keypoints = np.zeros(n), np.zeros(n), np.array([], dtype=int)
+        if evidence and speeds:
+            keypoints = merge_motionless(keypoints, prob, demo, speeds)
+        self.set_aside_ = set_aside
+        self.constant_columns_ = constant
+        self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
+                                          {k: v.params for k, v in per_stream.items()}, self.combine,
+                                          set_aside=dict(set_aside), constant_columns=dict(constant))
+        return self
+
+    def _keypoints(self, streams: dict, kinds: dict, floor: float, n: int):
+        """``(probability, support, keypoints)`` from the informative ``streams``' curves."""
+        evidence = self.combine == "evidence"
+        min_size = min(s.params["min_size"] for s in streams.values())
+        window = min(s.params["window"] for s in streams.values())
         if evidence:
-            prob, _ = combine_evidence({k: v.probability for k, v in per_stream.items()}, kinds)
+            prob, _ = combine_evidence({k: v.probability for k, v in streams.items()}, kinds)
             support = prob
         else:
-            prob, support = combine_probabilities({k: v.probability for k, v in per_stream.items()},
+            prob, support = combine_probabilities({k: v.probability for k, v in streams.items()},
                                                   floor=floor)
         if self.mode == "deterministic":
             if evidence:
                 keypoints = keypoints_deterministic(prob, min_support=KEYPOINT_PROBABILITY, min_size=min_size)
             else:
-                need = max(1.0, DEFAULT_SUPPORT_FRACTION * len(names)) if self.min_support is None else \
+                need = max(1.0, DEFAULT_SUPPORT_FRACTION * len(streams)) if self.min_support is None else \
                     check_positive(self.min_support, name="min_support")
                 keypoints = keypoints_deterministic(support, min_support=need - SUPPORT_SLACK,
                                                     min_size=min_size)
         else:
             n_samples = check_positive(self.n_samples, name="n_samples", integer=True)
+            if n_samples > MAX_DRAWS:
+                raise ValueError(f"n_samples: expected at most {MAX_DRAWS} draws per round, got {n_samples}")
             min_hits = check_positive(self.min_hits, name="min_hits", integer=True)
-            rng = np.random.default_rng(self.random_state)
+            rng = np.random.default_rng(_check_random_state(self.random_state))
             draw = prob
             if evidence:
                 # the evidence is a per-sample probability, not a distribution: normalise it to draw
                 draw = prob / prob.sum() if prob.sum() > 0 else np.full(n, 1.0 / n)
             keypoints = keypoints_sampling(draw, n_samples=n_samples, min_hits=min_hits, window=window,
                                            min_size=min_size, rng=rng)
-        if evidence and speeds:
-            keypoints = _merge_motionless(keypoints, prob, demo, speeds)
-        self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
-                                          {k: v.params for k, v in per_stream.items()}, self.combine)
-        return self
+        return prob, support, keypoints
 
 
-def _turning(Y, events, *, window: int, min_turn: float) -> np.ndarray:
-    """Which ``events`` turn by at least ``min_turn`` degrees somewhere within one window.
-
-    The turn at a sample is the angle between the chords over the ``window``
-    samples before and after it (the gate's measure); a jerk event sits up to
-    a window from the corner it marks, so the largest turn within a window of
-    the event is taken.
-    """
-    from scipy.ndimage import maximum_filter1d  # only the evidence rule needs it
-
-    Y = np.asarray(Y, dtype=float).reshape(Y.shape[0], -1)
-    n = Y.shape[0]
-    angle = maximum_filter1d(chord_angles(Y, np.arange(n), window), 2 * window + 1, mode="nearest")
-    return angle[np.asarray(events, dtype=int)] >= min_turn
+def _size_text(value: int) -> str:
+    """A number of samples for a message: exact when short, in powers of ten when long."""
+    return str(value) if value < 10**12 else f"{float(value):.3g}"
 
 
-def _moves(t, Y, speed) -> bool:
-    """Whether a motion stream moves at all: its path is more than round-off of its magnitude.
-
-    A held stream's speed is round-off (1e-13 of its values, from differences
-    of equal numbers on uneven time steps); its valleys and "turns" are noise.
-    """
-    path = float(np.sum(speed[:-1] * np.diff(t)))
-    scale = float(np.max(np.abs(Y))) if Y.size else 0.0
-    return path > np.sqrt(np.finfo(float).eps) * scale
-
-
-def _motion_evidence(speed, turns, *, window: int) -> tuple[np.ndarray, np.ndarray]:
-    """A motion stream's events and confidences: its rests, and the stop-or-turn gate's ``turns``.
-
-    The gate's events are the turns of a stroke that never rests (a letter's
-    corners). A turn marks one boundary, so it confirms one rest: the most
-    confident within ``window`` of it (the nearest of equals), whose
-    confidence becomes at least ``TURN_CONFIDENCE``; the rest finder's best
-    candidate is where the boundary lies, the turn's own event being up to a
-    window off. A turn far from every rest is an event of its own, a weaker
-    witness than a stop.
-
-    Confirming every rest within the window raised each ripple of the speed
-    there (any valley of 2 % of the typical speed, however far from a stop) to
-    a boundary, and a finely sampled speed has many more ripples per second:
-    at 1 kHz ten times as many as at 100 Hz.
-
-    Examples
-    --------
-    >>> t = np.linspace(0.0, 2.0, 401)  # two movements, a stop at 200, a dip of the speed at 100
-    >>> v = np.abs(np.sin(np.pi * t)) - 0.2 * np.exp(-0.5 * ((t - 0.5) / 0.03) ** 2)
-    >>> at, conf = _motion_evidence(v, [150], window=60)  # a turn half-way, near both
-    >>> at.tolist(), np.round(conf, 2).tolist()  # the stop is confirmed, the dip stays a dip
-    ([100, 200], [0.0, 0.9])
-    """
-    rests, confidence, _ = rest_events(speed, typical=float(np.percentile(speed, TYPICAL_PERCENTILE)))
-    turns = np.asarray(turns, dtype=int)
-    gap = np.abs(rests[:, None] - turns[None, :])
-    near = gap <= window
-    with_rest = near.any(axis=0)
-    if with_rest.any():
-        # per turn, its most confident rest within the window; of equals the nearest
-        top = np.where(near, confidence[:, None], -np.inf).max(axis=0)
-        pick = np.argmin(np.where(near & (confidence[:, None] == top), gap, np.inf), axis=0)[with_rest]
-        confidence = confidence.copy()
-        confidence[pick] = np.maximum(confidence[pick], TURN_CONFIDENCE)
-    alone = turns[~with_rest]
-    events = np.concatenate([rests, alone])
-    confidence = np.concatenate([confidence, np.full(alone.size, TURN_CONFIDENCE)])
-    order = np.argsort(events, kind="stable")
-    return events[order], confidence[order]
+def _check_sizes(params: dict, n: int) -> None:
+    """A window leaves room for a cut (two windows), and a grace period is within the demonstration."""
+    window, grace = params["window"], params["grace"]
+    if window > n // MIN_SEGMENTS:
+        raise ValueError(f"window: expected at most {n // MIN_SEGMENTS} samples (half the demonstration's "
+                         f"{n}), got {_size_text(window)}; give a smaller window")
+    if grace > n:
+        raise ValueError(f"grace: expected at most the demonstration's {n} samples, got {_size_text(grace)}")
 
 
-def _merge_motionless(keypoints, prob, demo: Demonstration, speeds: dict) -> np.ndarray:
-    """Drop keypoints that leave a segment without a movement of its own.
+def _check_random_state(value):
+    """``random_state``: None, an integer >= 0 or a numpy Generator (numpy's own message names neither)."""
+    if value is None or isinstance(value, np.random.Generator):
+        return value
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"random_state: expected None, an integer >= 0 or a numpy Generator, got {value!r}")
+    return int(value)
 
-    A segment's motion is the path its motion streams travel, each stream
-    measured against its own median segment; a segment below
-    ``MIN_MOTION_SHARE`` of that in every motion stream is merged into a
-    neighbour, by dropping its less probable bounding keypoint (its only one
-    at either end of the demonstration).
-    """
-    keypoints = np.asarray(keypoints, dtype=int)
-    dt = np.gradient(demo.t)
-    # cumulative path length of each motion stream, so a segment's path is a difference
-    paths = [np.concatenate(([0.0], np.cumsum(v * dt))) for v in speeds.values()]
-    while keypoints.size:
-        edges = np.concatenate(([0], keypoints, [demo.n_steps]))
-        shares = []
-        for c in paths:
-            travel = c[edges[1:]] - c[edges[:-1]]
-            typical = float(np.median(travel))
-            shares.append(travel / typical if typical > 0 else np.full(travel.size, np.inf))
-        share = np.max(shares, axis=0)
-        k = int(np.argmin(share))
-        if share[k] >= MIN_MOTION_SHARE:
-            break
-        # segment k lies between keypoints k - 1 and k
-        candidates = [i for i in (k - 1, k) if 0 <= i < keypoints.size]
-        drop = min(candidates, key=lambda i: prob[keypoints[i]])
-        keypoints = np.delete(keypoints, drop)
-    return keypoints
+
+def _nothing(name: str, params: dict, n: int, kind: str, floor: float) -> StreamSegmentation:
+    """The segmentation of a stream set aside as constant: no jerk, no events, only the floor."""
+    zeros = np.zeros(n)
+    return StreamSegmentation(name, params, zeros, zeros.copy(), np.array([], dtype=int), np.array([]),
+                              np.full(n, floor), kind=kind, floor=floor)
 
 
 def segment(demo: Demonstration, streams=None, **params) -> SegmentationResult:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import skillbank.io as sio
+from skillbank import Demonstration
 from skillbank.cli import main
 from skillbank.experiments import synthetic_multistream
 
@@ -184,3 +185,135 @@ def test_plot_reports_the_file_written(capsys, tmp_path):
     assert (tmp_path / "fig.png").read_bytes()[:4] == b"\x89PNG"
     code, out, err = _run(capsys, "segment", str(path), "--plot", str(tmp_path / "fig.bmp"))
     assert code == 2 and out == "" and "plot: expected a figure file name ending in one of" in err
+
+
+def test_a_constant_stream_is_set_aside_with_a_note(cli, tmp_path):
+    # was: exit 2, "the computation overflowed or became undefined"
+    demo = synthetic_multistream()
+    zero = sio.write_npz(type(demo)(demo.t, {**demo.streams, "torque": np.zeros((demo.n_steps, 3))}),
+                         tmp_path / "zero.npz")
+    plain = sio.write_npz(demo, tmp_path / "plain.npz")
+    code, out, err = cli("segment", zero, "--json")
+    assert code == 0
+    assert err == ("skillbank segment: set aside stream 'torque' (constant: every value is 0), which carries "
+                   "no information; the other streams were segmented as usual\n")
+    doc = json.loads(out)
+    assert doc["set_aside"] == {"torque": "constant: every value is 0"}
+    assert doc["constant_columns"] == {"force": [0, 1]}  # the synthetic force pushes along z only
+    code, out_plain, err_plain = cli("segment", plain, "--json")
+    assert code == 0 and err_plain == ""
+    assert doc["keypoints"] == json.loads(out_plain)["keypoints"] != []
+    # text output: the same note, once
+    code, out, err = cli("segment", zero)
+    assert code == 0 and err.count("\n") == 1 and "set aside stream 'torque'" in err
+
+
+def test_constant_columns_and_an_all_constant_recording_are_noted(cli, tmp_path):
+    t = np.linspace(0.0, 4.0, 400)
+    moving = np.column_stack([np.minimum(t, 1.0), np.clip(t - 2.0, 0.0, 1.0), np.full(400, 0.25)])
+    path = sio.write_npz(Demonstration(t, {"position": moving}), tmp_path / "held_z.npz")
+    code, out, err = cli("segment", path, "--json")
+    assert code == 0 and json.loads(out)["constant_columns"] == {"position": [2]}
+    assert err == ""  # reported, not noted
+    still = sio.write_npz(Demonstration(t, {"position": np.zeros((400, 3))}), tmp_path / "still.npz")
+    code, out, err = cli("segment", still, "--json")
+    assert code == 0 and json.loads(out)["n_segments"] == 1
+    assert err == ("skillbank segment: every stream is constant: stream 'position' (constant: every value is "
+                   "0); nothing to segment, the demonstration is one segment\n")
+
+
+def test_library_add_takes_a_recording_with_a_zero_force_sensor(cli, tmp_path):
+    demo = synthetic_multistream()
+    path = sio.write_npz(type(demo)(demo.t, {**demo.streams, "force": np.zeros((demo.n_steps, 3))}),
+                         tmp_path / "zero_force.npz")
+    assert cli("library", "init", tmp_path / "lib.db")[0] == 0
+    code, out, err = cli("library", "add", tmp_path / "lib.db", path, "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert len(report["primitives"][0]) == 3  # as without the sensor
+    assert report["set_aside"] == {"1": {"force": "constant: every value is 0"}}
+    assert err == ("skillbank library add: set aside stream 'force' (constant: every value is 0) in "
+                   "demonstration [1], which carries no information; the others were segmented as usual\n")
+    # the provenance of the cut says so too
+    from skillbank.pipeline import Library
+
+    with Library(tmp_path / "lib.db") as lib:
+        assert lib.provenance(1)["set_aside"] == {"force": "constant: every value is 0"}
+
+
+def _ros_helpers():
+    """tests/io/test_ros.py's bag writer and the three-button recording as topics (needs rosbags)."""
+    import importlib.util
+
+    pytest.importorskip("rosbags")
+    path = Path(__file__).resolve().parents[1] / "io" / "test_ros.py"
+    spec = importlib.util.spec_from_file_location("_segment_cli_ros", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def button_bag(data_dir, tmp_path_factory):
+    """The three-button demonstration written as a ROS 2 bag (MCAP), each sensor on its own clock."""
+    ros = _ros_helpers()
+    recording, _ = ros.three_button_recording(data_dir)
+    return ros.write_bag(tmp_path_factory.mktemp("bag"), "mcap", recording, name="buttons")
+
+
+def test_a_rate_that_would_create_gigabytes_is_refused_before_it_does(button_bag, limited):
+    # was: 23 GB, killed by the kernel
+    code, out, err = limited("segment", button_bag, "--rate", "1e9", "--json", memory=1 << 30, timeout=60)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1, err
+    assert re.fullmatch(r"skillbank segment: error: rate: 1e\+09 Hz over the recording's 27\.\d+ s would "
+                        r"create 2\.7\de\+10 samples, more than the bound of 1e\+07; give a lower rate, or "
+                        r"set SKILLBANK_MAX_SAMPLES to a larger count of samples\n", err), err
+
+
+def test_the_sample_bound_is_set_by_the_environment(button_bag, cli, monkeypatch):
+    code, out, err = cli("segment", button_bag, "--rate", "100", "--json")
+    assert code == 0, err
+    # under the bound: 27.7 s at 100 Hz is 2771 samples, cut at the gripper and the presses
+    assert json.loads(out)["n_segments"] == 6
+    monkeypatch.setenv("SKILLBANK_MAX_SAMPLES", "1000")
+    code, out, err = cli("segment", button_bag, "--rate", "100")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "would create 2.77e+03 samples, more than the bound of 1000;" in err
+    for bad in ("lots", "1.5", "1"):
+        monkeypatch.setenv("SKILLBANK_MAX_SAMPLES", bad)
+        code, out, err = cli("segment", button_bag, "--rate", "100")
+        assert code == 2 and err == (f"skillbank segment: error: SKILLBANK_MAX_SAMPLES: expected a whole "
+                                     f"number of samples >= 2, got {bad!r}\n")
+
+
+def test_a_bag_with_a_zero_torque_sensor_is_segmented(tmp_path, cli):
+    # the shape of the 10^6-message benchmark bags (benchmarks/bench_ingest.py), at 6000 messages:
+    # joints and force x ramp, force y and z held at 0 and 1, torque all zero
+    pytest.importorskip("rosbags")
+    import importlib
+    import sys
+
+    benchmarks = str(Path(__file__).resolve().parents[2] / "benchmarks")
+    if benchmarks not in sys.path:
+        sys.path.insert(0, benchmarks)
+    bag = importlib.import_module("bench_ingest").write_bag(tmp_path, "mcap", 6000)
+    code, out, err = cli("segment", bag, "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["set_aside"] == {"torque": "constant: every value is 0"}
+    assert doc["constant_columns"] == {"force": [1, 2]}
+    assert err == ("skillbank segment: set aside stream 'torque' (constant: every value is 0), which carries "
+                   "no information; the other streams were segmented as usual\n")
+
+
+@pytest.mark.parametrize(("rate", "match"), [
+    ("nan", r"rate: expected a number > 0, got nan"),
+    ("inf", r"rate: expected a number > 0, got inf"),
+    ("-100", r"rate: expected a number > 0, got -100\.0"),
+    ("0", r"rate: expected a number > 0, got 0\.0"),
+])
+def test_a_rate_that_is_no_rate_is_refused(button_bag, cli, rate, match):
+    code, out, err = cli("segment", button_bag, f"--rate={rate}")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert re.search(match, err), err

@@ -13,7 +13,9 @@ import pytest
 
 from skillbank import Demonstration
 from skillbank.segmentation import segment
-from skillbank.segmentation._segmenter import AUTO_WINDOW_FRACTION, TURN_CONFIDENCE, _motion_evidence
+from skillbank.segmentation._motion import TURN_CONFIDENCE
+from skillbank.segmentation._motion import motion_evidence as _motion_evidence
+from skillbank.segmentation._segmenter import AUTO_WINDOW_FRACTION
 
 #: Rests before the first and after the last reach (s).
 LEAD = 0.3

@@ -156,7 +156,20 @@ def test_product_rewards_agreement():
         ({"scale": "log"}, r"scale: expected 'relative' or 'absolute', got 'log'"),
         ({"normalize": "l2"}, r"normalize: expected 'robust' or 'max', got 'l2'"),
         ({"stream_params": {"position": {"windw": 3}}}, r"stream_params\['position'\]: expected keys"),
-        ({"min_size": 400}, r"demo: expected at least 800 samples to segment stream 'position'"),
+        ({"min_size": 400}, r"demo: expected at least 800 samples to segment stream 'position'.*; give a "
+                            r"smaller min_size"),
+        ({"min_size": "1e300s"},
+         r"demo: expected at least 1\.2e\+303 samples .* min_size=5\.99e\+302, got 600"),
+        ({"window": 301, "min_size": 2},
+         r"^window: expected at most 300 samples \(half the demonstration's 600\), got 301; give a smaller "
+         r"window$"),
+        ({"window": 10**12, "min_size": 2}, r"window: expected at most 300 samples .*, got 1e\+12;"),
+        ({"grace": 601}, r"^grace: expected at most the demonstration's 600 samples, got 601$"),
+        ({"mode": "sampling", "random_state": -1},
+         r"^random_state: expected None, an integer >= 0 or a numpy Generator, got -1$"),
+        ({"mode": "sampling", "random_state": 1.5}, r"^random_state: expected None, .* got 1\.5$"),
+        ({"mode": "sampling", "n_samples": 10**9},
+         r"^n_samples: expected at most 1000000 draws per round, got"),
     ],
 )
 def test_bad_parameters(kwargs, match):
