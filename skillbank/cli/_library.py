@@ -396,18 +396,19 @@ def check_robot(args) -> None:
 
 
 def _binding(text):
-    """``--binding``: a JSON object, or a file holding one."""
+    """``--binding``: a JSON object, or a file holding one (size and nesting bounded as a scene's)."""
+    # planning only for describe: the other library commands never load it
+    from ..planning._json import load_json, parse_json  # only when a binding is given
+    from ..planning._scene import MAX_SCENE_BYTES  # the same size bound as a scene's
+
     if text is None:
         return None
     if not text.lstrip().startswith("{"):
         path = Path(text)
         if not path.is_file():
             raise ValueError(f"binding: expected a JSON object or a .json file, got {text!r}")
-        text = path.read_text(encoding="utf-8")
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"binding: expected a JSON object, got invalid JSON ({exc})") from None
+        return load_json(path, "binding", MAX_SCENE_BYTES)
+    return parse_json(text, "binding")
 
 
 def _describe(args) -> int:

@@ -123,17 +123,23 @@ def load_json(path: Path, name: str, max_bytes: int):
     if len(data) > max_bytes:
         raise ValueError(f"{name}: expected a file of at most {max_bytes} bytes, got a larger one "
                          f"({str(path)!r})")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{name} {str(path)!r}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") \
-            from None
-    text_depth(data, f"{name} {str(path)!r}")
+    return parse_json(data, f"{name} {str(path)!r}")
+
+
+def parse_json(data, name: str):
+    """The JSON document of ``data`` (bytes or str): nesting bounded, one-line errors naming ``name``."""
+    if isinstance(data, bytes):
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{name}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") from None
+    else:
+        text = data
+    text_depth(data, name)
     try:
         return json.loads(text)
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, or an integer literal of > 4300 digits
-        raise ValueError(f"{name} {str(path)!r}: expected JSON, got {' '.join(str(exc).split())[:160]}") \
-            from None
+        raise ValueError(f"{name}: expected JSON, got {' '.join(str(exc).split())[:160]}") from None
 
 
 def number(value, where: str) -> float:

@@ -128,3 +128,22 @@ def test_cli_plan_with_a_skill_missing_names_the_step(synthetic_library, synthet
     scene = write_scene(tmp_path, dict(BUTTONS_DOC, goal=["(pushed b1)"]))
     code, _, err = cli("plan", db, "--scene", scene)
     assert code == 2 and "step 2 (push b1): skill 'push' has no usable primitive" in err
+
+
+@pytest.mark.parametrize("binding, message", [
+    ("{" + '"a": [' * 3000 + "]" * 3000 + "}", r"binding: expected JSON nested at most 16 levels deep"),
+    ('{"offset": [0, 0, 1' + "0" * 5000 + "]}", r"binding: expected JSON, got Exceeds the limit"),
+    ("{not json", r"binding: expected JSON, got Expecting property name"),
+])
+def test_cli_describe_binding_text_is_bounded_as_a_scene_is(synthetic_library, synthetic_db, tmp_path, cli,
+                                                            library_content, binding, message):
+    synthetic_library.close()
+    (tmp_path / "press.pddl").write_text(PRESS)
+    for given in (binding, tmp_path / "binding.json"):
+        (tmp_path / "binding.json").write_text(binding)
+        before = library_content(synthetic_db)
+        code, out, err = cli("library", "describe", synthetic_db, "press",
+                             "--action", tmp_path / "press.pddl", "--binding", given)
+        assert code == 2 and out == "" and err.count("\n") == 1
+        assert re.search(message.replace("binding: ", "binding( '[^']*')?: "), err), err
+        assert library_content(synthetic_db) == before
