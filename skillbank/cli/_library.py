@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import sys
 from pathlib import Path
@@ -12,6 +11,8 @@ import numpy as np
 
 from ..core._text import printable
 from ..core._validation import summarise
+from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
+from ._library_transfer import _copy, _export, _import
 from ._options import (
     add_constraint_options,
     add_execution_options,
@@ -28,54 +29,6 @@ from ._options import (
 )
 
 __all__ = ["add_parser"]
-
-_DB = "the library: a file (see 'library init') or a postgresql:// URL"
-_DB_READ = ("the library, a file or a postgresql:// URL; opened read-only, so a library in a folder you "
-            "cannot write works")
-
-
-class _URL:
-    """A library URL from the command line: the library opens with all of it, messages show it masked."""
-
-    def __init__(self, url: str):
-        self.url = url
-
-    def __str__(self) -> str:
-        from ..store import mask_url  # the store package, when a URL is printed (after a command ran)
-
-        return mask_url(self.url)
-
-    @property
-    def name(self) -> str:
-        """The URL's last path part (the database), for figure titles."""
-        return str(self).split("?", 1)[0].rstrip("/").rsplit("/", 1)[-1]
-
-
-def _location(text: str):
-    """A ``db`` argument: a URL of a store backend (``postgresql://...``), else a library file.
-
-    The store tells them apart (``store._registry.parse_location``); one it refuses is refused when opened.
-
-    Examples
-    --------
-    >>> _location("lib.db"), _location("sqlite:////data/lib.db")
-    (PosixPath('lib.db'), PosixPath('/data/lib.db'))
-    >>> str(_location("postgresql://ann:s3cret@db.lab/skills"))
-    'postgresql://ann:***@db.lab/skills'
-    """
-    from ..store._registry import parse_location  # the store package, when a library command is parsed
-
-    try:
-        _, target = parse_location(text)
-    except ValueError:  # refused by the store when the command opens it: one line, exit status 2, masked
-        return _URL(text)
-    return target if isinstance(target, Path) else _URL(target)
-
-
-def _target(location):
-    """What the store opens: the full URL (password included), or the path."""
-    return location.url if isinstance(location, _URL) else location
-
 
 def add_parser(sub):
     """Register ``library`` and its sub-commands on argparse subparsers ``sub``.
@@ -214,19 +167,6 @@ def add_parser(sub):
                    help="print the removed demonstration and its primitives as JSON")
     c.set_defaults(func=_remove)
     return p
-
-
-def _library(location, **kwargs):
-    # The pipeline pulls in scikit-learn; imported when a library command runs, not for --help.
-    from ..pipeline import Library
-
-    return Library(_target(location), **kwargs)
-
-
-def _open(args, *, create=False, readonly=False):
-    if readonly:
-        return _library(args.db, readonly=True)
-    return _library(args.db, create=create)
 
 
 def _init(args) -> int:
@@ -497,74 +437,6 @@ def print_execution(traj, constraint_error, orientation_error, collision, peaks,
               f"{peaks['joints']['acceleration']:.4g} rad/s^2")
     for note in notes:
         print(f"  note: {' '.join(note.split())}")
-
-
-def _export(args) -> int:
-    with _open(args, readonly=True) as lib:
-        manifest = lib.export(args.folder, progress=show_progress(args))
-        n = len(lib.demonstration_ids())
-    if args.json:
-        print(json.dumps({"folder": str(args.folder), "manifest": str(manifest), "demonstrations": n}))
-        return 0
-    print(f"{args.db}: exported {n} demonstration(s) to {args.folder} ({manifest.name})")
-    return 0
-
-
-@contextlib.contextmanager
-def _new_file_removed_on_failure(location):
-    """A library file this command creates is removed again (with WAL's side files) when the command fails."""
-    new = None if isinstance(location, _URL) or location.exists() else location
-    try:
-        yield
-    except BaseException:
-        for path in () if new is None else (new, new.with_name(new.name + "-wal"),
-                                             new.with_name(new.name + "-shm")):
-            path.unlink(missing_ok=True)
-        raise
-
-
-def _import(args) -> int:
-    with _new_file_removed_on_failure(args.db), _open(args, create=True) as lib:
-        res = lib.import_folder(args.folder, max_bytes=args.max_bytes)
-    kinds = ("demonstrations", "primitives", "versions")
-    added = {k: len(res[k]) for k in kinds}
-    if args.json:
-        ids = {k: {str(a): b for a, b in res[k].items()} for k in kinds}
-        print(json.dumps({"mode": res["mode"], "added": added, "skipped": len(res["skipped"]),
-                          "assigned": len(res["assigned"]), **ids,
-                          "duplicates": {str(a): b for a, b in res["skipped"].items()}}))
-        return 0
-    line = (f"{args.db}: imported {added['demonstrations']} demonstration(s), {added['primitives']} "
-            f"primitive(s), {added['versions']} clustering version(s)")
-    if res["mode"] == "copy":
-        print(f"{line} (an exact copy)")
-        return 0
-    print(f"{line} (merged); skipped {len(res['skipped'])} demonstration(s) already in the library; "
-          f"assigned {len(res['assigned'])} primitive(s) to the current clusters")
-    return 0
-
-
-def _copy(args) -> int:
-    # the progress bar and the store alone: a copy needs no pipeline (scikit-learn)
-    from tqdm import tqdm
-
-    from ..store import copy_library, open_store  # as above
-
-    def tick(done, total):
-        bar.total = total
-        bar.update(done - bar.n)
-
-    with _new_file_removed_on_failure(args.dst), \
-            open_store(_target(args.src), create=False, readonly=True) as src, \
-            open_store(_target(args.dst)) as dst, \
-            tqdm(desc="copying", unit="demo", disable=not show_progress(args)) as bar:
-        counts = copy_library(src, dst, progress=tick)
-    if args.json:
-        print(json.dumps({"source": str(args.src), "destination": str(args.dst), **counts}))
-        return 0
-    print(f"{args.dst}: copied {counts['demonstrations']} demonstration(s), {counts['primitives']} "
-          f"primitive(s) and {counts['versions']} clustering version(s) from {args.src}")
-    return 0
 
 
 def _remove(args) -> int:

@@ -8,7 +8,8 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
-from ._library import _DB_READ, _location, _target, check_robot, output_format, print_execution
+from ._library import check_robot, output_format, print_execution
+from ._library_location import _DB_READ, _location, _target
 from ._options import add_export_options, add_robot_options, export_params, robot_params, show_progress
 
 __all__ = ["add_parser"]
