@@ -114,27 +114,34 @@ def check_depth(doc, name: str) -> None:
         stack.extend((child, depth + 1) for child in children)
 
 
-def load_json(path: Path, name: str, max_bytes: int):
-    """The JSON document of file ``path``: at most ``max_bytes``, nesting bounded, one-line errors."""
+def read_bounded(path: Path, name: str, max_bytes: int, *, kind: str = "a JSON file") -> bytes:
+    """The bytes of file ``path``, at most ``max_bytes`` of them (more is refused before it is held)."""
     if not path.is_file():
-        raise ValueError(f"{name}: expected a JSON file, got {str(path)!r}, which is not a file")
+        raise ValueError(f"{name}: expected {kind}, got {str(path)!r}, which is not a file")
     with path.open("rb") as fh:
         data = fh.read(max_bytes + 1)
     if len(data) > max_bytes:
         raise ValueError(f"{name}: expected a file of at most {max_bytes} bytes, got a larger one "
                          f"({str(path)!r})")
-    return parse_json(data, f"{name} {str(path)!r}")
+    return data
+
+
+def utf8(data: bytes, name: str) -> str:
+    """``data`` decoded as UTF-8; one line naming ``name`` and the byte where it is not."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{name}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") from None
+
+
+def load_json(path: Path, name: str, max_bytes: int):
+    """The JSON document of file ``path``: at most ``max_bytes``, nesting bounded, one-line errors."""
+    return parse_json(read_bounded(path, name, max_bytes), f"{name} {str(path)!r}")
 
 
 def parse_json(data, name: str):
     """The JSON document of ``data`` (bytes or str): nesting bounded, one-line errors naming ``name``."""
-    if isinstance(data, bytes):
-        try:
-            text = data.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise ValueError(f"{name}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") from None
-    else:
-        text = data
+    text = utf8(data, name) if isinstance(data, bytes) else data
     text_depth(data, name)
     try:
         return json.loads(text)

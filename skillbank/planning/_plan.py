@@ -8,7 +8,7 @@ from pathlib import Path
 from ..store import Store
 from ._binding import check_binding
 from ._chain import PlanResult, _Skill, reproduce_plan
-from ._json import describe
+from ._json import describe, read_bounded, utf8
 from ._pddl import Domain, domain_text, parse_action, parse_domain, problem_text
 from ._scene import Scene, load_scene, scene_from_dict
 from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve
@@ -112,18 +112,8 @@ def _domain(store, scene, domain) -> Domain:
 
 def _read_domain(path: Path) -> str:
     """The text of a domain file: at most MAX_DOMAIN_BYTES of UTF-8."""
-    if not path.is_file():
-        raise ValueError(f"domain: expected a PDDL domain file, got {str(path)!r}, which is not a file")
-    with path.open("rb") as fh:
-        data = fh.read(MAX_DOMAIN_BYTES + 1)
-    if len(data) > MAX_DOMAIN_BYTES:
-        raise ValueError(f"domain: expected a file of at most {MAX_DOMAIN_BYTES} bytes, got a larger one "
-                         f"({str(path)!r})")
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"domain {str(path)!r}: expected UTF-8 text, got {exc.reason} at byte {exc.start}") \
-            from None
+    data = read_bounded(path, "domain", MAX_DOMAIN_BYTES, kind="a PDDL domain file")
+    return utf8(data, f"domain {str(path)!r}")
 
 
 def _scene(scene) -> Scene:
