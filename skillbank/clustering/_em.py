@@ -35,10 +35,24 @@ def assign(X: np.ndarray, nodes: np.ndarray, x_sq: np.ndarray | None = None):
     """
     if x_sq is None:
         x_sq = np.einsum("ij,ij->i", X, X)
+    c_sq = np.einsum("ij,ij->i", nodes, nodes)
     d2 = X @ (-2.0 * nodes.T)
-    d2 += np.einsum("ij,ij->i", nodes, nodes)[None, :]
+    d2 += c_sq[None, :]
     labels = np.argmin(d2, axis=1)
     nearest = np.take_along_axis(d2, labels[:, None], axis=1)[:, 0]
+    if nodes.shape[0] > 1:
+        # The expanded form is off by up to a few ulps of ||x||^2 + ||c||^2: a point (nearly) as far
+        # from two nodes could go to either, and to another one under another shift (predict centres
+        # on the nodes, fit on the data). Those points are decided on direct differences instead,
+        # exact for exact ties, which then go to the lowest index whatever the shift.
+        margin = 64 * np.finfo(float).eps * (x_sq + c_sq.max())
+        near = d2 <= (nearest + margin)[:, None]
+        rows = np.flatnonzero(near.sum(axis=1) > 1)
+        if rows.size:
+            diff = X[rows, None, :] - nodes[None, :, :]
+            exact = np.einsum("ijk,ijk->ij", diff, diff)
+            labels[rows] = np.argmin(exact, axis=1)
+            nearest[rows] = exact[np.arange(rows.size), labels[rows]] - x_sq[rows]
     return labels, np.maximum(nearest + x_sq, 0.0)
 
 

@@ -196,3 +196,15 @@ def test_bad_inputs():
         model.partial_fit(np.eye(2))
     with pytest.raises(NotFittedError):
         ElasticClustering().predict(np.eye(3))
+
+
+def test_a_point_as_far_from_two_centres_gets_the_lower_one_in_fit_and_predict():
+    # Hypothesis's counter-example (a developer run): (0.5, -3) is 3.5 from both (0.5, 0.5) and
+    # (-3, -3). Next to a value of 1e3 the expanded distance form is off by ~1e-10 and the tie fell
+    # one way in fit (centred on the data) and the other in predict (centred on the centres).
+    X = np.array([[0.5, 0.5], [0.5, -3.0], [-3.0, 1e3]] + [[-3.0, -3.0]] * 5)
+    model = ElasticClustering(criterion="auto", random_state=0).fit(X)
+    centres = model.cluster_centers_
+    tied = np.flatnonzero(np.isclose(((X[1] - centres) ** 2).sum(axis=1), 12.25, rtol=0, atol=1e-12))
+    assert tied.size == 2
+    assert model.labels_[1] == model.predict(X)[1] == tied.min()
