@@ -48,6 +48,15 @@ class SceneObject:
     type: str
     position: np.ndarray | None = None
     orientation: np.ndarray | None = None
+    #: Physical shape (None: a point the planner knows only as a pose): "button", "box", "cylinder",
+    #: "sphere". A button's position is the centre of its top face; a body's is its centre.
+    shape: str | None = None
+    #: Button: (radius,); box: full extents (x, y, z); cylinder: (radius, height); sphere: (radius,). Metres.
+    size: np.ndarray | None = None
+    #: Button: how far its cap moves down before it bottoms out (metres).
+    travel: float | None = None
+    #: Movable bodies: kg (None for buttons and fixed bodies).
+    mass: float | None = None
 
 
 @dataclass
@@ -82,6 +91,10 @@ class Scene:
     domain: Path | None = None
     folder: Path | None = None
     branch: str | None = None
+    #: The table: a :class:`~skillbank.core.Box` whose top is the table's surface, or None.
+    table: object = None
+    #: Workspace bounds ``(lower (3,), upper (3,))`` the whole robot stays within, or None.
+    workspace: tuple | None = None
 
     def constraints(self, names=None) -> Constraints:
         """:class:`~skillbank.core.Constraints` holding the obstacles ``names`` (default all)."""

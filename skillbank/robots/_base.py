@@ -18,6 +18,7 @@ import numpy as np
 
 from ..core._rotations import check_quaternions, matrix_to_quaternion, quaternion_to_matrix
 from ..core._validation import check_array, check_positive, numerical_errors, summarise
+from ._bodies import GRIPPERS, Gripper
 
 __all__ = ["RobotModel", "KinematicsError", "Singularity", "wrap_angle"]
 
@@ -77,6 +78,18 @@ def _check_rigid(value, name: str) -> np.ndarray:
     return T
 
 
+def _check_gripper(value, default):
+    if isinstance(value, Gripper):
+        return value
+    if value == "default":
+        value = default
+    if value is None or value == "none":
+        return None
+    if not isinstance(value, str) or value not in GRIPPERS:
+        raise ValueError(f"gripper: expected 'default', 'none' or one of {list(GRIPPERS)}, got {value!r}")
+    return GRIPPERS[value]
+
+
 def _inverse_rigid(T: np.ndarray) -> np.ndarray:
     inv = np.eye(4)
     inv[:3, :3] = T[:3, :3].T
@@ -125,8 +138,15 @@ class RobotModel(ABC):
     #: The robot's own joint velocity (rad/s) and acceleration (rad/s^2) limits, per joint; None: none known.
     max_velocity: ClassVar[tuple[float, ...] | None] = None
     max_acceleration: ClassVar[tuple[float, ...] | None] = None
+    #: The links' collision capsules (:class:`~skillbank.robots.Capsule`), frames as in :meth:`link_frames`.
+    BODIES: ClassVar[tuple] = ()
+    #: The gripper mounted unless ``gripper`` says otherwise (a name in ``GRIPPERS``), or None.
+    DEFAULT_GRIPPER: ClassVar[str | None] = None
 
-    def __init__(self, *, base=None, tool=None, singularity_thresholds=None, max_step=0.5):
+    def __init__(self, *, base=None, tool=None, singularity_thresholds=None, max_step=0.5,
+                 gripper="default"):
+        self.gripper = gripper
+        self.gripper_ = _check_gripper(gripper, self.DEFAULT_GRIPPER)
         self.base = _check_rigid(base, "base")
         self.tool = _check_rigid(tool, "tool")
         self._base_inv, self._tool_inv = _inverse_rigid(self.base), _inverse_rigid(self.tool)
@@ -168,6 +188,30 @@ class RobotModel(ABC):
     @abstractmethod
     def _singularity(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Per kind of ``SINGULARITIES``, its measure ``(n,)`` at joints ``q``: 0 at the singularity."""
+
+    def _frames(self, q: np.ndarray) -> np.ndarray:
+        """Every link frame ``(n, n_joints + 1, 4, 4)`` in the robot's base frame: the base, then after
+        each joint (the last is the flange). A model without bodies need not implement it."""
+        raise NotImplementedError(f"robot {self.name} describes no link frames")
+
+    def link_frames(self, q) -> np.ndarray:
+        """The link frames ``(n, n_joints + 1, 4, 4)`` in the world frame for joints ``q`` ``(n, n_joints)``.
+
+        Frame 0 is the robot's base, frame ``i`` the link that joint ``i`` moves; the last one is the
+        flange (the tool frame is ``link_frames(q)[:, -1] @ tool``).
+        """
+        q = self.check_joints(q)
+        with numerical_errors(f"{self.name} forward kinematics"):
+            return self.base @ self._frames(q)
+
+    @property
+    def bodies(self) -> tuple:
+        """Every collision capsule: the arm's (``BODIES``) and the mounted gripper's (in the flange frame)."""
+        out = tuple(self.BODIES)
+        if self.gripper_ is not None:
+            flange = self.n_joints
+            out += tuple(c._replace(frame=flange) for c in self.gripper_.capsules)
+        return out
 
     def _out_of_reach(self, T: np.ndarray) -> np.ndarray:
         """How far (m) each flange pose ``T (n, 4, 4)`` is outside the workspace; NaN: not known.

@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._base import RobotModel, Singularity, wrap_angle
+from ._bodies import Capsule
 
 __all__ = ["UR5e", "UR5E_DH"]
 
@@ -158,6 +159,25 @@ class UR5e(RobotModel):
         "elbow": Singularity("|sin(elbow)|", 0.05),
         "wrist": Singularity("|sin(wrist_2)|", 0.05),
     }
+
+    DEFAULT_GRIPPER = "robotiq_2f85"
+    #: Placeholder envelopes of the links in their DH frames (refined from UR's description, docs/robots.md).
+    BODIES = (
+        Capsule("base", 0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.09), 0.075),
+        Capsule("shoulder", 1, (0.0, 0.0, -0.06), (0.0, 0.0, 0.14), 0.065),
+        Capsule("upper_arm", 2, (0.425, 0.0, 0.138), (0.0, 0.0, 0.138), 0.06),
+        Capsule("forearm", 3, (0.3922, 0.0, 0.007), (0.0, 0.0, 0.007), 0.05),
+        Capsule("wrist_1", 3, (0.0, 0.0, 0.0), (0.0, 0.0, 0.17), 0.045),
+        Capsule("wrist_2", 4, (0.0, 0.0, -0.04), (0.0, 0.0, 0.0997), 0.045),
+        Capsule("wrist_3", 5, (0.0, 0.0, -0.04), (0.0, 0.0, 0.0996), 0.045),
+    )
+
+    def _frames(self, q: np.ndarray) -> np.ndarray:
+        out = np.empty((q.shape[0], 7, 4, 4))
+        out[:, 0] = np.eye(4)
+        for i in range(6):
+            out[:, i + 1] = out[:, i] @ _dh(q[:, i], i)
+        return out
 
     def _fk(self, q: np.ndarray) -> np.ndarray:
         T = _dh(q[:, 0], 0)
