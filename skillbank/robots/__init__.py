@@ -22,5 +22,5 @@ from ._bodies import GRIPPERS, Capsule, Gripper
 from ._registry import ROBOTS, robot_model
 from ._ur5e import UR5E_DH, UR5e
 
-__all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "robot_model", "Capsule",
-           "Gripper", "GRIPPERS"]
+__all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "robot_model",
+           "Capsule", "Gripper", "GRIPPERS"]
