@@ -2,8 +2,8 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-# One stamp per install: the demo needs the package and its planner (the `plan` extra), the tests
-# everything in `test` (which holds `plan` too, so installing it also satisfies the demo's stamp).
+# One stamp per install: the demo needs the package, its planner and the simulator (`plan`, `sim`), the tests
+# everything in `test` (which holds both, so installing it also satisfies the demo's stamp).
 DEMO_STAMP := $(VENV)/.installed-demo
 TEST_STAMP := $(VENV)/.installed-test
 
@@ -14,7 +14,7 @@ $(PY):
 	$(PY) -m pip install --quiet --upgrade pip
 
 $(DEMO_STAMP): pyproject.toml | $(PY)
-	$(PY) -m pip install --quiet -e '.[plan]'
+	$(PY) -m pip install --quiet -e '.[plan,sim]'
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(PY)
