@@ -341,10 +341,9 @@ def _over_table(table, point) -> bool:
 def _check_world(scene: Scene) -> None:
     """Objects and the start inside the workspace and not under the table top; a transit above the table."""
     table, workspace = scene.table, scene.workspace
-    points = [(f"objects[{short(o.name)}].position", o.position) for o in scene.objects.values()
-              if o.position is not None]
-    if scene.start.get("position") is not None:
-        points.append(("start.position", scene.start["position"]))
+    points = [("start.position", scene.start["position"])] if scene.start.get("position") is not None else []
+    points += [(f"objects[{short(o.name)}].position", o.position) for o in scene.objects.values()
+               if o.position is not None]
     for where, p in points:
         if workspace is not None:
             out = np.flatnonzero((p < workspace[0]) | (p > workspace[1]))
