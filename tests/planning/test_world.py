@@ -194,3 +194,16 @@ def test_the_three_button_presses_no_longer_switch_the_gripper_at_joins(button_l
     G = res.trajectory["gripper"].ravel()
     assert np.all(G == 45.0)
     assert not any("switches" in n for n in res.notes)
+
+
+def test_the_documented_scene_with_a_world_reads_and_plans_clear_of_the_wall_and_table(button_library):
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "planning.md").read_text()
+    doc = json.loads(text.split("A full scene with a world")[1].split("```json")[1].split("```")[0])
+    scene = scene_from_dict(doc)
+    res = plan_task(button_library.store, scene, robot="ur5e")
+    P = res.trajectory["position"]
+    assert not res.collision and P[:, 2].min() >= 0.0
+    assert [[s["kind"] for s in step.segments] for step in res.steps] == [["transit"] * 3, ["primitive"]]
+    assert not scene.obstacles["wall"].collides(P)
