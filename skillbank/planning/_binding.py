@@ -4,8 +4,9 @@ A skill's description is a PDDL action schema plus a *binding*, a JSON object
 with any of these keys (every one optional):
 
 ``goal``
-    The parameter (``"?b"``) whose object's pose is the step's goal. Default
-    (the convention): the last argument that is an object with a position.
+    The parameter (``"?b"``) whose object's pose is the step's goal. Default:
+    the one argument that is an object with a position; an action with more
+    than one such argument must name it (no guess is made).
 ``offset``
     ``[dx, dy, dz]`` added to that position (world frame, metres); default none.
 ``orientation``
@@ -21,6 +22,16 @@ with any of these keys (every one optional):
     The reuse's representation (default ``"lte"``), candidates, seconds.
 ``velocity``
     ``"zero"`` (default: the step starts and ends at rest) or ``"free"``.
+``approach``, ``retreat``
+    A distance (m) along the tool axis, or an offset ``[dx, dy, dz]`` (world
+    frame, m) from the goal: the step's primitive ends at the approach point
+    (``goal - d * z_tool``, or ``goal + offset``), a straight line at rest at
+    both ends brings the tool down onto the goal with its orientation held,
+    and another leaves it to the retreat point the same way. ``z_tool`` is the
+    goal orientation's z axis (the tool points along its frame's +z).
+``transit``
+    ``{"height": z}`` (m), or ``"none"``: overrides the scene's ``transit`` for
+    this skill (see :func:`skillbank.planning.reproduce_plan`).
 """
 
 from __future__ import annotations
@@ -37,7 +48,7 @@ from ._json import check_depth, describe, number, numbers, short
 __all__ = ["Binding", "check_binding", "BINDING_KEYS", "DEFAULT_METHOD"]
 
 BINDING_KEYS = ("goal", "offset", "orientation", "obstacles", "gripper", "method", "k", "duration",
-                "velocity")
+                "velocity", "approach", "retreat", "transit")
 #: The representation a plan step uses unless its binding names another: LTE edits the best
 #: candidate itself, so each step stays one recorded motion, met to round-off.
 DEFAULT_METHOD = "lte"
@@ -57,6 +68,11 @@ class Binding:
     k: int | None = None
     duration: float | None = None
     velocity: str = "zero"
+    #: A distance (float, m) along the tool axis, or an offset (ndarray (3,), m); None for none.
+    approach: object = None
+    retreat: object = None
+    #: The transit height (m), "none" (no transit for this skill), or None (the scene's).
+    transit: object = None
 
     def as_dict(self) -> dict:
         """The JSON-able binding, with only what differs from the defaults."""
@@ -82,7 +98,28 @@ class Binding:
                 out[key] = getattr(self, key)
         if self.velocity != "zero":
             out["velocity"] = self.velocity
+        for key in ("approach", "retreat"):
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = value.tolist() if isinstance(value, np.ndarray) else value
+        if self.transit is not None:
+            out["transit"] = self.transit if self.transit == "none" else {"height": self.transit}
         return out
+
+
+def _distance(value, where: str):
+    """A distance along the tool axis (a positive number) or a world offset (3 numbers, not all zero)."""
+    if isinstance(value, (list, tuple, np.ndarray)):
+        offset = numbers(value, where, 3)
+        if not np.any(offset):
+            raise ValueError(f"{where}: expected an offset [dx, dy, dz] that is not zero, got [0, 0, 0]")
+        return offset
+    d = number(value, where) if isinstance(value, (int, float, np.number)) and not isinstance(value, bool) \
+        else None
+    if d is None or d <= 0.0:
+        raise ValueError(f"{where}: expected a distance along the tool axis (a positive number, metres) or "
+                         f"an offset [dx, dy, dz], got {describe(value)}")
+    return d
 
 
 def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
@@ -156,4 +193,16 @@ def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
     if velocity not in ("zero", "free"):
         raise ValueError(f"{name}.velocity: expected 'zero' or 'free', got {describe(velocity)}")
     out.velocity = velocity
+    for key in ("approach", "retreat"):
+        if doc.get(key) is not None:
+            setattr(out, key, _distance(doc[key], f"{name}.{key}"))
+    transit = doc.get("transit")
+    if transit is not None:
+        if transit == "none":
+            out.transit = "none"
+        elif isinstance(transit, dict) and set(transit) == {"height"}:
+            out.transit = number(transit["height"], f"{name}.transit.height")
+        else:
+            raise ValueError(f"{name}.transit: expected {{\"height\": z}} (metres) or 'none', got "
+                             f"{describe(transit)}")
     return out

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Constraints, Demonstration, quaternion_angle
+from ..core import Constraints, Demonstration, quaternion_angle, quaternion_to_matrix, slerp
 from ..core._validation import summarise
 from ..robots import RobotModel, robot_model
 from ..selection import reuse
@@ -65,15 +65,19 @@ class PlanStep:
     orientation_error: float
     collision: bool
     notes: list = field(default_factory=list)
+    #: The step's pieces in order, ``{"kind", "start", "stop"}`` in the plan's samples (a piece starts
+    #: on the last one's end sample): ``"transit"``, ``"primitive"``, ``"approach"``, ``"retreat"``.
+    segments: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        """JSON-able: ``action``, ``args``, ``skill``, ``start``, ``stop``, ``used`` and the step's errors."""
+        """JSON-able: ``action``, ``args``, ``skill``, ``start``, ``stop``, ``used``, the step's errors and
+        ``segments``."""
         return {"action": self.action, "args": list(self.args), "skill": self.skill, "start": int(self.start),
                 "stop": int(self.stop), "used": [int(i) for i in self.used], "goal": self.goal.tolist(),
                 "goal_orientation": None if self.goal_orientation is None else self.goal_orientation.tolist(),
                 "method": self.method, "constraint_error": float(self.constraint_error),
                 "orientation_error": float(self.orientation_error), "collision": bool(self.collision),
-                "notes": list(self.notes)}
+                "notes": list(self.notes), "segments": [dict(s) for s in self.segments]}
 
 
 @dataclass
@@ -163,18 +167,28 @@ def _start_joints(model, joints) -> np.ndarray:
 
 
 def _goal_object(scene, args, params, binding, where):
+    """The object whose pose is the step's goal: the binding's ``goal``, else the one positioned argument."""
+    names = [p for p, _ in params] + [f"argument {k + 1}" for k in range(len(params), len(args))]
     if binding.goal is not None:
-        name = args[[p for p, _ in params].index(binding.goal)]
+        name = args[names.index(binding.goal)]
         if name not in scene.objects or scene.objects[name].position is None:
             raise ValueError(f"{where}: its binding's goal {binding.goal} is {name!r}, which has no "
                              "position in the scene")
         return name
-    posed = [a for a in args if a in scene.objects and scene.objects[a].position is not None]
+    posed = [(p, a) for p, a in zip(names, args, strict=False)
+             if a in scene.objects and scene.objects[a].position is not None]
     if not posed:
         raise ValueError(f"{where}: none of its arguments {list(args)} is an object with a position in "
                          "the scene, so the step has no goal (give the object a position, or the skill a "
                          "binding)")
-    return posed[-1]
+    if len({a for _, a in posed}) > 1:  # no guess: the wrong button pressed and reported reached is worse
+        action = where.split("(", 1)[1].split()[0]
+        shown = ", ".join(f"{p} = {a}" for p, a in posed)
+        raise ValueError(f"{where}: action {action} has {len(posed)} parameters that are objects with a "
+                         f"position ({shown}) and its binding names no goal; give one, e.g. skillbank "
+                         f"library describe DB {action} --action FILE.pddl --binding "
+                         f"'{{\"goal\": \"{posed[0][0]}\"}}'")
+    return posed[0][1]
 
 
 def _obstacles(scene, binding, where) -> list:
@@ -187,18 +201,26 @@ def _obstacles(scene, binding, where) -> list:
     return list(binding.obstacles)
 
 
-def _inside(scene, names, point, what, where) -> None:
-    for n in names:
-        if scene.obstacles[n].signed_distance(np.asarray(point, dtype=float)[None])[0] < 0.0:
-            raise ValueError(f"{where}: cannot avoid obstacle {n} ({scene.specs[n]}): its {what} "
-                             f"{np.round(point, 6).tolist()} is inside it")
+def _world(scene, names) -> list:
+    """``[(label, Obstacle)]`` the step's tool point stays out of: its obstacles, the table, the workspace."""
+    world = getattr(scene, "world", None)
+    if world is None:  # a scene built by hand without the world's fields
+        return [(f"obstacle {n} ({scene.specs[n]})", scene.obstacles[n]) for n in names]
+    return world(names)
 
 
-def _hits(scene, names, Y) -> list:
-    return [n for n in names if scene.obstacles[n].collides(Y)]
+def _inside(world, point, what, where) -> None:
+    for label, ob in world:
+        if ob.signed_distance(np.asarray(point, dtype=float)[None])[0] < 0.0:
+            raise ValueError(f"{where}: cannot avoid {label}: its {what} {np.round(point, 6).tolist()} is "
+                             "inside it")
 
 
-def _reuse(skill, constraints, scene, names, where, limits, random_state):
+def _hits(world, Y) -> list:
+    return [label for label, ob in world if ob.collides(Y)]
+
+
+def _reuse(skill, constraints, world, where, limits, random_state):
     b = skill.binding
     prims = skill.primitives
     kwargs = dict(method=b.method, k=b.k, ids=[p.id for p in prims], random_state=random_state,
@@ -210,29 +232,194 @@ def _reuse(skill, constraints, scene, names, where, limits, random_state):
         if message.startswith("no usable candidate") and constraints.obstacles:
             try:  # the same step with no obstacle: if it works, the obstacles are what stops it
                 free = reuse([p.demo for p in prims], constraints.replace(obstacles=()), **kwargs)
-                blocking = _hits(scene, names, free.trajectory["position"])
+                blocking = _hits(world, free.trajectory["position"])
             except ValueError:
                 blocking = []
             if blocking:
-                shown = ", ".join(f"{n} ({scene.specs[n]})" for n in blocking)
-                raise ValueError(f"{where}: cannot avoid obstacle {shown}: skill {skill.label!r} has no "
+                raise ValueError(f"{where}: cannot avoid {', '.join(blocking)}: skill {skill.label!r} has no "
                                  f"primitive that can be edited around it ({message})") from None
         raise ValueError(f"{where}: skill {skill.label!r} has no usable primitive: "
                          f"{message.removeprefix('no usable candidate: ')}") from None
     if res.collision:
-        blocking = _hits(scene, names, res.trajectory["position"]) or names
-        shown = ", ".join(f"{n} ({scene.specs[n]})" for n in blocking)
-        raise ValueError(f"{where}: cannot avoid obstacle {shown}: the {b.method} reproduction of skill "
+        blocking = _hits(world, res.trajectory["position"]) or [label for label, _ in world]
+        raise ValueError(f"{where}: cannot avoid {', '.join(blocking)}: the {b.method} reproduction of skill "
                          f"{skill.label!r} passes through it")
     return res
 
 
-def _joints(model, traj, seed, where, branch=None) -> np.ndarray:
-    if "orientation" not in traj.streams:
+# -- the pieces of a step: transit, the primitive, approach, retreat --------------------------------------
+
+#: Peak speed (m/s) of the straight pieces: approach and retreat come onto a goal and leave it gently;
+#: a transit moves faster. Each piece also meets the task's velocity and acceleration limits.
+APPROACH_SPEED = 0.05
+TRANSIT_SPEED = 0.25
+#: Shortest duration (s) of a straight piece, and its sample spacing (s).
+MIN_PIECE_DURATION = 0.5
+PIECE_DT = 0.01
+#: A recorded gripper toggles when it moves by more than this fraction of its largest magnitude
+#: (the three-button recording's closing goes 45 -> 89; sensor noise stays far below 5 %).
+TOGGLE = 0.05
+
+
+def _duration(length, speed, limits) -> float:
+    """Seconds of a minimum-jerk move of ``length``: its peak speed is ``1.875 L / T``, its peak
+    acceleration ``5.774 L / T^2``."""
+    T = max(MIN_PIECE_DURATION, 1.875 * length / speed)
+    if "velocity" in limits:
+        T = max(T, 1.875 * length / limits["velocity"])
+    if "acceleration" in limits:
+        T = max(T, float(np.sqrt(10.0 / np.sqrt(3.0) * length / limits["acceleration"])))
+    return T
+
+
+def _line(a, b, q_a, q_b, speed, limits) -> dict:
+    """A straight minimum-jerk move from ``a`` to ``b`` (at rest at both ends); orientation slerped (held
+    when ``q_a`` is ``q_b``), None when the step has no orientation."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    T = _duration(float(np.linalg.norm(b - a)), speed, limits)
+    n = max(11, int(np.ceil(T / PIECE_DT)) + 1)
+    tau = np.linspace(0.0, 1.0, n)
+    s = tau ** 3 * (10.0 - 15.0 * tau + 6.0 * tau ** 2)
+    piece = {"t": tau * T, "position": a + s[:, None] * (b - a)}
+    piece["position"][-1] = b  # exactly, not to round-off: the next piece starts here
+    if q_a is not None:
+        same = q_b is None or float(quaternion_angle(q_a, q_b)) < 1e-12
+        piece["orientation"] = np.tile(q_a, (n, 1)) if same else slerp([0.0, 1.0], np.stack([q_a, q_b]), s)
+    return piece
+
+
+def _offset_point(goal, goal_q, value, key, where):
+    """The approach or retreat point: ``goal - d * z_tool`` for a distance, ``goal + offset`` for one."""
+    if value is None:
+        return None
+    if isinstance(value, np.ndarray):
+        return goal + value
+    if goal_q is None:
+        raise ValueError(f"{where}: its binding's {key} is a distance along the tool axis, which needs the "
+                         "goal's orientation (the object's, or the binding's 'orientation'); give an offset "
+                         "[dx, dy, dz] instead")
+    return goal - value * quaternion_to_matrix(goal_q)[:, 2]
+
+
+def _transit_height(scene, binding):
+    if binding.transit == "none":
+        return None
+    return binding.transit if binding.transit is not None else getattr(scene, "transit", None)
+
+
+def _transit(a, b, q_a, q_b, height, limits) -> list:
+    """Up from ``a`` to ``height``, across, and down to ``b``: three pieces, each from rest to rest."""
+    up, over = np.array([a[0], a[1], height]), np.array([b[0], b[1], height])
+    q_mid = q_b if q_b is not None else q_a
+    return [("transit", _line(a, up, q_a, q_a, TRANSIT_SPEED, limits)),
+            ("transit", _line(up, over, q_a, q_mid, TRANSIT_SPEED, limits)),
+            ("transit", _line(over, b, q_mid, q_mid, TRANSIT_SPEED, limits))]
+
+
+def _held(row, n) -> np.ndarray:
+    return np.repeat(np.asarray(row)[None], n, axis=0)
+
+
+def _assemble(pieces, traj) -> tuple:
+    """The step's streams from its pieces ``[(kind, piece)]`` on one time base, each join sample kept once,
+    and its segments ``[(kind, start, stop)]`` (local samples; a piece starts on the last one's end).
+
+    The primitive's own streams fill its piece; around it, recorded streams other than the pose are held
+    at the primitive's first (transit) or last (approach, retreat) sample.
+    """
+    names = [k for k in traj.stream_names if k not in ("joints", "gripper")]
+    streams = {k: [] for k in ["t", *names]}
+    segments, offset, count = [], 0.0, 0
+    for j, (kind, piece) in enumerate(pieces):
+        if kind == "primitive":
+            piece = {"t": traj.t - traj.t[0], **{k: traj[k] for k in names}}
+        n = len(piece["t"])
+        for k in names:
+            if k not in piece:
+                piece[k] = _held(traj[k][0 if kind == "transit" else -1], n)
+        skip = 0 if j == 0 else 1
+        streams["t"].append(piece["t"][skip:] + offset)
+        for k in names:
+            streams[k].append(piece[k][skip:])
+        offset += float(piece["t"][-1])
+        start = 0 if j == 0 else count - 1
+        count = start + n
+        segments.append((kind, start, count))
+    return {k: np.concatenate(v) for k, v in streams.items()}, segments
+
+
+def _recorded_gripper(traj, segments):
+    """The primitive's recorded gripper laid on the step: held before and after its piece; with no primitive
+    piece (a transit carried the move), its first value until the goal and its last from there on."""
+    if "gripper" not in traj.streams:
+        return None
+    rec = traj["gripper"][:, 0]
+    n = segments[-1][2]
+    prim = [(a, b) for kind, a, b in segments if kind == "primitive"]
+    if prim:
+        a, b = prim[0]
+        return np.concatenate([np.full(a, rec[0]), rec, np.full(n - b, rec[-1])])
+    goal = max([b for kind, _, b in segments if kind == "transit"], default=1) - 1
+    return np.concatenate([np.full(goal, rec[0]), np.full(n - goal, rec[-1])])
+
+
+def _gripper(recorded, binding, carried, n):
+    """The step's gripper stream (or None) and a note: the carried value is held until the step's own
+    recorded toggle (the recorded profile from there on); the binding's ``start``/``end`` override."""
+    if binding.gripper_start is None and binding.gripper_end is None:
+        if recorded is None:
+            return (None if carried is None else np.full(n, carried)), None
+        if carried is None:
+            return recorded.copy(), None
+        scale = max(float(np.abs(recorded).max()), abs(carried), 1e-300)
+        moved = np.flatnonzero(np.abs(recorded - recorded[0]) > TOGGLE * scale)
+        G = np.full(n, float(carried))
+        if moved.size:
+            G[moved[0]:] = recorded[moved[0]:]
+            return G, None
+        note = None
+        if recorded[0] != carried:
+            note = (f"gripper held at the carried {carried:g}: the skill's recorded {recorded[0]:g} does not "
+                    "toggle in this step")
+        return G, note
+    first = next(v for v in (binding.gripper_start, carried, None if recorded is None else recorded[0],
+                             binding.gripper_end) if v is not None)
+    G = np.full(n, float(first))
+    if binding.gripper_end is not None:
+        G[-1] = binding.gripper_end
+    return G, None
+
+
+def _first_contact(ob, Y) -> int:
+    """The first sample inside ``ob``, or the first whose segment to the next crosses it (-1: none)."""
+    inside = np.flatnonzero(ob.signed_distance(Y) < 0.0)
+    crossing = np.flatnonzero(ob.segment_hits(Y)) if len(Y) > 1 else np.zeros(0, int)
+    hits = [int(x[0]) for x in (inside, crossing) if x.size]
+    return min(hits) if hits else -1
+
+
+def check_step(world, streams, segments, where, model=None) -> None:
+    """Refuse a step whose path touches the world: every piece's tool path against ``world`` (the step's
+    obstacles, the table, the workspace), naming the piece, what it touches and the time.
+
+    The one place a step's path is checked; the whole-arm check of ``streams["joints"]`` (with ``model``)
+    belongs here too.
+    """
+    P, t = streams["position"], streams["t"]
+    for kind, a, b in segments:
+        for label, ob in world:
+            i = _first_contact(ob, P[a:b])
+            if i >= 0:
+                raise ValueError(f"{where}: its {kind} passes through {label} at t = {t[a + i]:.4g} s (tool "
+                                 f"point {np.round(P[a + i], 4).tolist()})")
+
+
+def _joints(model, streams, seed, where, branch=None) -> np.ndarray:
+    if "orientation" not in streams:
         raise ValueError(f"{where}: robot {model.name} needs an orientation, and the skill's primitives "
                          "have none")
     try:
-        return model.ik(traj["position"], traj["orientation"], q_seed=seed, branch=branch)
+        return model.ik(streams["position"], streams["orientation"], q_seed=seed, branch=branch)
     except ValueError as exc:
         raise ValueError(f"{where}: robot {model.name}: {' '.join(str(exc).split())}") from None
 
@@ -250,25 +437,6 @@ def _joint_scale(J, t, limits) -> float:
     if "joint_acceleration" in limits:
         scale = max(scale, float(np.sqrt((np.abs(a) / limits["joint_acceleration"]).max())) * (1 + 1e-12))
     return scale
-
-
-def _gripper(traj, binding, carried, n):
-    """The step's gripper stream (or None), and a note when it switches at the join."""
-    recorded = traj["gripper"][:, 0] if "gripper" in traj.streams else None
-    if binding.gripper_start is None and binding.gripper_end is None:
-        if recorded is not None:
-            note = None
-            if carried is not None and recorded[0] != carried:
-                note = (f"gripper switches from {carried:g} to the skill's recorded {recorded[0]:g} at "
-                        "the join")
-            return recorded.copy(), note
-        return (None if carried is None else np.full(n, carried)), None
-    first = next(v for v in (binding.gripper_start, carried, None if recorded is None else recorded[0],
-                             binding.gripper_end) if v is not None)
-    G = np.full(n, float(first))
-    if binding.gripper_end is not None:
-        G[-1] = binding.gripper_end
-    return G, None
 
 
 def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state=None, progress=None):
@@ -309,7 +477,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     if not plan:  # the goal holds already: the empty plan is the answer, with nothing to reproduce
         return PlanResult(plan=[], steps=[], trajectory=None, collision=False, constraint_error=0.0,
                           join_error={}, notes=[EMPTY_PLAN])
-    pieces, steps, notes = [], [], []
+    pieces_all, steps, notes = [], [], []
     branch = getattr(scene, "branch", None)
     if model is not None:
         limits, more = robot_limits(model, limits)  # the robot's own joint limits always apply
@@ -330,43 +498,82 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         goal = obj.position + (0.0 if b.offset is None else b.offset)
         goal_q = {"object": obj.orientation, "none": None}.get(b.orientation, b.orientation) \
             if isinstance(b.orientation, str) else b.orientation
-        names = _obstacles(scene, b, where)
-        _inside(scene, names, goal, f"goal (the pose of {target})", where)
-        if position is not None:
-            _inside(scene, names, position, "start", where)
+        world = _world(scene, _obstacles(scene, b, where))
         with_q = all("orientation" in p.demo.streams for p in skill.primitives)
-        zero = np.zeros(3) if b.velocity == "zero" else None
-        constraints = Constraints(start=position, goal=goal, start_velocity=zero, end_velocity=zero,
-                                  obstacles=[scene.obstacles[n] for n in names],
+        step_q = goal_q if with_q else None
+        near = _offset_point(goal, step_q, b.approach, "approach", where)
+        away = _offset_point(goal, step_q, b.retreat, "retreat", where)
+        _inside(world, goal, f"goal (the pose of {target})", where)
+        for point, what in ((near, "approach point"), (away, "retreat point"), (position, "start")):
+            if point is not None:
+                _inside(world, point, what, where)
+        height = _transit_height(scene, b)
+        extra = near is not None or away is not None or height is not None
+        zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
+        constraints = Constraints(start=position, goal=goal if near is None else near, start_velocity=zero,
+                                  end_velocity=zero, obstacles=[ob for _, ob in world],
                                   start_orientation=orientation if with_q else None,
-                                  goal_orientation=goal_q if with_q else None)
-        res = _reuse(skill, constraints, scene, names, where, task_limits, random_state)
-        traj = res.trajectory
-        n = traj.n_steps
-        streams = {name: traj[name] for name in traj.stream_names if name != "joints"}
+                                  goal_orientation=step_q)
         step_notes = []
+        try:
+            res = _reuse(skill, constraints, world, where, task_limits, random_state)
+            failure = None
+        except ValueError as exc:
+            if height is None or position is None:
+                raise
+            res, failure = None, exc
+        traj = None if res is None else res.trajectory
+        end = constraints.goal
+        if height is not None and position is not None and (
+                traj is None or float(traj["position"][:, 2].max()) < height):
+            if traj is None:  # the primitive cannot make the move: a transit may
+                try:
+                    res = _reuse(skill, constraints.replace(obstacles=()), [], where, task_limits,
+                                 random_state)
+                except ValueError:
+                    raise failure from None
+                traj = res.trajectory
+            rotated = "orientation" in traj.streams
+            q_a = (orientation if orientation is not None else traj["orientation"][0]) if rotated else None
+            q_b = traj["orientation"][-1] if rotated else None
+            pieces = _transit(position, end, q_a, q_b, height, task_limits)
+            reached = "cannot avoid the obstacles on its own" if failure is not None else \
+                f"reaches z = {float(traj['position'][:, 2].max()):.6g} m"
+            step_notes.append(f"{where}: a transit at z = {height:.6g} m carries the move (the primitive "
+                              f"{reached})")
+        else:
+            pieces = [("primitive", None)]
+        q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
+        if near is not None:
+            pieces.append(("approach", _line(near, goal, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+        if away is not None:
+            pieces.append(("retreat", _line(goal, away, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+        streams, segments = _assemble(pieces, traj)
+        n = len(streams["t"])
+        t = streams.pop("t")
         if goal_q is not None and not with_q:
             step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} has none")
-        t = traj.t - traj.t[0]
         if model is not None:
             seed = joints
             if seed is None:
                 best = next(p for p in skill.primitives if p.id == res.used[0]).demo
                 if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
                     seed = best["joints"][0]
-            streams["joints"] = _joints(model, traj, seed, where, branch)
+            streams["joints"] = _joints(model, streams, seed, where, branch)
             scale = _joint_scale(streams["joints"], t, limits)
             if scale > 1.0:
                 t = t * scale
                 step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
                                   f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
-        G, note = _gripper(traj, b, gripper, n)
+        G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
         if G is not None:
             streams["gripper"] = G[:, None]
         if note:
             step_notes.append(f"{where}: {note}")
-        if pieces:
-            prev = pieces[-1]
+        streams["t"] = t
+        check_step(world, streams, segments, where, model)
+        if pieces_all:
+            prev = pieces_all[-1]
             errors["position"] = max(errors["position"],
                                      float(np.linalg.norm(streams["position"][0] - prev["position"][-1])))
             if "orientation" in streams and "orientation" in prev:
@@ -376,23 +583,26 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 errors["joints"] = max(errors["joints"],
                                        float(np.abs(streams["joints"][0] - prev["joints"][-1]).max()))
         first = 0 if not steps else steps[-1].stop - 1
-        streams["t"] = t
-        pieces.append(streams)
-        steps.append(PlanStep(action, tuple(args), skill.label, first, first + n, list(res.used), goal,
-                              goal_q, b.method, float(res.constraint_error), float(res.orientation_error),
-                              bool(res.collision), step_notes + [
-                                  f"{where}: {x}" for x in res.notes
-                                  # with a robot the chain computes the joints itself: reuse's note that
-                                  # it dropped the recorded joints does not apply
-                                  if not (model is not None and x.startswith("joints"))]))
+        pieces_all.append(streams)
+        moved = any(k == "primitive" for k, _, _ in segments)  # else a transit met the end points exactly
+        step = PlanStep(action, tuple(args), skill.label, first, first + n, list(res.used), goal, goal_q,
+                        b.method, float(res.constraint_error) if moved else 0.0, float(res.orientation_error),
+                        bool(res.collision), step_notes + [
+                            f"{where}: {x}" for x in res.notes
+                            # with a robot the chain computes the joints itself: reuse's note that
+                            # it dropped the recorded joints does not apply
+                            if not (model is not None and x.startswith("joints"))],
+                        segments=[{"kind": k, "start": first + a, "stop": first + z} for k, a, z in segments])
+        steps.append(step)
         notes += step_notes
         position, orientation = streams["position"][-1], streams.get("orientation", [None])[-1]
         joints = streams["joints"][-1] if model is not None else None
         gripper = float(G[-1]) if G is not None else gripper
         if progress is not None:
             progress(i, len(plan))
-    trajectory = _join(pieces, model, notes)
-    collision = scene.constraints().collides(trajectory["position"]) if scene.obstacles else False
+    trajectory = _join(pieces_all, model, notes)
+    everything = _world(scene, list(scene.obstacles))
+    collision = any(ob.collides(trajectory["position"]) for _, ob in everything)
     error = max([s.constraint_error for s in steps] + [errors["position"]])
     return PlanResult(plan=list(plan), steps=steps, trajectory=trajectory, collision=bool(collision),
                       constraint_error=error, join_error=errors, notes=notes)

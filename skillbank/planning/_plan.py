@@ -11,7 +11,7 @@ from ._chain import PlanResult, _Skill, reproduce_plan
 from ._json import describe, read_bounded, utf8
 from ._pddl import Domain, domain_text, parse_action, parse_domain, problem_text
 from ._scene import Scene, load_scene, scene_from_dict
-from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve
+from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve, unused_types
 
 __all__ = ["describe_skill", "skill_domain", "plan_task", "write_pddl", "MAX_DOMAIN_BYTES"]
 
@@ -179,7 +179,13 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     objects = {name: obj.type for name, obj in scene.objects.items()}
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
     check_groundings(dom, objects, max_groundings=max_groundings)
-    steps = solve(dom.text, problem, max_expansions=max_expansions, time_limit=time_limit)
+    try:
+        steps = solve(dom.text, problem, max_expansions=max_expansions, time_limit=time_limit)
+    except ValueError as exc:
+        unused = unused_types(dom, objects)  # a scene of switches planned with a 'press ?b - button' action
+        if not unused or not str(exc).startswith(("goal:", "planner:")):
+            raise
+        raise ValueError(f"{exc}{unused}") from None
     result = reproduce_plan(scene, steps, _skills(store, dom), robot=robot, limits=limits,
                             random_state=random_state, progress=progress)
     result.domain, result.problem = dom.text, problem

@@ -18,7 +18,7 @@ from ..core._validation import check_positive, summarise
 from ._pddl import Domain, _typed_list, parse_sexpr
 
 __all__ = ["solve", "planner", "MAX_EXPANSIONS", "MAX_GROUNDINGS", "TIME_LIMIT", "INSTALL",
-           "check_groundings"]
+           "check_groundings", "unused_types"]
 
 #: States the search expands before it gives up (a 10-step button task expands under a hundred).
 MAX_EXPANSIONS = 200_000
@@ -80,6 +80,46 @@ def _parents(domain: Domain) -> dict:
     return {}
 
 
+def _fits(domain: Domain):
+    """``fits(kind, wanted)``: whether an object of type ``kind`` can bind a parameter of type ``wanted``
+    (its type or an ancestor; every type fits ``object``)."""
+    parents = _parents(domain)
+
+    def fits(kind: str, wanted: str) -> bool:
+        seen = set()
+        while kind not in seen:  # up the hierarchy (a cycle in a bad domain ends the walk)
+            if kind == wanted:
+                return True
+            seen.add(kind)
+            kind = parents.get(kind, "object")
+        return wanted == "object"
+
+    return fits
+
+
+def unused_types(domain: Domain, objects: dict) -> str:
+    """A clause naming the scene's types that no action's parameter takes (``""`` when every type is used).
+
+    Examples
+    --------
+    >>> from skillbank.planning import domain_text, parse_action
+    >>> d = domain_text([parse_action("(:action press :parameters (?b - button) :effect (pressed ?b))")])
+    >>> print(unused_types(d, {"b1": "button", "s1": "switch", "s2": "switch"})[:60])
+    ; type 'switch' of the scene's objects s1, s2 is the type of
+    """
+    fits = _fits(domain)
+    wanted = sorted({t for a in domain.actions.values() for _, t in a.parameters})
+    unused: dict = {}
+    for name, kind in objects.items():
+        if not any(fits(kind, w) for w in wanted):
+            unused.setdefault(kind, []).append(name)
+    if not unused:
+        return ""
+    shown = "; ".join(f"type {k!r} of the scene's objects {summarise(v)}" for k, v in sorted(unused.items()))
+    verb = "is" if len(unused) == 1 else "are each"
+    return f"; {shown} {verb} the type of no action's parameter (the actions take {', '.join(wanted)})"
+
+
 def check_groundings(domain: Domain, objects: dict, *, max_groundings: int = MAX_GROUNDINGS) -> int:
     """The number of ground actions of ``domain`` over ``objects`` (name -> type); ValueError above the bound.
 
@@ -94,17 +134,7 @@ def check_groundings(domain: Domain, objects: dict, *, max_groundings: int = MAX
     4
     """
     max_groundings = check_positive(max_groundings, name="max_groundings", integer=True)
-    parents = _parents(domain)
-
-    def fits(kind: str, wanted: str) -> bool:
-        seen = set()
-        while kind not in seen:  # up the hierarchy (a cycle in a bad domain ends the walk)
-            if kind == wanted:
-                return True
-            seen.add(kind)
-            kind = parents.get(kind, "object")
-        return wanted == "object"
-
+    fits = _fits(domain)
     kinds = Counter(objects.values())
     fitting = {}
     counts = {}

@@ -150,10 +150,27 @@ def test_a_library_without_descriptions_or_domain_says_what_to_do(synthetic_libr
 def test_a_domain_given_is_used_as_it_is(synthetic_library):
     doc = button_scene(BUTTONS, goal=["b4"])
     doc["init"] = ["(ready b1)", "(next b1 b4)", "(next b4 b4)"]
+    synthetic_library.describe("press", "(:action " + ORDERED.split("(:action ", 1)[1].rstrip()[:-1],
+                               {"goal": "?n"})
     res = plan_task(synthetic_library.store, scene_from_dict(doc), domain=ORDERED)
-    # the convention: the goal is the last argument with a pose, here the *next* button
     assert res.plan == [("press", ("b1", "b4")), ("press", ("b4", "b4"))]
     assert np.linalg.norm(res.trajectory["position"][res.steps[0].stop - 1] - BUTTONS[3]) < 1e-9
+
+
+def test_two_positioned_parameters_and_no_goal_is_an_error_that_shows_the_fix(synthetic_library):
+    """Issue 24: with (?b ?n - button) the old default (the last positioned argument) pressed b2 for
+    (press b3 b2) and reported it reached. Now no guess is made."""
+    doc = button_scene(BUTTONS, goal=["b3"])
+    doc["init"] = ["(ready b3)", "(next b3 b2)"]
+    with pytest.raises(ValueError, match=r"^step 1 \(press b3 b2\): action press has 2 parameters that are "
+                                         r"objects with a position \(\?b = b3, \?n = b2\) and its binding "
+                                         r"names no goal; give one, e.g. skillbank library describe DB press "
+                                         r"--action FILE\.pddl --binding '\{\"goal\": \"\?b\"\}'$"):
+        plan_task(synthetic_library.store, scene_from_dict(doc), domain=ORDERED)
+    doc["goal"], doc["init"] = ["(pressed b4)"], ["(ready b4)", "(next b4 b4)"]  # the same object twice: no
+    # ambiguity
+    res = plan_task(synthetic_library.store, scene_from_dict(doc), domain=ORDERED)
+    assert res.plan == [("press", ("b4", "b4"))]
 
 
 def test_the_three_button_skill_presses_four_new_buttons_with_one_continuous_joint_path(button_library):
