@@ -29,7 +29,7 @@ LAYERS = (
     ("selection",),
     ("store",),
     ("planning",),
-    ("pipeline",),
+    ("pipeline", "simulation"),
     ("plotting",),
     ("experiments",),
     ("cli",),

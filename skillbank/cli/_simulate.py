@@ -1,0 +1,122 @@
+"""``skillbank simulate``: replay a joint trajectory in a MuJoCo world of a scene and report what happened.
+
+Exit status: 0 when every goal fact the simulation can judge holds and no unintended contact happened,
+1 otherwise, 2 on bad input (docs/simulation.md).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ._library import check_robot
+from ._options import show_progress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub):
+    """Register ``skillbank simulate``.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parser = argparse.ArgumentParser(prog="skillbank")
+    >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
+    ArgumentParser(...)
+    """
+    p = sub.add_parser("simulate", help="replay a joint trajectory in a physics simulation of the scene "
+                                        "(MuJoCo, needs skillbank[sim]); exit 1 when a goal fact fails or "
+                                        "the robot touches what it should not")
+    p.add_argument("trajectory", type=Path,
+                   help="a file with a 'joints' stream: a reuse's or plan's CSV or NPZ, or a recording "
+                        "such as the three-button HDF5")
+    p.add_argument("--scene", type=Path, required=True,
+                   help="scene file (JSON): table, obstacles, buttons, objects, goal "
+                        "(see docs/simulation.md)")
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e, with its Robotiq 2F-85)")
+    p.add_argument("--json", action="store_true",
+                   help="print duration, real_time_factor, tracking, contacts, buttons, objects, facts, "
+                        "notes as JSON")
+    p.add_argument("--plot", type=Path, default=None,
+                   help="write a figure: the tool path with contacts marked, and each button's force "
+                        "over time")
+    p.add_argument("--video", type=Path, default=None,
+                   help="write an animated GIF rendered off-screen (EGL or OSMesa)")
+    p.set_defaults(func=_simulate)
+    return p
+
+
+def _check_folder(path, name: str) -> None:
+    if path is not None and not Path(path).parent.is_dir():
+        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
+                         f"{str(Path(path).parent)!r} does not exist")
+
+
+def _simulate(args) -> int:
+    from .. import io  # the readers, when a trajectory is read
+    from ..planning import load_scene  # scene files, when a simulation runs
+    from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
+
+    check_robot(args)
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")
+    for name in ("plot", "video"):
+        _check_folder(getattr(args, name), name)
+    io.check_input_file(args.trajectory, name="trajectory")
+    scene = load_scene(args.scene)
+    demo = io.load(args.trajectory)
+    bar = None
+    if show_progress(args):
+        from tqdm import tqdm  # a bar on a terminal only
+
+        bar = tqdm(desc="physics steps", unit="step", leave=False)
+    try:
+        result = simulate(demo, scene, robot=args.robot, progress=bar, video=args.video)
+    finally:
+        if bar is not None:
+            bar.close()
+    written = []
+    if args.plot is not None:
+        from ..plotting import plot_simulation  # matplotlib only when a figure is asked for
+
+        written.append(plot_simulation(result, scene, args.plot, title=str(args.trajectory.name)))
+    if result.video_ is not None:
+        written.insert(0, result.video_)
+    status = 0 if result.ok else 1
+    if args.json:
+        doc = result.to_dict()
+        doc["written"] = [str(p) for p in written]
+        print(json.dumps(doc, allow_nan=False))
+        return status
+    _report(args, result, written)
+    return status
+
+
+def _report(args, result, written) -> None:
+    print(f"{args.trajectory}: simulated {result.duration:.3g} s at {result.real_time_factor:.3g}x real "
+          f"time; {'ok' if result.ok else 'NOT ok'}")
+    print(f"  tracking: joints within {result.joint_max:.3g} rad, tool within "
+          f"{result.tool_max * 1000:.3g} mm")
+    if result.contacts:
+        print(f"  contacts ({len(result.contacts)} unintended):")
+        for c in result.contacts:
+            print(f"    {c['t']:.3f} s  {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
+    else:
+        print("  contacts: none unintended")
+    for name, b in result.buttons.items():
+        when = f"at {b['t']:.3f} s" if b["pressed"] else "never"
+        print(f"  button {name}: {'pressed' if b['pressed'] else 'not pressed'} ({when}), peak force "
+              f"{b['peak_force']:.3g} N")
+    for name, o in result.objects.items():
+        held = "held" if o["held"] else "not held"
+        print(f"  object {name}: moved {o['displacement'] * 1000:.3g} mm, {held}, "
+              f"{'lifted' if o['lifted'] else 'not lifted'}")
+    for fact, value in result.facts.items():
+        print(f"  fact {fact}: {'cannot judge' if value is None else ('holds' if value else 'FAILS')}")
+    for note in result.notes:
+        print(f"  note: {note}")
+    for path in written:
+        print(f"  wrote {path}")

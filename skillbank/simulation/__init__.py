@@ -1,0 +1,17 @@
+"""Physics simulation of a joint trajectory in a scene's world (MuJoCo, extra ``skillbank[sim]``).
+
+:func:`build_world` writes the MJCF world of a :class:`~skillbank.planning.Scene`
+for a robot model; :func:`simulate` replays a trajectory's ``joints`` (and
+``gripper``) in it and reports tracking, contacts, buttons, objects and the
+scene's goal facts (:class:`SimulationResult`). docs/simulation.md describes
+the world, the rules and the JSON contract. MuJoCo is imported when a world
+is compiled, not when this package is imported.
+"""
+
+from ._mujoco import MISSING, import_mujoco
+from ._run import GRIPPER_RANGE, SimulationResult, simulate
+from ._servo import SERVO_GAINS
+from ._world import GRIP_FORCE, LINK_MASSES, PRESS_FORCE, World, build_world
+
+__all__ = ["simulate", "SimulationResult", "GRIPPER_RANGE", "build_world", "World", "LINK_MASSES",
+           "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco"]

@@ -1,0 +1,89 @@
+"""The MuJoCo world matches the robot model: link frames, TCP, capsules, masses; the button spring."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from skillbank.simulation import LINK_MASSES, PRESS_FORCE, build_world
+
+from .conftest import TABLE, button, scene
+
+
+def _compiled(world):
+    M = mujoco.MjModel.from_xml_string(world.xml)
+    return M, mujoco.MjData(M)
+
+
+def test_simulated_link_frames_are_the_models(ur5e):
+    world = build_world(scene(), ur5e)
+    M, d = _compiled(world)
+    rng = np.random.default_rng(7)
+    q = rng.uniform(-np.pi, np.pi, (20, 6))
+    expected = ur5e.link_frames(q)
+    tcp = expected[:, -1] @ ur5e.gripper_.tool()
+    for k in range(len(q)):
+        d.qpos[[M.jnt_qposadr[M.joint(j).id] for j in world.joints]] = q[k]
+        mujoco.mj_kinematics(M, d)
+        for i, site in enumerate(world.frames):
+            s = M.site(site).id
+            np.testing.assert_allclose(d.site_xpos[s], expected[k, i, :3, 3], atol=1e-9)
+            np.testing.assert_allclose(d.site_xmat[s].reshape(3, 3), expected[k, i, :3, :3], atol=1e-9)
+        np.testing.assert_allclose(d.site_xpos[M.site("tcp").id], tcp[k, :3, 3], atol=1e-9)
+
+
+def test_collision_geoms_are_the_models_capsules(ur5e):
+    world = build_world(scene(), ur5e)
+    M, d = _compiled(world)
+    q = np.array([0.3, -1.1, 1.2, -0.7, 1.4, 0.5])
+    d.qpos[:6] = q
+    mujoco.mj_kinematics(M, d)
+    frames = ur5e.link_frames(q)[0]
+    palm = [c for c in ur5e.bodies if "finger" not in c.name]
+    assert palm
+    for cap in palm:
+        g = M.geom(cap.name).id
+        T = frames[cap.frame]
+        a, b = (T[:3, :3] @ np.asarray(p) + T[:3, 3] for p in (cap.a, cap.b))
+        assert M.geom_size[g][0] == pytest.approx(cap.radius)
+        np.testing.assert_allclose(d.geom_xpos[g], (a + b) / 2, atol=1e-9)
+        if M.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            assert 2 * M.geom_size[g][1] == pytest.approx(np.linalg.norm(b - a))
+
+
+def test_link_masses_are_urs(ur5e):
+    M, _ = _compiled(build_world(scene(), ur5e))
+    masses = [M.body(f"link{i}").mass[0] for i in range(1, 6)]
+    np.testing.assert_allclose(masses, LINK_MASSES["ur5e"][:5])
+    assert all(M.body_gravcomp[M.body(f"link{i}").id] == 1 for i in range(1, 7))
+
+
+def test_a_button_takes_its_press_force_at_half_travel(ur5e):
+    """MuJoCo's own spring force on the plunger: F/2 at rest, F at half travel."""
+    world = build_world(scene([button("b1", [0.4, 0.0, 0.1], travel=0.01)]), ur5e)
+    M, d = _compiled(world)
+    adr = M.jnt_qposadr[M.joint(world.buttons["b1"]["joint"]).id]
+    dof = M.jnt_dofadr[M.joint(world.buttons["b1"]["joint"]).id]
+    for depth, force in ((0.0, PRESS_FORCE / 2), (0.005, PRESS_FORCE)):
+        d.qpos[adr] = depth
+        d.qvel[:] = 0
+        mujoco.mj_forward(M, d)
+        assert -d.qfrc_passive[dof] == pytest.approx(force)  # against the press (the axis points down)
+
+
+def test_base_and_table_do_not_collide(ur5e):
+    world = build_world(scene(table=TABLE), ur5e)
+    M, d = _compiled(world)
+    d.qpos[:6] = ur5e.home
+    mujoco.mj_forward(M, d)
+    assert d.ncon == 0
+
+
+@pytest.mark.parametrize("obj, match", [
+    (button("b1", [0, 0, 0], radius=-0.01), r"objects.b1.size: expected \(radius,\)"),
+    (button("b1", [0, 0, 0], travel=0.0), "objects.b1.travel: expected a positive distance"),
+])
+def test_bad_objects_are_refused(ur5e, obj, match):
+    with pytest.raises(ValueError, match=match):
+        build_world(scene([obj]), ur5e)
