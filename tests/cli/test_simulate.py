@@ -41,8 +41,8 @@ def _forearm_box():
 def files(tmp_path):
     traj = _sweep(tmp_path / "sweep.npz")
     wall = tmp_path / "wall.json"
-    # The scene parser on this branch knows no shapes yet: b1 is a pose only, so its fact cannot be judged.
-    point = {"b1": {"type": "button", "position": [0.4, 0.0, 0.1]}}
+    # b1 is of a type that is no button: a pose only, so its fact cannot be judged.
+    point = {"b1": {"type": "spot", "position": [0.4, 0.0, 0.1]}}
     wall.write_text(json.dumps({"objects": point, "obstacles": {"wall": _forearm_box()},
                                 "goal": ["(pressed b1)"]}))
     empty = tmp_path / "empty.json"
@@ -56,6 +56,17 @@ def test_a_clean_replay_exits_0(cli, files):
     assert code == 0, err
     assert "ok" in out.splitlines()[0] and "contacts: none unintended" in out
     assert "fact (pressed b1): cannot judge" in out
+
+
+def test_a_button_the_replay_never_presses_exits_1(cli, files, tmp_path):
+    traj, _, _ = files
+    scene = tmp_path / "button.json"
+    scene.write_text(json.dumps({"objects": {"b1": {"type": "button", "position": [0.4, 0.0, 0.1]}},
+                                 "goal": ["(pressed b1)"]}))
+    code, out, err = cli("simulate", str(traj), "--scene", str(scene), "--json")
+    assert code == 1, err
+    doc = json.loads(out)
+    assert doc["facts"] == {"(pressed b1)": False} and doc["buttons"]["b1"]["pressed"] is False
 
 
 def test_a_contact_exits_1_and_names_the_forearm_and_the_wall(cli, files):
