@@ -52,6 +52,10 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="print plan, steps (action, args, skill, start, stop, used), t, streams, collision, "
                         "constraint_error as JSON")
+    p.add_argument("--simulate", action="store_true",
+                   help="replay the plan's joints in a MuJoCo simulation of the scene (needs --robot and "
+                        "skillbank[sim]) and report the planned and the achieved goal facts side by side; "
+                        "exit 1 when they disagree or the robot touches what no step targets")
     p.set_defaults(func=_plan)
     return p
 
@@ -62,6 +66,13 @@ def _plan(args) -> int:
     from ..store import open_store  # the store, when a plan runs (not for --help)
 
     check_robot(args)
+    if args.simulate:
+        if args.robot is None:
+            raise ValueError("simulate: a simulation replays the plan's joints: give --robot too "
+                             "(--robot ur5e)")
+        from ..simulation import import_mujoco  # the extra is checked before the plan, not after
+
+        import_mujoco()
     limits, branch = (robot_params(args)[k] for k in ("limits", "branch"))
     kind = output_format(args)
     writing = export_params(args, kind)
@@ -95,6 +106,9 @@ def _plan(args) -> int:
             if args.plot is not None else {}
     if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
         return _empty(args, result, scene)
+    # before anything is written: a world that refuses the plan (the robot starting in an obstacle)
+    # leaves no output behind
+    sim = _simulate(args, result, scene) if args.simulate else None
     with _all_or_nothing(args) as written:
         if args.out is not None:
             io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
@@ -104,11 +118,16 @@ def _plan(args) -> int:
 
             written += list(write_pddl(result, _stem(args.plot)))
             written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
+    status = 0 if sim is None or _agree(sim) else 1
     if args.json:
         doc = result.to_dict()
         doc["written"] = [str(p) for p in written]
+        if sim is not None:
+            doc["simulation"] = sim.to_dict()
+            doc["facts"] = {fact: {"planned": True, "achieved": value} for fact, value in sim.facts.items()}
+            doc["agree"] = status == 0
         print(json.dumps(doc, allow_nan=False))
-        return 0
+        return status
     print(f"{args.db}: plan of {len(result.plan)} step(s) for {len(scene.goal)} goal fact(s)")
     for k, s in enumerate(result.steps, 1):
         print(f"  {k}. ({' '.join([s.action, *s.args])}) by skill {s.skill!r} from primitive(s) {s.used}, "
@@ -121,7 +140,46 @@ def _plan(args) -> int:
                     orientation=any(s.goal_orientation is not None for s in result.steps))
     for path in written:
         print(f"  wrote {path}")
-    return 0
+    if sim is not None:
+        _print_simulation(sim)
+    return status
+
+
+def _simulate(args, result, scene):
+    """The plan replayed in physics; each step may touch only the objects it acts on, during its samples."""
+    from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
+
+    t = result.trajectory.t
+    targets = [(float(t[s.start]), float(t[s.stop - 1]), list(s.args)) for s in result.steps]
+    bar = None
+    if show_progress(args):
+        from tqdm import tqdm  # a bar on a terminal only
+
+        bar = tqdm(desc="physics steps", unit="step", leave=False)
+    try:
+        return simulate(result.trajectory, scene, robot=args.robot, targets=targets, progress=bar)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _agree(sim) -> bool:
+    """The plan and the world agree: every goal fact was seen to hold and nothing else was touched.
+
+    A fact the simulation cannot judge is not agreement: success the world did not show is not reported.
+    """
+    return all(value is True for value in sim.facts.values()) and not sim.contacts
+
+
+def _print_simulation(sim) -> None:
+    print(f"  simulated {sim.duration:.3g} s at {sim.real_time_factor:.3g}x real time: tracking within "
+          f"{sim.joint_max:.3g} rad, tool within {sim.tool_max * 1000:.3g} mm")
+    for fact, value in sim.facts.items():
+        seen = "cannot judge" if value is None else ("holds" if value else "FAILS")
+        print(f"    {fact}: planned holds, simulated {seen}")
+    for c in sim.contacts:
+        print(f"    contact {c['t']:.3f} s: {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
+    print(f"  plan and simulation {'agree' if _agree(sim) else 'DISAGREE'}")
 
 
 def _check_folder(path, name: str) -> None:
@@ -163,6 +221,8 @@ def _empty(args, result, scene) -> int:
     asked = [f"--{name}" for name in ("out", "plot") if getattr(args, name) is not None]
     if asked:
         notes.append(f"{' and '.join(asked)}: nothing written (a plan of no steps has no trajectory)")
+    if args.simulate:
+        notes.append("--simulate: nothing simulated (a plan of no steps moves nothing)")
     if args.json:
         doc = result.to_dict()
         doc.update(notes=notes, written=[])

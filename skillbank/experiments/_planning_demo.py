@@ -84,6 +84,8 @@ RAIL_ACTIONS = {
   :effect (touched ?x))
 """,
 }
+#: Each RAIL action's goal: the parameter whose object the step ends at (two have two posed parameters).
+RAIL_GOALS = {"pushing": "?t", "pressing": "?b", "reaching": "?x"}
 #: The table scene (m, RAIL's frame), as the hand's contact points. The plate is the push's goal;
 #: the cube was placed where the push reproduced for it comes down onto the table, 8.5 cm before.
 RAIL_OBJECTS = {"cube": ("block", [0.551, 0.315, 0.03]), "plate": ("target", [0.55, 0.40, 0.03]),
@@ -174,7 +176,7 @@ def _button_library(lib, data: Path) -> None:
                          f"one button to the next, got {len(presses)}")
     for p in presses:
         lib.label("press", primitive=p.id)
-    lib.describe("press", PRESS_ACTION)
+    lib.describe("press", PRESS_ACTION, {"goal": "?to"})
 
 
 def _rail_library(lib, data: Path) -> int:
@@ -187,7 +189,7 @@ def _rail_library(lib, data: Path) -> int:
     for p in lib.primitives(load=False):
         lib.label(lib.demonstration(p.demonstration_id).metadata["label"], primitive=p.id)
     for label, action in RAIL_ACTIONS.items():
-        lib.describe(label, action)
+        lib.describe(label, action, {"goal": RAIL_GOALS[label]})
     return len(demos)
 
 
