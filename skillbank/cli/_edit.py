@@ -15,6 +15,7 @@ from ._options import (
     execution_params,
     export_params,
 )
+from ._world import agree, load_world, print_simulation, run_simulation, world_constraints
 
 __all__ = ["add_parser", "run"]
 
@@ -70,6 +71,8 @@ def run(args) -> int:
                                         via_orientation=args.via_orientation)
     execution = execution_params(args)
     check_robot(args)
+    world = load_world(args)
+    constraints = world_constraints(constraints, world)
     kind = output_format(args)
     writing = export_params(args, kind, execution["duration"])
     if args.plot is not None:
@@ -92,6 +95,8 @@ def run(args) -> int:
     metrics = comparison_metrics(Y, t, demos[0]["position"], constraints) if args.metrics else None
     traj.metadata.update(constraint_error=error, orientation_error=done.orientation_error,
                          collision=collision)
+    sim = run_simulation(args, traj, world, constraints) if args.simulate else None
+    status = 0 if sim is None or agree(sim) else 1
     if args.out is not None:
         write_trajectory(traj, args.out, format=kind, **writing)
     plot = None
@@ -109,8 +114,10 @@ def run(args) -> int:
             doc["metrics"] = metrics
         if plot is not None:
             doc["plot"] = str(plot)
+        if sim is not None:
+            doc["simulation"] = sim.to_dict()
         print(json.dumps(doc, allow_nan=False))
-        return 0
+        return status
     print(f"{args.method}: {len(demos)} demonstration(s) -> {Y.shape[0]} samples, {Y.shape[1]} dimensions")
     print_execution(traj, error, done.orientation_error, collision, done.peaks, done.notes,
                     orientation=constraints.has_orientation)
@@ -118,7 +125,9 @@ def run(args) -> int:
         print("  " + ", ".join(f"{k} {v:.4g}" for k, v in metrics.items()))
     for note in notes:
         print(f"  warning: {' '.join(note.split())}")
+    if sim is not None:
+        print_simulation(sim)
     for path in (args.out, plot):
         if path is not None:
             print(f"  wrote {path}")
-    return 0
+    return status

@@ -60,6 +60,9 @@ def add_execution_options(p) -> None:
                         "a ROS 2 bag folder of a JointTrajectory, PoseStamped poses and the gripper's "
                         "JointState (rosbag, needs skillbank[ros])")
     add_export_options(p)
+    from ._world import add_world_options  # the world options live beside the simulation's report
+
+    add_world_options(p)
 
 
 def robot_params(args) -> dict:

@@ -27,6 +27,7 @@ from ._options import (
     segmentation_params,
     show_progress,
 )
+from ._world import agree, load_world, print_simulation, run_simulation, world_constraints
 
 __all__ = ["add_parser"]
 
@@ -389,6 +390,8 @@ def _reuse(args) -> int:
     options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
     execution = execution_params(args)
     check_robot(args)
+    world = load_world(args)
+    constraints = world_constraints(constraints, world)
     kind = output_format(args)
     writing = export_params(args, kind, execution["duration"])
     if args.plot is not None:
@@ -400,6 +403,8 @@ def _reuse(args) -> int:
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
                            random_state=args.seed, progress=show_progress(args), **options, **execution)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
+    sim = run_simulation(args, result.trajectory, world, constraints) if args.simulate else None
+    status = 0 if sim is None or agree(sim) else 1
     if args.out is not None:
         io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
     if args.plot is not None:
@@ -408,17 +413,22 @@ def _reuse(args) -> int:
         plot_edit(result.trajectory, args.plot, demos=[used[i] for i in result.used if i in used],
                   constraints=constraints, title=f"skill {args.skill}")
     if args.json:
-        print(json.dumps(result.to_dict()))
-        return 0
+        doc = result.to_dict()
+        if sim is not None:
+            doc["simulation"] = sim.to_dict()
+        print(json.dumps(doc, allow_nan=False))
+        return status
     print(f"{args.db}: skill {args.skill!r} reproduced with {args.method} from primitive(s) {result.used}")
     print_execution(result.trajectory, result.constraint_error, result.orientation_error, result.collision,
                     result.peaks, result.notes, orientation=constraints.has_orientation)
     for pid, reason in result.rejected.items():
         print(f"  rejected {pid}: {reason}")
+    if sim is not None:
+        print_simulation(sim)
     for path in (args.out, args.plot):
         if path is not None:
             print(f"  wrote {path}")
-    return 0
+    return status
 
 
 def print_execution(traj, constraint_error, orientation_error, collision, peaks, notes,

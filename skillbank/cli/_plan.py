@@ -11,6 +11,7 @@ from pathlib import Path
 from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
 from ._options import add_export_options, add_robot_options, export_params, robot_params, show_progress
+from ._world import agree, print_simulation
 
 __all__ = ["add_parser"]
 
@@ -118,7 +119,7 @@ def _plan(args) -> int:
 
             written += list(write_pddl(result, _stem(args.plot)))
             written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
-    status = 0 if sim is None or _agree(sim) else 1
+    status = 0 if sim is None or agree(sim) else 1
     if args.json:
         doc = result.to_dict()
         doc["written"] = [str(p) for p in written]
@@ -141,7 +142,7 @@ def _plan(args) -> int:
     for path in written:
         print(f"  wrote {path}")
     if sim is not None:
-        _print_simulation(sim)
+        print_simulation(sim, planned=True)
     return status
 
 
@@ -161,25 +162,6 @@ def _simulate(args, result, scene):
     finally:
         if bar is not None:
             bar.close()
-
-
-def _agree(sim) -> bool:
-    """The plan and the world agree: every goal fact was seen to hold and nothing else was touched.
-
-    A fact the simulation cannot judge is not agreement: success the world did not show is not reported.
-    """
-    return all(value is True for value in sim.facts.values()) and not sim.contacts
-
-
-def _print_simulation(sim) -> None:
-    print(f"  simulated {sim.duration:.3g} s at {sim.real_time_factor:.3g}x real time: tracking within "
-          f"{sim.joint_max:.3g} rad, tool within {sim.tool_max * 1000:.3g} mm")
-    for fact, value in sim.facts.items():
-        seen = "cannot judge" if value is None else ("holds" if value else "FAILS")
-        print(f"    {fact}: planned holds, simulated {seen}")
-    for c in sim.contacts:
-        print(f"    contact {c['t']:.3f} s: {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
-    print(f"  plan and simulation {'agree' if _agree(sim) else 'DISAGREE'}")
 
 
 def _check_folder(path, name: str) -> None:

@@ -439,8 +439,11 @@ def _confined(folder: Path | None, entry, key: str) -> Path:
     return Path(real)
 
 
-def scene_from_dict(doc, *, folder=None) -> Scene:
+def scene_from_dict(doc, *, folder=None, need_goal: bool = True) -> Scene:
     """Check a parsed scene; ``folder`` is where its file lives (for ``domain``).
+
+    With ``need_goal=False`` a scene may have no goal: a world to check and simulate a reuse in
+    (``library reuse --scene``), not a task to plan.
 
     Raises
     ------
@@ -476,7 +479,7 @@ def scene_from_dict(doc, *, folder=None) -> Scene:
                              "twice")
         objects[obj.name] = obj
     obstacles, specs = _obstacles(doc.get("obstacles", []))
-    if doc.get("goal") is None or doc["goal"] == []:
+    if need_goal and (doc.get("goal") is None or doc["goal"] == []):
         raise ValueError("goal: expected a non-empty list of atoms like '(pressed b1)', got "
                          f"{'none' if doc.get('goal') is None else 'an empty list'}")
     folder = None if folder is None else Path(folder)
@@ -487,7 +490,7 @@ def scene_from_dict(doc, *, folder=None) -> Scene:
     workspace = None if doc.get("workspace") is None else _corners(doc["workspace"], "workspace")
     scene = Scene(objects=objects, obstacles=obstacles, specs=specs,
                   init=_atoms(doc.get("init", []), "init", objects),
-                  goal=_atoms(doc["goal"], "goal", objects),
+                  goal=_atoms(doc.get("goal") or [], "goal", objects),
                   start=_start(doc.get("start", {})),
                   domain=None if doc.get("domain") is None else _confined(folder, doc["domain"], "domain"),
                   folder=folder, branch=branch, workspace=workspace,
@@ -497,7 +500,7 @@ def scene_from_dict(doc, *, folder=None) -> Scene:
     return scene
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, *, need_goal: bool = True) -> Scene:
     """Read and check a scene file (JSON; see the module docstring).
 
     Examples
@@ -512,4 +515,4 @@ def load_scene(path) -> Scene:
     """
     path = Path(path)
     doc = load_json(path, "scene", MAX_SCENE_BYTES)
-    return scene_from_dict(doc, folder=path.resolve().parent)
+    return scene_from_dict(doc, folder=path.resolve().parent, need_goal=need_goal)

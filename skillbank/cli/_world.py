@@ -1,0 +1,100 @@
+"""The world a reuse or an edit is checked and simulated in: ``--scene``, ``--simulate``.
+
+``library reuse`` and ``edit`` take a scene file as their world (its obstacles, table and workspace
+bound the tool path as ``--obstacle`` does; a goal is not needed) and ``--simulate`` replays the
+result's joints in MuJoCo. ``plan`` has its own ``--scene`` (the task) and shares the simulation's
+report from here.
+"""
+
+from __future__ import annotations
+
+from ._options import show_progress
+
+__all__ = ["add_world_options", "load_world", "world_constraints", "run_simulation", "print_simulation",
+           "agree"]
+
+
+def add_world_options(p) -> None:
+    """``--scene`` (a world) and ``--simulate`` for the commands that make one executable trajectory."""
+    from pathlib import Path  # stdlib
+
+    p.add_argument("--scene", type=Path, default=None, metavar="FILE",
+                   help="a scene file (JSON, docs/planning.md) as the world: its obstacles, table and "
+                        "workspace bound the path like --obstacle; its buttons and objects are simulated "
+                        "with --simulate; its goal facts, if any, are judged there")
+    p.add_argument("--simulate", action="store_true",
+                   help="replay the result's joints in a MuJoCo simulation of the world (needs --robot "
+                        "and skillbank[sim]); exit 1 when the robot touches anything but the scene's "
+                        "buttons and objects or a goal fact fails")
+
+
+def load_world(args):
+    """The ``--scene`` world (a :class:`~skillbank.planning.Scene`, goal optional) or None, checked first."""
+    if getattr(args, "simulate", False):
+        if getattr(args, "robot", None) is None:
+            raise ValueError("simulate: a simulation replays joints: give --robot too (--robot ur5e)")
+        from ..simulation import import_mujoco  # the extra is checked before the work, not after
+
+        import_mujoco()
+    if getattr(args, "scene", None) is None:
+        return None
+    from ..planning import load_scene  # scene files, when one is given
+
+    return load_scene(args.scene, need_goal=False)
+
+
+def world_constraints(constraints, scene):
+    """``constraints`` with the world's obstacles, table and workspace slabs added (the tool stays out)."""
+    if scene is None:
+        return constraints
+    return constraints.replace(obstacles=tuple(constraints.obstacles) + tuple(ob for _, ob in scene.world()))
+
+
+def run_simulation(args, trajectory, scene, constraints):
+    """Replay ``trajectory`` in ``scene`` (or, with no scene, a world of ``constraints``' obstacles)."""
+    from ..planning import Scene  # the world's type
+    from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
+
+    if scene is None:
+        obstacles = {f"obstacles[{k}]": ob for k, ob in enumerate(constraints.obstacles)}
+        scene = Scene(objects={}, obstacles=obstacles, init=[], goal=[],
+                      specs={k: ob.spec() for k, ob in obstacles.items()})
+    bar = None
+    if show_progress(args):
+        from tqdm import tqdm  # a bar on a terminal only
+
+        bar = tqdm(desc="physics steps", unit="step", leave=False)
+    try:
+        return simulate(trajectory, scene, robot=args.robot, progress=bar)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def agree(sim) -> bool:
+    """The world saw success: every goal fact seen to hold and nothing touched that no step targets.
+
+    A fact the simulation cannot judge is not success: what the world did not show is not reported.
+    """
+    return all(value is True for value in sim.facts.values()) and not sim.contacts
+
+
+def print_simulation(sim, *, planned: bool = False) -> None:
+    """The simulation's report under a command's own (two-space indent)."""
+    print(f"  simulated {sim.duration:.3g} s at {sim.real_time_factor:.3g}x real time: tracking within "
+          f"{sim.joint_max:.3g} rad, tool within {sim.tool_max * 1000:.3g} mm")
+    for fact, value in sim.facts.items():
+        seen = "cannot judge" if value is None else ("holds" if value else "FAILS")
+        print(f"    {fact}: {'planned holds, ' if planned else ''}simulated {seen}")
+    for name, b in sim.buttons.items():
+        when = f"pressed at {b['t']:.3f} s" if b["pressed"] else "not pressed"
+        print(f"    button {name}: {when}, peak force {b['peak_force']:.3g} N")
+    for name, o in sim.objects.items():
+        held, lifted = ("held" if o["held"] else "not held"), ("lifted" if o["lifted"] else "not lifted")
+        print(f"    object {name}: moved {o['displacement'] * 1000:.3g} mm, {held}, {lifted}")
+    for c in sim.contacts:
+        print(f"    contact {c['t']:.3f} s: {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
+    if planned:
+        print(f"  plan and simulation {'agree' if agree(sim) else 'DISAGREE'}")
+    else:
+        print(f"  simulation {'ok' if agree(sim) else 'NOT ok'}")
