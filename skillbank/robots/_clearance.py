@@ -106,6 +106,12 @@ def segment_box_distance(a, b, lower, upper) -> np.ndarray:
     >>> float(segment_box_distance([-2, 0, 0], [2, 0, 0], [-1, -1, -1], [1, 1, 1]))
     -1.0
     """
+    # a tiny step puts a crossing at +-inf before clipping: the right limit, so no warning
+    with np.errstate(over="ignore", divide="ignore"):
+        return _segment_box(a, b, lower, upper)
+
+
+def _segment_box(a, b, lower, upper) -> np.ndarray:
     a, b, lower, upper = (np.asarray(x, dtype=float) for x in (a, b, lower, upper))
     shape = np.broadcast_shapes(a.shape, b.shape, lower.shape, upper.shape)
     a, b, lower, upper = (np.broadcast_to(x, shape) for x in (a, b, lower, upper))
@@ -118,19 +124,6 @@ def segment_box_distance(a, b, lower, upper) -> np.ndarray:
 
     ends = [np.zeros(shape[:-1] + (1,)), np.ones(shape[:-1] + (1,))]
     faces = np.concatenate([at(lower), at(upper)], axis=-1)  # (..., 6)
-    middle = at((lower + upper) / 2)
-    # inside, depth_k(s) = max(lower_k - p_k, p_k - upper_k) is linear on each side of the mid-plane:
-    # c + d s with (c, d) = (lower - a, -v) or (a - upper, v); two axes' depths are equal where those meet
-    branch_c = np.stack([lower - a, a - upper], axis=-1)  # (..., 3, 2)
-    branch_d = np.stack([-v, v], axis=-1)
-    equal = []
-    for i, j in ((0, 1), (0, 2), (1, 2)):
-        for bi in range(2):
-            for bj in range(2):
-                dd = branch_d[..., i, bi] - branch_d[..., j, bj]
-                cc = branch_c[..., j, bj] - branch_c[..., i, bi]
-                ok = dd != 0.0
-                equal.append(np.where(ok, np.clip(cc / np.where(ok, dd, 1.0), 0.0, 1.0), 0.0))
     breaks = np.sort(np.concatenate(ends + [faces], axis=-1), axis=-1)  # (..., 8)
     lo, hi = breaks[..., :-1], breaks[..., 1:]  # the 7 pieces between face crossings
     mid = a[..., None, :] + ((lo + hi) / 2)[..., None] * v[..., None, :]  # (..., 7, 3)
@@ -140,9 +133,44 @@ def segment_box_distance(a, b, lower, upper) -> np.ndarray:
     vv = np.where(out, v[..., None, :] ** 2, 0.0).sum(axis=-1)
     av = np.where(out, (a[..., None, :] - bound) * v[..., None, :], 0.0).sum(axis=-1)
     stationary = np.clip(-av / np.where(vv > 0, vv, 1.0), lo, hi)
-    candidates = np.concatenate(ends + [faces, middle, np.stack(equal, axis=-1), stationary], axis=-1)
+    candidates = np.concatenate(ends + [faces, stationary], axis=-1)
     points = a[..., None, :] + candidates[..., None] * v[..., None, :]
-    return _box_sdf(points, lower[..., None, :], upper[..., None, :]).min(axis=-1)
+    out = _box_sdf(points, lower[..., None, :], upper[..., None, :]).min(axis=-1)
+    # A segment that reaches the box reaches it at an end or a face crossing (a candidate at <= 0, up to
+    # the round-off of the crossing's point: the extra candidates are harmless when not needed); only then
+    # can the minimum be inside, at a mid-plane crossing or where two axes' depths are equal.
+    inside = out <= 1e-9 * (1.0 + np.abs(upper - lower).max(axis=-1) + np.abs(v).max(axis=-1))
+    if inside.any():
+        out = np.array(out)  # writable, also for one segment
+        a, v, lower, upper = a[inside], v[inside], lower[inside], upper[inside]
+        extra = _inside_breaks(a, v, lower, upper)
+        points = a[:, None, :] + extra[..., None] * v[:, None, :]
+        deeper = _box_sdf(points, lower[:, None, :], upper[:, None, :]).min(axis=-1)
+        out[inside] = np.minimum(out[inside], deeper)
+    return out
+
+
+def _inside_breaks(a, v, lower, upper) -> np.ndarray:
+    """Where a segment inside a box may have its deepest point: ``(m, 15)`` parameters in [0, 1].
+
+    Inside, the depth along axis k, ``max(lower_k - p_k, p_k - upper_k)``, is linear on each side of
+    the box's mid-plane, ``c + d s`` with ``(c, d) = (lower - a, -v)`` or ``(a - upper, v)``; the signed
+    distance is the largest of the three, so its kinks are the mid-plane crossings and where two axes'
+    branches are equal.
+    """
+    moving = v != 0.0
+    middle = np.where(moving, np.clip(((lower + upper) / 2 - a) / np.where(moving, v, 1.0), 0.0, 1.0), 0.0)
+    branch_c = np.stack([lower - a, a - upper], axis=-1)  # (m, 3, 2)
+    branch_d = np.stack([-v, v], axis=-1)
+    equal = []
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        for bi in range(2):
+            for bj in range(2):
+                dd = branch_d[..., i, bi] - branch_d[..., j, bj]
+                cc = branch_c[..., j, bj] - branch_c[..., i, bi]
+                ok = dd != 0.0
+                equal.append(np.where(ok, np.clip(cc / np.where(ok, dd, 1.0), 0.0, 1.0), 0.0))
+    return np.concatenate([middle, np.stack(equal, axis=-1)], axis=-1)
 
 
 @dataclass
