@@ -119,7 +119,8 @@ def mujoco_clearance(robot, joints, sim) -> np.ndarray:
     ids = [(model.geom(b).id, model.geom(o).id) if o != "workspace" else None for b, o in pairs]
     frame = np.array([c.frame for c in robot.bodies])
     F = robot.link_frames(joints)[:, frame]
-    quat = matrix_to_quaternion(F[..., :3, :3].reshape(-1, 3, 3)).reshape(F.shape[0], -1, 4)[..., [3, 0, 1, 2]]
+    quat = matrix_to_quaternion(F[..., :3, :3].reshape(-1, 3, 3)).reshape(F.shape[0], -1, 4)
+    quat = quat[..., [3, 0, 1, 2]]  # MuJoCo's quaternions are scalar-first
     out = np.full((joints.shape[0], len(pairs)), np.nan)
     for i in range(joints.shape[0]):
         data.mocap_pos[:] = F[i, :, :3, 3]
@@ -176,15 +177,16 @@ def main(argv=None) -> int:
         rows.append(("MuJoCo mj_geomDistance", t_mj * args.samples / m, m, m))
         both = (reference > 0) & (theirs > 0)
         disagreement["MuJoCo mj_geomDistance"] = float(np.abs(reference - theirs)[both].max())
-        disagreement["MuJoCo overlaps agree"] = bool(np.all((reference < 1e-6) == (theirs < 1e-6)
-                                                            | np.isnan(theirs)))
+        same = ((reference < 1e-6) == (theirs < 1e-6)) | np.isnan(theirs)
+        disagreement["MuJoCo overlaps agree"] = bool(same.all())
 
     print(f"whole-arm clearance, UR5e + 2F-85, {args.samples} samples x {n_pairs} pairs "
           f"({platform.processor() or platform.machine()})")
     print(f"{'method':28s} {'time (s)':>10s} {'per sample (us)':>16s} {'timed on':>9s} {'checked':>8s}")
     for name, seconds, timed, checked in rows:
         print(f"{name:28s} {seconds:10.4f} {seconds / args.samples * 1e6:16.2f} {timed:9d} {checked:8d}")
-    print(f"smallest distance {result.min_distance:.4f} m, sample {result.index}, {result.body} / {result.other}")
+    print(f"smallest distance {result.min_distance:.4f} m, sample {result.index}, "
+          f"{result.body} / {result.other}")
     for name, value in disagreement.items():
         print(f"largest disagreement, {name}: {value if isinstance(value, bool) else f'{value:.2e} m'}")
     if args.json:
