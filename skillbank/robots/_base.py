@@ -90,6 +90,24 @@ def _check_gripper(value, default):
     return GRIPPERS[value]
 
 
+def _check_tool(value, gripper):
+    """The tool transform: a 4 x 4 rigid transform, ``"flange"``, ``"tcp"`` (the mounted gripper's) or a
+    gripper's name (its TCP)."""
+    if not isinstance(value, str):
+        return _check_rigid(value, "tool")
+    if value == "flange":
+        return np.eye(4)
+    if value == "tcp":
+        if gripper is None:
+            raise ValueError("tool: 'tcp' is the mounted gripper's tool centre point, but no gripper is "
+                             "mounted (gripper='none'); give the gripper or a 4 x 4 tool transform")
+        return gripper.tool()
+    if value in GRIPPERS:
+        return GRIPPERS[value].tool()
+    raise ValueError(f"tool: expected a 4 x 4 transform, 'flange', 'tcp' or a gripper's name among "
+                     f"{list(GRIPPERS)}, got {value!r}")
+
+
 def _inverse_rigid(T: np.ndarray) -> np.ndarray:
     inv = np.eye(4)
     inv[:3, :3] = T[:3, :3].T
@@ -108,8 +126,14 @@ class RobotModel(ABC):
     ----------
     base : array-like of shape (4, 4), optional
         The robot's base frame in the world frame (default: they coincide).
-    tool : array-like of shape (4, 4), optional
-        The tool frame in the flange frame (default: the flange).
+    tool : array-like of shape (4, 4) or str, optional
+        The tool frame in the flange frame (default: the flange). ``"tcp"`` is the mounted gripper's
+        tool centre point (``gripper_.tool()``), a gripper's name (``"robotiq_2f85"``) that gripper's,
+        ``"flange"`` the flange. The default stays the flange: recorded pose streams (the UR
+        controller's) are the flange's.
+    gripper : str or Gripper, default="default"
+        The gripper mounted on the flange (its capsules join :attr:`bodies`): ``"default"`` the
+        robot's ``DEFAULT_GRIPPER``, ``"none"``, a name in ``GRIPPERS`` or a :class:`Gripper`.
     singularity_thresholds : mapping of str to float, optional
         Thresholds replacing the class's (``SINGULARITIES``), by kind.
     max_step : float, default=0.5
@@ -142,13 +166,16 @@ class RobotModel(ABC):
     BODIES: ClassVar[tuple] = ()
     #: The gripper mounted unless ``gripper`` says otherwise (a name in ``GRIPPERS``), or None.
     DEFAULT_GRIPPER: ClassVar[str | None] = None
+    #: Body name pairs never checked for self-collision besides those on the same or consecutive frames
+    #: (bodies whose envelopes touch at every configuration, or cannot reach each other).
+    SELF_COLLISION_SKIP: ClassVar[frozenset] = frozenset()
 
     def __init__(self, *, base=None, tool=None, singularity_thresholds=None, max_step=0.5,
                  gripper="default"):
         self.gripper = gripper
         self.gripper_ = _check_gripper(gripper, self.DEFAULT_GRIPPER)
         self.base = _check_rigid(base, "base")
-        self.tool = _check_rigid(tool, "tool")
+        self.tool = _check_tool(tool, self.gripper_)
         self._base_inv, self._tool_inv = _inverse_rigid(self.base), _inverse_rigid(self.tool)
         if singularity_thresholds is not None and not isinstance(singularity_thresholds, Mapping):
             raise ValueError("singularity_thresholds: expected a mapping of kind to threshold, got "
@@ -212,6 +239,17 @@ class RobotModel(ABC):
             flange = self.n_joints
             out += tuple(c._replace(frame=flange) for c in self.gripper_.capsules)
         return out
+
+    def self_collision_pairs(self) -> tuple:
+        """The body pairs checked for self-collision, ``((name, name), ...)``.
+
+        Every pair of :attr:`bodies` except those on the same or consecutive frames (joined by one joint,
+        they touch where the joint is) and those in ``SELF_COLLISION_SKIP``.
+        """
+        bodies = self.bodies
+        skip = {frozenset(pair) for pair in self.SELF_COLLISION_SKIP}
+        return tuple((a.name, b.name) for i, a in enumerate(bodies) for b in bodies[i + 1:]
+                     if abs(a.frame - b.frame) > 1 and frozenset((a.name, b.name)) not in skip)
 
     def _out_of_reach(self, T: np.ndarray) -> np.ndarray:
         """How far (m) each flange pose ``T (n, 4, 4)`` is outside the workspace; NaN: not known.

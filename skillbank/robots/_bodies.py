@@ -4,8 +4,19 @@ A robot model lists its links' collision geometry as :class:`Capsule` s, each
 fixed in one of the frames :meth:`~skillbank.robots.RobotModel.link_frames`
 returns (frame 0 the base, frame ``i`` the link moved by joint ``i``, the
 last one the flange). A gripper (:class:`Gripper`) adds its own capsules in
-the flange frame and its tool centre point (TCP). Collision checks, planning
-and the simulator all read this one description.
+the flange frame and its tool centre point (TCP). Collision checks
+(:func:`~skillbank.robots.clearance`), planning and the simulator all read
+this one description.
+
+Every capsule is the smallest-volume capsule that contains the convex hull
+of one collision mesh of robosuite 1.5.2's UR5e and Robotiq 85 models (MIT;
+``robosuite/models/assets/robots/ur5e`` and ``grippers/robotiq_gripper_85.xml``)
+expressed in our frames, rounded to the millimetre and grown by 1 to 2 mm for
+robosuite's kinematic constants, which differ from the manufacturer's DH
+table by up to 1.5 mm. MuJoCo collides a mesh as its convex hull, and a
+capsule (convex) contains a hull exactly when it contains the mesh's
+vertices, which ``tests/robots/test_bodies.py`` checks at random
+configurations (docs/robots.md, "Bodies and clearance").
 """
 
 from __future__ import annotations
@@ -14,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Capsule", "Gripper", "GRIPPERS"]
+__all__ = ["Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85"]
 
 
 class Capsule(NamedTuple):
@@ -23,7 +34,7 @@ class Capsule(NamedTuple):
     Attributes
     ----------
     name : str
-        The body's name (``"upper_arm"``, ``"gripper_fingers"``).
+        The body's name (``"upper_arm"``, ``"finger_left"``).
     frame : int
         Index into :meth:`RobotModel.link_frames`: 0 the base, ``i`` after joint ``i``.
     a, b : tuple of 3 float
@@ -52,6 +63,13 @@ class Gripper(NamedTuple):
         Largest opening between the fingers (metres).
     source : str
         Where the dimensions come from.
+    fingers : tuple of str
+        The names of the capsules that touch what the gripper presses or grasps.
+
+    Examples
+    --------
+    >>> ROBOTIQ_2F85.tool()[:3, 3].tolist()
+    [0.0, 0.0, 0.163]
     """
 
     name: str
@@ -59,6 +77,7 @@ class Gripper(NamedTuple):
     tcp: tuple
     stroke: float
     source: str
+    fingers: tuple = ()
 
     def tool(self) -> np.ndarray:
         """The TCP as a flange-to-tool transform (a translation along the flange's axes)."""
@@ -67,14 +86,27 @@ class Gripper(NamedTuple):
         return T
 
 
-#: Placeholder dimensions, refined from the Robotiq 2F-85's published drawing (docs/robots.md).
+#: The Robotiq 2F-85 as robosuite 1.5.2 mounts it on the UR5e: its base (``robotiq_85_adapter_link``)
+#: on the flange, no coupling between them (robosuite's ``right_hand`` body is the flange: it lies
+#: within 1.5 mm of DH frame 6, same axes). The capsules contain the convex hulls of the collision
+#: meshes and boxes over the whole stroke (the outer and inner knuckles at 0 to 0.8 rad, the inner
+#: finger kept parallel, as the linkage does); the fingers' capsules end 8 mm beyond the closed
+#: fingertips (a capsule's round end about a flat tip). The TCP is the middle of the closed fingertips'
+#: ends, 0.163 m along the flange's z: the fingertip boxes' far faces at full closure (robosuite's
+#: ``eef`` site, 0.145 m, is the middle of the pads, 18.75 mm, half a fingertip, above).
 ROBOTIQ_2F85 = Gripper(
     name="robotiq_2f85",
-    capsules=(Capsule("gripper_body", -1, (0.0, 0.0, 0.0), (0.0, 0.0, 0.09), 0.045),
-              Capsule("gripper_fingers", -1, (0.0, 0.0, 0.09), (0.0, 0.0, 0.14), 0.03)),
-    tcp=(0.0, 0.0, 0.15),
+    capsules=(
+        # robotiq_arg2f_base_link.stl: x +-37.5 mm, y +-42.4 mm, z -2.7 to 90 mm
+        Capsule("gripper_body", -1, (0.0, 0.0, 0.024), (0.0, 0.0, 0.051), 0.045),
+        # knuckles, fingers, pads on the flange's -y side (robosuite's left_*), swept over the stroke
+        Capsule("finger_left", -1, (0.0, -0.040, 0.077), (0.0, -0.021, 0.128), 0.044),
+        Capsule("finger_right", -1, (0.0, 0.040, 0.077), (0.0, 0.021, 0.128), 0.044),
+    ),
+    tcp=(0.0, 0.0, 0.163),
     stroke=0.085,
-    source="placeholder",
+    source="robosuite 1.5.2 robotiq_gripper_85.xml and meshes (MIT), fitted in tests/robots/test_bodies.py",
+    fingers=("finger_left", "finger_right"),
 )
 
 #: Gripper name -> description.
