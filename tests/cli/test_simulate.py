@@ -19,7 +19,7 @@ from skillbank.robots import robot_model  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def _sweep(path, angle=0.8, duration=1.6):
+def _sweep(path, angle=0.9, duration=1.8):
     home = np.array(robot_model("ur5e").home)
     t = np.linspace(0.0, duration, 81)
     q = np.tile(home, (len(t), 1))
@@ -29,10 +29,10 @@ def _sweep(path, angle=0.8, duration=1.6):
 
 
 def _forearm_box():
-    """A 4 cm box beside the forearm's middle, 0.5 rad round the base from home (as in the API test)."""
+    """A 4 cm box beside the forearm's middle, 0.6 rad round the base from home (as in the API test)."""
     ur5e = robot_model("ur5e")
     forearm = next(c for c in ur5e.bodies if c.name == "forearm")
-    F = ur5e.link_frames(np.array(ur5e.home) + [0.5, 0, 0, 0, 0, 0])[0, forearm.frame]
+    F = ur5e.link_frames(np.array(ur5e.home) + [0.6, 0, 0, 0, 0, 0])[0, forearm.frame]
     m = F[:3, :3] @ (0.5 * (np.asarray(forearm.a) + np.asarray(forearm.b))) + F[:3, 3]
     return "box:" + ",".join(f"{v:.6f}" for v in [*(m - 0.02), *(m + 0.02)])
 

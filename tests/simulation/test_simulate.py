@@ -11,6 +11,7 @@ import pytest
 from skillbank.core import Box, Demonstration, Sphere
 from skillbank.io import load
 from skillbank.planning import SceneObject
+from skillbank.robots import clearance
 from skillbank.simulation import simulate
 
 from .conftest import TABLE, button, scene, sweep
@@ -96,11 +97,11 @@ def _capsule_distance(ur5e, q, cap, box):
 def test_the_forearm_driven_into_a_box_is_the_contact_at_the_predicted_time(ur5e):
     q0 = np.array(ur5e.home)
     forearm = next(c for c in ur5e.bodies if c.name == "forearm")
-    # a 4 cm box beside the forearm's middle, 0.5 rad further round the base axis
-    F = ur5e.link_frames(q0 + [0.5, 0, 0, 0, 0, 0])[0, forearm.frame]
+    # a 4 cm box beside the forearm's middle, 0.6 rad further round the base axis
+    F = ur5e.link_frames(q0 + [0.6, 0, 0, 0, 0, 0])[0, forearm.frame]
     middle = F[:3, :3] @ (0.5 * (np.asarray(forearm.a) + np.asarray(forearm.b))) + F[:3, 3]
     box = Box(middle - 0.02, middle + 0.02)
-    demo = sweep(q0, 0, 0.8, 1.6, n=161)
+    demo = sweep(q0, 0, 0.9, 1.8, n=181)
     distances = {c.name: _capsule_distance(ur5e, demo["joints"], c, box) for c in ur5e.bodies}
     first = {name: demo.t[np.argmax(d <= 0)] for name, d in distances.items() if (d <= 0).any()}
     assert min(first, key=first.get) == "forearm"
@@ -110,6 +111,11 @@ def test_the_forearm_driven_into_a_box_is_the_contact_at_the_predicted_time(ur5e
     assert hits[0]["t"] == pytest.approx(first["forearm"], abs=0.02)  # within two samples of 10 ms
     assert hits[0]["force"] > 0
     assert not result.ok
+    # the geometric whole-arm check flags the same link and obstacle, within one sample of the physics
+    check = clearance(ur5e, demo["joints"], {"wall": box}, t=demo.t)
+    index, body, other = check.first_contact()
+    assert (body, other) == ("forearm", "wall")
+    assert abs(demo.t[index] - hits[0]["t"]) <= demo.t[1] - demo.t[0] + 1e-9
 
 
 def test_a_box_pushed_by_the_gripper_moves(ur5e):
