@@ -93,6 +93,8 @@ def _check_gripper(value, default):
 def _check_tool(value, gripper):
     """The tool transform: a 4 x 4 rigid transform, ``"flange"``, ``"tcp"`` (the mounted gripper's) or a
     gripper's name (its TCP)."""
+    if value is None:  # the default: where the mounted gripper works, else the flange
+        return np.eye(4) if gripper is None else gripper.tool()
     if not isinstance(value, str):
         return _check_rigid(value, "tool")
     if value == "flange":
@@ -127,10 +129,12 @@ class RobotModel(ABC):
     base : array-like of shape (4, 4), optional
         The robot's base frame in the world frame (default: they coincide).
     tool : array-like of shape (4, 4) or str, optional
-        The tool frame in the flange frame (default: the flange). ``"tcp"`` is the mounted gripper's
-        tool centre point (``gripper_.tool()``), a gripper's name (``"robotiq_2f85"``) that gripper's,
-        ``"flange"`` the flange. The default stays the flange: recorded pose streams (the UR
-        controller's) are the flange's.
+        The tool frame in the flange frame. Default: the mounted gripper's tool centre point
+        (``gripper_.tool()``; the Robotiq 2F-85's on the UR5e, 0.163 m along the flange's z, where
+        the closed fingertips meet), or the flange when no gripper is mounted. ``"tcp"`` says the
+        same explicitly, a gripper's name (``"robotiq_2f85"``) gives that gripper's TCP, ``"flange"``
+        the flange (ROS's ``tool0``: what a UR controller records as its pose unless a TCP is set,
+        as in the three-button recording).
     gripper : str or Gripper, default="default"
         The gripper mounted on the flange (its capsules join :attr:`bodies`): ``"default"`` the
         robot's ``DEFAULT_GRIPPER``, ``"none"``, a name in ``GRIPPERS`` or a :class:`Gripper`.
@@ -193,7 +197,8 @@ class RobotModel(ABC):
 
     def __repr__(self) -> str:
         changed = [name for name, same in (
-            ("base", np.array_equal(self.base, np.eye(4))), ("tool", np.array_equal(self.tool, np.eye(4))),
+            ("base", np.array_equal(self.base, np.eye(4))),
+            ("tool", np.array_equal(self.tool, _check_tool(None, self.gripper_))),
             ("singularity_thresholds", all(self.singularity_thresholds[k] == s.threshold
                                            for k, s in self.SINGULARITIES.items())),
             ("max_step", self.max_step == 0.5)) if not same]

@@ -113,7 +113,7 @@ class UR5e(RobotModel):
 
     A pose has up to 8 inverse-kinematics solutions, ``branch_names``
     ``shoulder-{left,right}/elbow-{up,down}/wrist-{up,down}`` (docs/robots.md
-    gives their geometry). Poses are of the flange in UR's ``base`` frame
+    gives their geometry). Poses are of the tool (by default the mounted 2F-85's TCP) in UR's ``base`` frame
     unless ``base`` and ``tool`` say otherwise.
 
     The three singularities are the factors of the Jacobian's determinant
@@ -131,9 +131,11 @@ class UR5e(RobotModel):
 
     Examples
     --------
-    >>> robot = UR5e()
+    >>> robot = UR5e()  # the tool is the Robotiq 2F-85's TCP, 0.163 m beyond the flange
     >>> position, quaternion = robot.fk(robot.home)
     >>> position.round(4).tolist()
+    [-0.4919, -0.1333, 0.3249]
+    >>> UR5e(tool="flange").fk(robot.home)[0].round(4).tolist()
     [-0.4919, -0.1333, 0.4879]
     >>> robot.branch_names[robot.branch_of(robot.home)[0]]
     'shoulder-right/elbow-up/wrist-down'

@@ -191,14 +191,15 @@ def test_tcp_is_where_the_closed_fingertips_end(gripper):
     assert abs(pads[1][1] - pads[0][1]) - 2 * 0.001 == pytest.approx(ROBOTIQ_2F85.stroke, abs=2e-3)
 
 
-def test_tool_names_give_the_gripper_tcp_and_the_default_stays_the_flange():
+def test_tool_names_give_the_gripper_tcp_which_is_the_default():
     tcp = ROBOTIQ_2F85.tool()
-    assert np.array_equal(UR5e().tool, np.eye(4))  # recorded poses are the flange's
+    assert np.array_equal(UR5e().tool, tcp)  # positions are where the fingertips meet
+    assert np.array_equal(UR5e(gripper="none").tool, np.eye(4))  # no gripper: the flange
     assert np.array_equal(UR5e().gripper_.tool(), tcp)
-    for tool in ("robotiq_2f85", "tcp"):
+    for tool in ("robotiq_2f85", "tcp", None):
         model = robot_model("ur5e", tool=tool)
         assert np.array_equal(model.tool, tcp)
-        flange, _ = UR5e().fk(UR5e.home)
+        flange, _ = UR5e(tool="flange").fk(UR5e.home)
         position, _ = model.fk(UR5e.home)
         # at home the tool points down: the TCP is 0.163 m below the flange
         np.testing.assert_allclose(position, flange - [0.0, 0.0, 0.163], atol=1e-9)

@@ -196,7 +196,7 @@ def test_the_table_with_the_arm_folded_down_into_it_and_the_base_standing_on_it(
     table = Box([-2.0, -2.0, -0.05], [2.0, 2.0, 0.0])
     home = clearance(ROBOT, ROBOT.home, table=table, self_collision=False)
     assert ("base", "table") not in home.per_pair  # mounted on it
-    flange_z = ROBOT.fk(ROBOT.home)[0][2]
+    flange_z = ROBOT.link_frames(ROBOT.home)[0, -1, 2, 3]
     # at home the fingers' capsules end 0.128 + 0.044 m below the flange, pointing down
     assert home.per_pair["finger_left", "table"] == pytest.approx(flange_z - 0.128 - 0.044, abs=1e-12)
     # the lowest body: the shoulder, its capsule 0.1565 - 0.085 m above the table whatever the joints

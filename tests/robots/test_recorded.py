@@ -30,14 +30,14 @@ def test_reader_gives_the_joints_in_chain_order_with_their_names(buttons, data_d
 
 
 def test_fk_of_the_recorded_joints_gives_the_recorded_flange_pose(buttons):
-    robot = UR5e()
+    robot = UR5e(tool="flange")
     position, quaternion = robot.fk(buttons["joints"])
     distance = np.linalg.norm(position - buttons["position"], axis=1)
     angle = np.degrees(quaternion_angle(quaternion, buttons["orientation"]))
     assert distance.max() <= 1e-3 and angle.max() <= 0.5  # measured: 0.79 mm, 0.20 degrees
     assert np.median(distance) < 0.6e-3 and np.median(angle) < 0.15
     # the frame is UR's base (DH frame 0), not ROS's base_link turned by pi about z
-    turned, _ = UR5e(base=np.diag([-1.0, -1.0, 1.0, 1.0])).fk(buttons["joints"])
+    turned, _ = UR5e(base=np.diag([-1.0, -1.0, 1.0, 1.0]), tool="flange").fk(buttons["joints"])
     assert np.linalg.norm(turned - buttons["position"], axis=1).min() > 0.5
     # the stored (alphabetical) order is not the chain order
     alphabetical, _ = robot.fk(buttons["joints"][:, [2, 1, 0, 3, 4, 5]])
@@ -45,7 +45,7 @@ def test_fk_of_the_recorded_joints_gives_the_recorded_flange_pose(buttons):
 
 
 def test_ik_of_the_recorded_poses_round_trips_on_the_recorded_branch(buttons):
-    robot = UR5e()
+    robot = UR5e(tool="flange")
     joints = buttons["joints"]
     branches = robot.branch_of(joints)
     assert set(branches.tolist()) == {0} and robot.branch_names[0] == "shoulder-left/elbow-up/wrist-up"

@@ -28,7 +28,7 @@ A2, A3 = UR5E_DH["a"][1:3]
 
 @pytest.fixture(scope="module")
 def robot():
-    return UR5e()
+    return UR5e(tool="flange")  # the known poses are the flange's (UR's tool0)
 
 
 @pytest.fixture(scope="module")
@@ -310,7 +310,7 @@ def test_path_into_a_singularity_names_the_first_sample_in_the_threshold(robot, 
         _seeded(robot, q)
     assert (info.value.index, info.value.reason) == (k, "singularity")
     # the thresholds are the model's parameters
-    UR5e(singularity_thresholds={kind: 0.0}).ik(*robot.fk(q[: k + 1]), q_seed=q[0])
+    UR5e(singularity_thresholds={kind: 0.0}, tool="flange").ik(*robot.fk(q[: k + 1]), q_seed=q[0])
 
 
 def test_crossing_the_wrist_singularity_between_samples_is_a_branch_flip(robot):
@@ -335,7 +335,7 @@ def test_a_jump_in_the_pose_path_is_an_error(robot):
     with pytest.raises(KinematicsError, match=match) as info:
         _seeded(robot, q)
     assert info.value.reason == "jump"
-    np.testing.assert_allclose(UR5e(max_step=2.5).ik(*robot.fk(q), q_seed=HOME), q, atol=1e-12)
+    np.testing.assert_allclose(UR5e(max_step=2.5, tool="flange").ik(*robot.fk(q), q_seed=HOME), q, atol=1e-12)
 
 
 def test_a_joint_turning_beyond_its_range_is_a_limit_error(robot):

@@ -120,8 +120,7 @@ def test_the_forearm_driven_into_a_box_is_the_contact_at_the_predicted_time(ur5e
 
 def test_a_box_pushed_by_the_gripper_moves(ur5e):
     down = np.array([0.0, 1.0, 0.0, 0.0])  # tool z pointing down
-    reach = ur5e.gripper_.tcp[2]  # the IK places the flange; the TCP is this far below it
-    q0 = ur5e.ik([-0.45, -0.25, 0.03 + reach], down, q_seed=ur5e.home)
+    q0 = ur5e.ik([-0.45, -0.25, 0.03], down, q_seed=ur5e.home)  # the TCP (the model's default tool)
     demo = sweep(q0, 0, 0.5, 1.0, n=101)
     path = (ur5e.link_frames(demo["joints"])[:, -1] @ ur5e.gripper_.tool())[:, :3, 3]
     centre = path[60].copy()
