@@ -20,7 +20,7 @@ Examples
 """
 
 from ._binding import BINDING_KEYS, DEFAULT_METHOD, Binding, check_binding
-from ._chain import EMPTY_PLAN, PlanResult, PlanStep, reproduce_plan
+from ._chain import CLEARANCE, EMPTY_PLAN, PlanResult, PlanStep, arm_clearance, reproduce_plan
 from ._pddl import Action, Domain, domain_text, parse_action, parse_atom, parse_domain, problem_text
 from ._plan import describe_skill, plan_task, skill_domain, write_pddl
 from ._scene import Scene, SceneObject, load_scene, scene_from_dict
@@ -32,4 +32,5 @@ __all__ = [
     "DEFAULT_METHOD",
     "solve", "INSTALL", "PlanResult", "PlanStep", "reproduce_plan", "describe_skill", "skill_domain",
     "plan_task", "write_pddl", "EMPTY_PLAN", "MAX_GROUNDINGS", "TIME_LIMIT", "check_groundings",
+    "CLEARANCE", "arm_clearance",
 ]

@@ -15,14 +15,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Constraints, Demonstration, quaternion_angle, quaternion_to_matrix, slerp
-from ..core._validation import summarise
-from ..robots import RobotModel, robot_model
+from ..core import Box, Constraints, Demonstration, Sphere, quaternion_angle, quaternion_to_matrix, slerp
+from ..core._validation import check_positive, summarise
+from ..robots import RobotModel, clearance, robot_model
 from ..selection import reuse
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
-__all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN"]
+__all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE", "arm_clearance"]
 
+#: Metres every body of the robot keeps from obstacles, the table, the workspace bounds and itself, on top
+#: of its capsules (already envelopes of the links' collision meshes, docs/robots.md).
+CLEARANCE = 0.005
+#: How far a press pushes a button in, as a fraction of its travel (the simulator counts half as pressed).
+PRESS_DEPTH = 0.75
+#: Times a step is reproduced again, keeping the tool further from what a body of the robot came near.
+MAX_REPAIRS = 4
 #: The note of a plan of no steps.
 EMPTY_PLAN = "the goal already holds in the initial facts: the plan has no steps and nothing is reproduced"
 
@@ -68,16 +75,19 @@ class PlanStep:
     #: The step's pieces in order, ``{"kind", "start", "stop"}`` in the plan's samples (a piece starts
     #: on the last one's end sample): ``"transit"``, ``"primitive"``, ``"approach"``, ``"retreat"``.
     segments: list = field(default_factory=list)
+    #: With a robot: the whole robot's smallest distance over the step (``Clearance.summary``), else None.
+    clearance: dict | None = None
 
     def to_dict(self) -> dict:
-        """JSON-able: ``action``, ``args``, ``skill``, ``start``, ``stop``, ``used``, the step's errors and
-        ``segments``."""
+        """JSON-able: ``action``, ``args``, ``skill``, ``start``, ``stop``, ``used``, the step's errors,
+        ``segments`` and, with a robot, ``clearance`` (``min_distance`` m, ``body``, ``other``, ``time``)."""
         return {"action": self.action, "args": list(self.args), "skill": self.skill, "start": int(self.start),
                 "stop": int(self.stop), "used": [int(i) for i in self.used], "goal": self.goal.tolist(),
                 "goal_orientation": None if self.goal_orientation is None else self.goal_orientation.tolist(),
                 "method": self.method, "constraint_error": float(self.constraint_error),
                 "orientation_error": float(self.orientation_error), "collision": bool(self.collision),
-                "notes": list(self.notes), "segments": [dict(s) for s in self.segments]}
+                "notes": list(self.notes), "segments": [dict(s) for s in self.segments],
+                "clearance": None if self.clearance is None else dict(self.clearance)}
 
 
 @dataclass
@@ -96,7 +106,11 @@ class PlanResult:
         (the goal already holds in the initial facts: an empty plan is the
         answer, and there is nothing to reproduce).
     collision : bool
-        Whether the whole path touches any obstacle of the scene.
+        Whether the path touches any obstacle of the scene, the table or the workspace bounds: with a
+        robot, any of its bodies (links, gripper), else the tool point.
+    clearance : float or None
+        With a robot: the whole robot's smallest distance (m) to the obstacles, the table, the workspace
+        bounds and itself over the plan (each step's limiting pair is in its ``clearance``).
     constraint_error : float
         Largest of the steps' constraint errors and the position gaps at the joins.
     join_error : dict
@@ -115,6 +129,7 @@ class PlanResult:
     domain: str = ""
     problem: str = ""
     notes: list = field(default_factory=list)
+    clearance: float | None = None
 
     def to_dict(self) -> dict:
         """The ``skillbank plan --json`` document.
@@ -128,6 +143,7 @@ class PlanResult:
                "steps": [s.to_dict() for s in self.steps], "t": [] if traj is None else traj.t.tolist(),
                "streams": {} if traj is None else {k: v.tolist() for k, v in traj.streams.items()},
                "collision": bool(self.collision),
+               "clearance": None if self.clearance is None else float(self.clearance),
                "constraint_error": float(self.constraint_error),
                "join_error": {k: float(v) for k, v in self.join_error.items()}, "notes": list(self.notes)}
         if traj is not None and "joints" in traj.streams:
@@ -189,6 +205,19 @@ def _goal_object(scene, args, params, binding, where):
                          f"library describe DB {action} --action FILE.pddl --binding "
                          f"'{{\"goal\": \"{posed[0][0]}\"}}'")
     return posed[0][1]
+
+
+def _press_depth(obj, goal_q) -> np.ndarray:
+    """How far past a button's top face its press goes: :data:`PRESS_DEPTH` of its travel, along the tool.
+
+    A button's position is its top face; a press that stops there moves nothing. The tool pushes along
+    its z axis (its orientation at the button), straight down without one. Zero for anything else.
+    """
+    if getattr(obj, "shape", None) != "button" or not getattr(obj, "travel", None):
+        return np.zeros(3)
+    axis = np.array([0.0, 0.0, -1.0]) if goal_q is None else quaternion_to_matrix(
+        np.asarray(goal_q, dtype=float)[None])[0][:, 2]
+    return PRESS_DEPTH * float(obj.travel) * axis
 
 
 def _obstacles(scene, binding, where) -> list:
@@ -398,12 +427,16 @@ def _first_contact(ob, Y) -> int:
     return min(hits) if hits else -1
 
 
-def check_step(world, streams, segments, where, model=None) -> None:
-    """Refuse a step whose path touches the world: every piece's tool path against ``world`` (the step's
-    obstacles, the table, the workspace), naming the piece, what it touches and the time.
+def check_step(world, streams, segments, where, model=None, *, scene=None, names=(), margin=CLEARANCE,
+               first=False):
+    """Refuse a step whose path touches the world; with a robot, the whole robot's clearance summary.
 
-    The one place a step's path is checked; the whole-arm check of ``streams["joints"]`` (with ``model``)
-    belongs here too.
+    The tool path of every piece is checked against ``world`` (the step's obstacles, the table, the
+    workspace), naming the piece, what it touches and the time. With ``model``, every sample of
+    ``streams["joints"]`` is checked for every body of the robot (links and gripper,
+    :func:`skillbank.robots.clearance`) against the obstacles ``names`` of ``scene``, its table, its
+    workspace and the robot itself, with ``margin`` metres to spare; a step that comes closer is
+    refused naming the body, what it comes near and the time. The one place a step's path is checked.
     """
     P, t = streams["position"], streams["t"]
     for kind, a, b in segments:
@@ -412,6 +445,72 @@ def check_step(world, streams, segments, where, model=None) -> None:
             if i >= 0:
                 raise ValueError(f"{where}: its {kind} passes through {label} at t = {t[a + i]:.4g} s (tool "
                                  f"point {np.round(P[a + i], 4).tolist()})")
+    if model is None or scene is None:
+        return None
+    res = arm_clearance(model, scene, names, streams["joints"], t)
+    hit = res.first_contact(margin)
+    if hit is not None:
+        i, body, other = hit
+        d = float(res.distance[i])
+        what = _other_label(scene, other)
+        if first and i == 0 and d < 0:
+            raise ValueError(f"{where}: the robot starts inside {what}: its {body} is {-d * 1000:.3g} mm "
+                             "deep at the start; start it clear of the scene")
+        depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+        # what a repair must add to the obstacle for the tool path: up to the tool point, then what the
+        # body lacks (and half the margin again, so the next attempt is not on the edge)
+        shape = scene.table if other == "table" else scene.obstacles.get(other)
+        reach = 0.0 if shape is None else max(float(shape.signed_distance(P[i][None])[0]), 0.0)
+        raise _ArmContact(f"{where}: the robot's {body} comes {depth} {what} at t = {t[i]:.4g} s (clearance "
+                          f"margin {margin * 1000:g} mm; --clearance sets it)", other=other,
+                          lack=reach + margin - d + 0.5 * margin)
+    return _summary(res)
+
+
+class _ArmContact(ValueError):
+    """A body of the robot too near ``other``; ``lack`` metres more would clear it with some to spare."""
+
+    def __init__(self, message, *, other, lack):
+        super().__init__(message)
+        self.other, self.lack = other, lack
+
+
+def _grown(world, scene, grow) -> list:
+    """``world`` with the obstacles (and the table) named in ``grow`` grown by that many metres."""
+    if not grow:
+        return world
+    out = []
+    for label, ob in world:
+        name = "table" if ob is scene.table else next(
+            (n for n in scene.obstacles if scene.obstacles[n] is ob), None)
+        g = grow.get(name, 0.0)
+        if g > 0.0 and isinstance(ob, Box):
+            ob = Box(ob.lower - g, ob.upper + g)
+        elif g > 0.0 and isinstance(ob, Sphere):
+            ob = Sphere(ob.center, ob.radius + g)
+        out.append((label, ob))
+    return out
+
+
+def arm_clearance(model, scene, names, joints, t=None):
+    """The whole robot's :class:`~skillbank.robots.Clearance` along ``joints`` in ``scene``'s world."""
+    obstacles = {n: scene.obstacles[n] for n in names}
+    return clearance(model, joints, obstacles, table=scene.table, workspace=scene.workspace, t=t)
+
+
+def _summary(res) -> dict:
+    return {"min_distance": float(res.min_distance), "body": res.body, "other": res.other,
+            "time": None if res.time is None else float(res.time)}
+
+
+def _other_label(scene, other: str) -> str:
+    if other in scene.obstacles:
+        return f"obstacle {other} ({scene.specs.get(other, scene.obstacles[other].spec())})"
+    if other == "table":
+        return f"the table (top at z = {float(scene.table.upper[2]):.6g} m)"
+    if other == "workspace":
+        return "the workspace's bounds"
+    return f"its own {other} (self-collision)"
 
 
 def _joints(model, streams, seed, where, branch=None) -> np.ndarray:
@@ -439,7 +538,8 @@ def _joint_scale(J, t, limits) -> float:
     return scale
 
 
-def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state=None, progress=None):
+def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state=None, progress=None,
+                   clearance_margin=None):
     """Reproduce every step of ``plan`` in ``scene`` and join them (see the module docstring).
 
     Parameters
@@ -455,11 +555,16 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     random_state : int, optional
     progress : callable, optional
         ``progress(done, total)`` after each step.
+    clearance_margin : float, optional
+        With a robot: metres every body keeps from the obstacles, the table, the workspace bounds and
+        itself (default :data:`CLEARANCE`); a step that comes closer is refused.
 
     Returns
     -------
     PlanResult
     """
+    clearance_margin = CLEARANCE if clearance_margin is None else check_positive(
+        clearance_margin, name="clearance", allow_zero=True)
     limits = check_limits(limits)
     task_limits = {k: v for k, v in limits.items() if k in _TASK_LIMITS}
     model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
@@ -498,80 +603,107 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         goal = obj.position + (0.0 if b.offset is None else b.offset)
         goal_q = {"object": obj.orientation, "none": None}.get(b.orientation, b.orientation) \
             if isinstance(b.orientation, str) else b.orientation
-        world = _world(scene, _obstacles(scene, b, where))
-        with_q = all("orientation" in p.demo.streams for p in skill.primitives)
-        step_q = goal_q if with_q else None
-        near = _offset_point(goal, step_q, b.approach, "approach", where)
-        away = _offset_point(goal, step_q, b.retreat, "retreat", where)
-        _inside(world, goal, f"goal (the pose of {target})", where)
-        for point, what in ((near, "approach point"), (away, "retreat point"), (position, "start")):
-            if point is not None:
-                _inside(world, point, what, where)
-        height = _transit_height(scene, b)
-        extra = near is not None or away is not None or height is not None
-        zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
-        constraints = Constraints(start=position, goal=goal if near is None else near, start_velocity=zero,
-                                  end_velocity=zero, obstacles=[ob for _, ob in world],
-                                  start_orientation=orientation if with_q else None,
-                                  goal_orientation=step_q)
-        step_notes = []
-        try:
-            res = _reuse(skill, constraints, world, where, task_limits, random_state)
-            failure = None
-        except ValueError as exc:
-            if height is None or position is None:
-                raise
-            res, failure = None, exc
-        traj = None if res is None else res.trajectory
-        end = constraints.goal
-        if height is not None and position is not None and (
-                traj is None or float(traj["position"][:, 2].max()) < height):
-            if traj is None:  # the primitive cannot make the move: a transit may
+        if b.offset is None:
+            goal = goal + _press_depth(obj, goal_q)
+        grow, repaired = {}, []
+        for attempt in range(MAX_REPAIRS + 1):
+            try:
+                world = _grown(_world(scene, _obstacles(scene, b, where)), scene, grow)
+                with_q = all("orientation" in p.demo.streams for p in skill.primitives)
+                step_q = goal_q if with_q else None
+                near = _offset_point(goal, step_q, b.approach, "approach", where)
+                away = _offset_point(goal, step_q, b.retreat, "retreat", where)
+                _inside(world, goal, f"goal (the pose of {target})", where)
+                for point, what in ((near, "approach point"), (away, "retreat point"), (position, "start")):
+                    if point is not None:
+                        _inside(world, point, what, where)
+                height = _transit_height(scene, b)
+                extra = near is not None or away is not None or height is not None
+                zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
+                constraints = Constraints(start=position, goal=goal if near is None else near,
+                                          start_velocity=zero, end_velocity=zero,
+                                          obstacles=[ob for _, ob in world],
+                                          start_orientation=orientation if with_q else None,
+                                          goal_orientation=step_q)
+                step_notes = []
                 try:
-                    res = _reuse(skill, constraints.replace(obstacles=()), [], where, task_limits,
-                                 random_state)
-                except ValueError:
-                    raise failure from None
-                traj = res.trajectory
-            rotated = "orientation" in traj.streams
-            q_a = (orientation if orientation is not None else traj["orientation"][0]) if rotated else None
-            q_b = traj["orientation"][-1] if rotated else None
-            pieces = _transit(position, end, q_a, q_b, height, task_limits)
-            reached = "cannot avoid the obstacles on its own" if failure is not None else \
-                f"reaches z = {float(traj['position'][:, 2].max()):.6g} m"
-            step_notes.append(f"{where}: a transit at z = {height:.6g} m carries the move (the primitive "
-                              f"{reached})")
-        else:
-            pieces = [("primitive", None)]
-        q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
-        if near is not None:
-            pieces.append(("approach", _line(near, goal, q_goal, q_goal, APPROACH_SPEED, task_limits)))
-        if away is not None:
-            pieces.append(("retreat", _line(goal, away, q_goal, q_goal, APPROACH_SPEED, task_limits)))
-        streams, segments = _assemble(pieces, traj)
-        n = len(streams["t"])
-        t = streams.pop("t")
-        if goal_q is not None and not with_q:
-            step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} has none")
-        if model is not None:
-            seed = joints
-            if seed is None:
-                best = next(p for p in skill.primitives if p.id == res.used[0]).demo
-                if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
-                    seed = best["joints"][0]
-            streams["joints"] = _joints(model, streams, seed, where, branch)
-            scale = _joint_scale(streams["joints"], t, limits)
-            if scale > 1.0:
-                t = t * scale
-                step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
-                                  f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
-        G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
-        if G is not None:
-            streams["gripper"] = G[:, None]
-        if note:
-            step_notes.append(f"{where}: {note}")
-        streams["t"] = t
-        check_step(world, streams, segments, where, model)
+                    res = _reuse(skill, constraints, world, where, task_limits, random_state)
+                    failure = None
+                except ValueError as exc:
+                    if height is None or position is None:
+                        raise
+                    res, failure = None, exc
+                traj = None if res is None else res.trajectory
+                end = constraints.goal
+                if height is not None and position is not None and (
+                        traj is None or float(traj["position"][:, 2].max()) < height):
+                    if traj is None:  # the primitive cannot make the move: a transit may
+                        try:
+                            res = _reuse(skill, constraints.replace(obstacles=()), [], where, task_limits,
+                                         random_state)
+                        except ValueError:
+                            raise failure from None
+                        traj = res.trajectory
+                    rotated = "orientation" in traj.streams
+                    q_a = (orientation if orientation is not None else traj["orientation"][0]) \
+                        if rotated else None
+                    q_b = traj["orientation"][-1] if rotated else None
+                    pieces = _transit(position, end, q_a, q_b, height, task_limits)
+                    reached = "cannot avoid the obstacles on its own" if failure is not None else \
+                        f"reaches z = {float(traj['position'][:, 2].max()):.6g} m"
+                    step_notes.append(f"{where}: a transit at z = {height:.6g} m carries the move (the "
+                                      f"primitive {reached})")
+                else:
+                    pieces = [("primitive", None)]
+                q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
+                if near is not None:
+                    pieces.append(("approach", _line(near, goal, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+                if away is not None:
+                    pieces.append(("retreat", _line(goal, away, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+                streams, segments = _assemble(pieces, traj)
+                n = len(streams["t"])
+                t = streams.pop("t")
+                if goal_q is not None and not with_q:
+                    step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} has none")
+                if model is not None:
+                    seed = joints
+                    if seed is None:
+                        best = next(p for p in skill.primitives if p.id == res.used[0]).demo
+                        if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
+                            seed = best["joints"][0]
+                    streams["joints"] = _joints(model, streams, seed, where, branch)
+                    scale = _joint_scale(streams["joints"], t, limits)
+                    if scale > 1.0:
+                        t = t * scale
+                        step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
+                                          f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
+                G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
+                if G is not None:
+                    streams["gripper"] = G[:, None]
+                if note:
+                    step_notes.append(f"{where}: {note}")
+                streams["t"] = t
+                arm = check_step(world, streams, segments, where, model, scene=scene,
+                                 names=_obstacles(scene, b, where), margin=clearance_margin, first=not steps)
+                break
+            except _ArmContact as contact:
+                # a repair: the tool path keeps further from what a body came near, by what it lacked
+                if contact.other not in scene.obstacles and contact.other != "table" or attempt == MAX_REPAIRS:
+                    if repaired:
+                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing it for the tool "
+                                         "path)") from None
+                    raise ValueError(str(contact)) from None
+                grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
+                repaired.append(contact.other)
+            except ValueError as exc:
+                if not repaired:
+                    raise
+                raise ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it for "
+                                 f"the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no path "
+                                 f"({' '.join(str(exc).split())})") from None
+        if repaired:
+            step_notes.append(f"{where}: kept the whole robot clear by keeping the tool further from "
+                              + ", ".join(f"{n} (by {g * 1000:.3g} mm)" for n, g in grow.items()))
         if pieces_all:
             prev = pieces_all[-1]
             errors["position"] = max(errors["position"],
@@ -592,7 +724,8 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                             # with a robot the chain computes the joints itself: reuse's note that
                             # it dropped the recorded joints does not apply
                             if not (model is not None and x.startswith("joints"))],
-                        segments=[{"kind": k, "start": first + a, "stop": first + z} for k, a, z in segments])
+                        segments=[{"kind": k, "start": first + a, "stop": first + z} for k, a, z in segments],
+                        clearance=arm)
         steps.append(step)
         notes += step_notes
         position, orientation = streams["position"][-1], streams.get("orientation", [None])[-1]
@@ -603,9 +736,13 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     trajectory = _join(pieces_all, model, notes)
     everything = _world(scene, list(scene.obstacles))
     collision = any(ob.collides(trajectory["position"]) for _, ob in everything)
+    whole = None
+    if model is not None:  # the whole robot over the joined path, every obstacle of the scene
+        whole = float(arm_clearance(model, scene, list(scene.obstacles), trajectory["joints"]).min_distance)
+        collision = collision or whole < 0.0
     error = max([s.constraint_error for s in steps] + [errors["position"]])
     return PlanResult(plan=list(plan), steps=steps, trajectory=trajectory, collision=bool(collision),
-                      constraint_error=error, join_error=errors, notes=notes)
+                      constraint_error=error, join_error=errors, notes=notes, clearance=whole)
 
 
 def _join(pieces, model, notes) -> Demonstration:

@@ -129,7 +129,7 @@ def _scene(scene) -> Scene:
 
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
               max_expansions: int = MAX_EXPANSIONS, max_groundings: int = MAX_GROUNDINGS,
-              time_limit: float = TIME_LIMIT, progress=None) -> PlanResult:
+              time_limit: float = TIME_LIMIT, progress=None, clearance=None) -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
 
     1. The domain: ``domain`` (a :class:`Domain`, PDDL text or a file; used as
@@ -160,6 +160,9 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
         Seconds the planner may search before giving up.
     progress : callable, optional
         ``progress(done, total)`` over the steps reproduced.
+    clearance : float, optional
+        With a robot: metres every body of the robot keeps from the obstacles, the table, the workspace
+        bounds and itself (default :data:`~skillbank.planning.CLEARANCE`, 5 mm beyond its capsules).
 
     Returns
     -------
@@ -187,6 +190,7 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
             raise
         raise ValueError(f"{exc}{unused}") from None
     result = reproduce_plan(scene, steps, _skills(store, dom), robot=robot, limits=limits,
+                            clearance_margin=clearance,
                             random_state=random_state, progress=progress)
     result.domain, result.problem = dom.text, problem
     return result

@@ -380,10 +380,37 @@ def _arm(model, world: World, masses, grip_force: float, kp, kv):
                      f'<exclude body1="finger_right" body2="link{n - 1}"/>']
         world.fingers = ("finger_left_joint", "finger_right_joint")
         world.stroke = float(gripper.stroke)
+    excludes += _self_collision_excludes(model, excludes)
     for d in range(depth - 1, -1, -1):
         lines.append("  " * d + "</body>")
     world.joints = tuple(model.joint_names)
     return lines, actuators, excludes
+
+
+def _self_collision_excludes(model, already) -> list[str]:
+    """Exclude every pair of the robot's bodies that the geometric check never compares.
+
+    The model's :meth:`~skillbank.robots.RobotModel.self_collision_pairs` is the one rule of which of its
+    bodies may touch (those on consecutive frames, and its ``SELF_COLLISION_SKIP``, always do, by
+    construction): the simulation reports a self-contact exactly where the check would.
+    """
+    def owner(cap):
+        return cap.name if "finger" in cap.name and cap.frame == model.n_joints else f"link{cap.frame}"
+
+    checked = {frozenset(p) for p in model.self_collision_pairs()}
+    groups = {}
+    for cap in model.bodies:
+        groups.setdefault(owner(cap), []).append(cap.name)
+    names = sorted(groups)
+    out = []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            line = f'<exclude body1="{a}" body2="{b}"/>'
+            if line in already or f'<exclude body1="{b}" body2="{a}"/>' in already:
+                continue
+            if not any(frozenset((x, y)) in checked for x in groups[a] for y in groups[b]):
+                out.append(line)
+    return out
 
 
 def _fingers(pad, flange, gripper, caps_by_frame, world, model, grip_force) -> list[str]:

@@ -1,0 +1,118 @@
+"""Plans safe for the whole robot, checked in physics (issue 24): the UR5e's links and gripper against a
+wall and the table, a repair that keeps them clear, and ``plan --simulate`` reporting what MuJoCo saw."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")  # the extra skillbank[sim]
+
+from skillbank.planning import (  # noqa: E402
+    _chain,  # noqa: E402
+    arm_clearance,
+    plan_task,
+    scene_from_dict,
+)
+from skillbank.robots import robot_model  # noqa: E402
+from skillbank.simulation import simulate  # noqa: E402
+
+from .conftest import write_scene  # noqa: E402
+
+DOWN = [0.0, 1.0, 0.0, 0.0]
+#: Two buttons on a table in front of the UR5e, a wall between them reaching 25 cm up from the table.
+WALL = "box:-0.6,-0.02,0.0,-0.3,0.02,0.25"
+
+
+def wall_scene(**extra) -> dict:
+    doc = {"objects": {"b1": {"type": "button", "position": [-0.45, -0.2, 0.03], "orientation": DOWN},
+                       "b2": {"type": "button", "position": [-0.45, 0.2, 0.03], "orientation": DOWN}},
+           "obstacles": {"wall": WALL}, "table": {"height": 0.0},
+           "init": ["(free b1)", "(free b2)"], "goal": ["(pressed b2)"],
+           "start": {"position": [-0.45, -0.2, 0.08], "orientation": DOWN}}
+    doc.update(extra)
+    return doc
+
+
+@pytest.fixture(scope="module")
+def around_the_wall(button_library):
+    scene = scene_from_dict(wall_scene())
+    return scene, plan_task(button_library.store, scene, robot="ur5e")
+
+
+def test_a_plan_past_the_wall_keeps_every_link_clear_and_the_physics_agrees(around_the_wall):
+    scene, res = around_the_wall
+    model = robot_model("ur5e")
+    check = arm_clearance(model, scene, list(scene.obstacles), res.trajectory["joints"], res.trajectory.t)
+    # every body (links, gripper), every sample, against the wall, the table and itself
+    assert check.min_distance >= _chain.CLEARANCE - 1e-9
+    assert res.clearance == pytest.approx(check.min_distance) and not res.collision
+    step = res.steps[0]
+    assert step.clearance["min_distance"] >= _chain.CLEARANCE - 1e-9 and step.clearance["body"]
+    # the press pushes the button in by PRESS_DEPTH of its travel, along the tool's z (down here)
+    np.testing.assert_allclose(res.trajectory["position"][-1], [-0.45, 0.2, 0.03 - 0.75 * 0.004], atol=1e-6)
+    t = res.trajectory.t
+    sim = simulate(res.trajectory, scene, targets=[(t[step.start], t[step.stop - 1], list(step.args))])
+    assert sim.facts == {"(pressed b2)": True}
+    assert sim.contacts == []  # nothing touched the wall, the table or b1
+    assert sim.buttons["b2"]["pressed"] and not sim.buttons["b1"]["pressed"]
+
+
+def test_the_fingers_would_touch_the_wall_without_the_repair(button_library, monkeypatch):
+    """The tool point alone clears the wall; the gripper around it does not, and that is what is named."""
+    monkeypatch.setattr(_chain, "MAX_REPAIRS", 0)
+    with pytest.raises(ValueError, match=r"^step 1 \(press b2\): the robot's finger_(left|right) comes "
+                                         r"within [\d.]+ mm of obstacle wall \(box:-0.6,-0.02,0.0,-0.3,0.02,"
+                                         r"0.25\) at t = [\d.]+ s \(clearance margin 5 mm; --clearance "
+                                         r"sets it\)$"):
+        plan_task(button_library.store, scene_from_dict(wall_scene()), robot="ur5e")
+
+
+def test_the_repair_is_said(around_the_wall):
+    _, res = around_the_wall
+    assert any("kept the whole robot clear by keeping the tool further from wall" in n for n in res.notes)
+
+
+def test_a_start_inside_an_obstacle_is_refused(button_library):
+    # a ball round the start tool point's gripper
+    doc = wall_scene(obstacles={"wall": WALL, "ball": "sphere:-0.45,-0.2,0.16,0.04"})
+    with pytest.raises(ValueError, match=r"^step 1 \(press b2\): .*inside obstacle ball"):
+        plan_task(button_library.store, scene_from_dict(doc), robot="ur5e")
+
+
+def test_plan_simulate_json_reports_clearance_and_the_simulation_side_by_side(cli, button_library, tmp_path):
+    scene = write_scene(tmp_path, wall_scene())
+    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "ur5e",
+                         "--simulate", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["agree"] is True and doc["facts"] == {"(pressed b2)": {"planned": True, "achieved": True}}
+    assert doc["clearance"] >= 0.005 and doc["steps"][0]["clearance"]["min_distance"] >= 0.005
+    sim = doc["simulation"]
+    assert set(sim) >= {"duration", "real_time_factor", "tracking", "contacts", "buttons", "objects", "facts"}
+    assert sim["contacts"] == [] and sim["tracking"]["tool_max"] < 0.005
+
+
+def test_a_box_left_on_the_way_is_what_the_world_shows_and_the_exit_is_1(cli, button_library, tmp_path):
+    """The planner knows the crate only as an object (no obstacle): the simulation sees the gripper hit it."""
+    doc = wall_scene()
+    doc["objects"]["crate"] = {"type": "crate", "shape": "box", "size": [0.06, 0.06, 0.06], "mass": 0.3,
+                               "position": [-0.45, 0.2, 0.1]}
+    scene = write_scene(tmp_path, doc)
+    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "ur5e",
+                         "--simulate")
+    assert code == 1, err
+    assert "plan and simulation DISAGREE" in out and "touched crate" in out
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    ((), r"^skillbank plan: error: simulate: a simulation replays the plan's joints: give --robot too"),
+    (("--robot", "ur5e", "--clearance", "-1"), r"^skillbank plan: error: clearance: expected a number >= 0"),
+])
+def test_bad_simulate_and_clearance_options_are_one_line(cli, button_library, tmp_path, extra, match):
+    scene = write_scene(tmp_path, wall_scene())
+    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--simulate", *extra)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert __import__("re").match(match, err)
