@@ -656,15 +656,15 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 else:
                     pieces = [("primitive", None)]
                 q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
-                if near is not None:
-                    pieces.append(("approach", _line(near, goal, q_goal, q_goal, APPROACH_SPEED, task_limits)))
-                if away is not None:
-                    pieces.append(("retreat", _line(goal, away, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+                for kind, a_, b_ in (("approach", near, goal), ("retreat", goal, away)):
+                    if (near, away)[kind == "retreat"] is not None:
+                        pieces.append((kind, _line(a_, b_, q_goal, q_goal, APPROACH_SPEED, task_limits)))
                 streams, segments = _assemble(pieces, traj)
                 n = len(streams["t"])
                 t = streams.pop("t")
                 if goal_q is not None and not with_q:
-                    step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} has none")
+                    step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} "
+                                      "has none")
                 if model is not None:
                     seed = joints
                     if seed is None:
@@ -688,10 +688,11 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 break
             except _ArmContact as contact:
                 # a repair: the tool path keeps further from what a body came near, by what it lacked
-                if contact.other not in scene.obstacles and contact.other != "table" or attempt == MAX_REPAIRS:
+                growable = contact.other in scene.obstacles or contact.other == "table"
+                if not growable or attempt == MAX_REPAIRS:
                     if repaired:
-                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing it for the tool "
-                                         "path)") from None
+                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing it for the "
+                                         "tool path)") from None
                     raise ValueError(str(contact)) from None
                 grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
                 repaired.append(contact.other)
