@@ -158,8 +158,7 @@ def _simulate(args, result, scene):
     """The plan replayed in physics; each step may touch only the objects it acts on, during its samples."""
     from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
 
-    t = result.trajectory.t
-    targets = [(float(t[s.start]), float(t[s.stop - 1]), list(s.args)) for s in result.steps]
+    targets = result.targets()
     bar = None
     if show_progress(args):
         from tqdm import tqdm  # a bar on a terminal only

@@ -61,7 +61,9 @@ BUTTONS = {"b1": [-0.25, -0.50, 0.12], "b2": [-0.05, -0.62, 0.10], "b3": [0.18, 
 BUTTON_CODE = ("b3", "b1", "b4", "b2")
 BUTTON_ORIENTATION = [0.048, 0.962, -0.25, 0.095]
 BUTTON_START = [-0.36, -0.42, 0.18]  # above the demonstration's first button, as it was after its reach
-BUTTON_POST = "sphere:0.116,-0.622,0.179,0.03"  # between b1 and b4, on the path an unobstructed press takes
+#: Between b1 and b4, on the path an unobstructed press takes; 2 cm in radius, which the whole UR5e (links
+#: and gripper, 5 mm to spare) can pass.
+BUTTON_POST = "sphere:0.116,-0.622,0.181,0.02"
 
 #: The RAIL skills' actions, each named after its class (the label).
 RAIL_ACTIONS = {
@@ -84,8 +86,11 @@ RAIL_ACTIONS = {
   :effect (touched ?x))
 """,
 }
-#: Each RAIL action's goal: the parameter whose object the step ends at (two have two posed parameters).
-RAIL_GOALS = {"pushing": "?t", "pressing": "?b", "reaching": "?x"}
+#: Each RAIL skill's binding: the parameter whose object the step ends at (two have two posed
+#: parameters). RAIL's hand positions are contact points, and its pressing ends where the demonstrated
+#: press did: no push past the button's top by its travel (offset 0).
+RAIL_BINDINGS = {"pushing": {"goal": "?t"}, "pressing": {"goal": "?b", "offset": [0.0, 0.0, 0.0]},
+                 "reaching": {"goal": "?x"}}
 #: The table scene (m, RAIL's frame), as the hand's contact points. The plate is the push's goal;
 #: the cube was placed where the push reproduced for it comes down onto the table, 8.5 cm before.
 RAIL_OBJECTS = {"cube": ("block", [0.551, 0.315, 0.03]), "plate": ("target", [0.55, 0.40, 0.03]),
@@ -189,7 +194,7 @@ def _rail_library(lib, data: Path) -> int:
     for p in lib.primitives(load=False):
         lib.label(lib.demonstration(p.demonstration_id).metadata["label"], primitive=p.id)
     for label, action in RAIL_ACTIONS.items():
-        lib.describe(label, action, {"goal": RAIL_GOALS[label]})
+        lib.describe(label, action, RAIL_BINDINGS[label])
     return len(demos)
 
 

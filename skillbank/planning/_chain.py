@@ -26,8 +26,9 @@ __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE"
 #: Metres every body of the robot keeps from obstacles, the table, the workspace bounds and itself, on top
 #: of its capsules (already envelopes of the links' collision meshes, docs/robots.md).
 CLEARANCE = 0.005
-#: How far a press pushes a button in, as a fraction of its travel (the simulator counts half as pressed).
-PRESS_DEPTH = 0.75
+#: How far a press pushes a button in, as a fraction of its travel: to the bottom, where a real button clicks
+#: (the simulator counts half as pressed; the servo and the spring leave it short of the bottom).
+PRESS_DEPTH = 1.0
 #: Times a step is reproduced again, keeping the tool further from what a body of the robot came near.
 MAX_REPAIRS = 4
 #: The note of a plan of no steps.
@@ -130,6 +131,25 @@ class PlanResult:
     problem: str = ""
     notes: list = field(default_factory=list)
     clearance: float | None = None
+
+    def targets(self) -> list:
+        """``[(t_start, t_end, objects)]``: when each step may touch the objects it acts on (its arguments).
+
+        From the step's first sample to the end of the next step's first piece: a step leaves its object
+        (lifts off a pressed button, lets go of a placed box) at the start of the next one. The windows a
+        simulation takes as its ``targets``; outside them a touch is an unintended contact.
+        """
+        if self.trajectory is None:
+            return []
+        t = self.trajectory.t
+        out = []
+        for k, step in enumerate(self.steps):
+            end = step.stop - 1
+            if k + 1 < len(self.steps):
+                after = self.steps[k + 1]
+                end = after.segments[0]["stop"] - 1 if after.segments else after.stop - 1
+            out.append((float(t[step.start]), float(t[end]), list(step.args)))
+        return out
 
     def to_dict(self) -> dict:
         """The ``skillbank plan --json`` document.

@@ -490,7 +490,7 @@ def scene_from_dict(doc, *, folder=None, need_goal: bool = True) -> Scene:
     workspace = None if doc.get("workspace") is None else _corners(doc["workspace"], "workspace")
     scene = Scene(objects=objects, obstacles=obstacles, specs=specs,
                   init=_atoms(doc.get("init", []), "init", objects),
-                  goal=_atoms(doc.get("goal") or [], "goal", objects),
+                  goal=_atoms([] if doc.get("goal") is None else doc["goal"], "goal", objects),
                   start=_start(doc.get("start", {})),
                   domain=None if doc.get("domain") is None else _confined(folder, doc["domain"], "domain"),
                   folder=folder, branch=branch, workspace=workspace,

@@ -117,7 +117,7 @@ def test_a_demonstration_without_two_button_to_button_presses_is_refused(tmp_pat
     # the synthetic recording's moves all start or end high above a table: no press among them
     monkeypatch.setattr(demo, "load", lambda path: synthetic_ur5e())
     with pytest.raises(ValueError, match=r"data: expected the three-button demonstration to segment into two "
-                                         r"presses from one button to the next, got 0"):
+                                         r"presses from one button to the next, got 1"):
         button_task(tmp_path, tmp_path)
 
 

@@ -147,7 +147,8 @@ def test_a_malformed_position_is_a_value_error_naming_it(value):
     doc = {"objects": {"b1": {"type": "button", "position": value}}, "goal": ["(pressed b1)"]}
     if value is None or (isinstance(value, list) and len(value) == 3):
         found = scene_from_dict(doc).objects["b1"].position
-        assert found is None if value is None else found.tolist() == value
+        # as floats: an integer past 2^53 is read as the nearest double, like every JSON reader does
+        assert found is None if value is None else found.tolist() == [float(v) for v in value]
         return
     with pytest.raises(ValueError, match=r"objects\['b1'\].position"):
         scene_from_dict(doc)

@@ -61,7 +61,9 @@ def test_pressing_four_buttons_chains_continuous_steps_that_end_on_each_button(d
     scene = scene_from_dict(doc)
     for k, step in enumerate(res.steps):
         button = scene.objects[step.args[0]].position
-        assert np.linalg.norm(P[step.stop - 1] - button) < 2e-3  # each press ends on its button
+        # each press ends on its button, pushed in by its travel along the tool (down here)
+        np.testing.assert_allclose(step.goal, button - [0.0, 0.0, 0.004], atol=1e-12)
+        assert np.linalg.norm(P[step.stop - 1] - step.goal) < 2e-3
         if k:
             assert step.start == res.steps[k - 1].stop - 1  # the join sample is shared
     assert res.join_error["position"] < 1e-12 and res.join_error["orientation"] < 1e-9
@@ -81,7 +83,7 @@ def test_an_obstacle_between_two_buttons_is_avoided(described_library):
     doc = button_scene(BUTTONS[:2], goal=["b2"], start=BUTTONS[0], obstacles=[spec])
     res = _plan(described_library, doc)
     assert not res.collision and not scene_from_dict(doc).constraints().collides(res.trajectory["position"])
-    assert np.linalg.norm(res.trajectory["position"][-1] - BUTTONS[1]) < 2e-3
+    assert np.linalg.norm(res.trajectory["position"][-1] - res.steps[-1].goal) < 2e-3
 
 
 def test_a_goal_inside_an_obstacle_names_the_step_and_the_obstacle(described_library):
@@ -154,7 +156,9 @@ def test_a_domain_given_is_used_as_it_is(synthetic_library):
                                {"goal": "?n"})
     res = plan_task(synthetic_library.store, scene_from_dict(doc), domain=ORDERED)
     assert res.plan == [("press", ("b1", "b4")), ("press", ("b4", "b4"))]
-    assert np.linalg.norm(res.trajectory["position"][res.steps[0].stop - 1] - BUTTONS[3]) < 1e-9
+    # the press pushes b4 in by its default travel (4 mm) along the tool, here straight down
+    assert np.linalg.norm(res.trajectory["position"][res.steps[0].stop - 1] - BUTTONS[3]
+                          - [0.0, 0.0, -0.004]) < 1e-9
 
 
 def test_two_positioned_parameters_and_no_goal_is_an_error_that_shows_the_fix(synthetic_library):
@@ -173,17 +177,25 @@ def test_two_positioned_parameters_and_no_goal_is_an_error_that_shows_the_fix(sy
     assert res.plan == [("press", ("b4", "b4"))]
 
 
+#: A post on the path the unobstructed press from b2 to b3 takes, where the whole UR5e (links and gripper)
+#: can pass it: half-way along that press.
+POST = "sphere:0.194,-0.648,0.168,0.02"
+
+
 def test_the_three_button_skill_presses_four_new_buttons_with_one_continuous_joint_path(button_library):
     q = [0.0, 0.94, -0.33, 0.08]
     buttons = [[-0.3, -0.45, 0.12], [0.0, -0.6, 0.1], [0.25, -0.55, 0.11], [0.35, -0.4, 0.13]]
     doc = button_scene(buttons, goal=["b4", "b2", "b1", "b3"], orientation=q,
-                       obstacles={"post": "sphere:0.12,-0.58,0.16,0.03"}, start=[-0.356, -0.416, 0.176])
+                       obstacles={"post": POST}, start=[-0.356, -0.416, 0.176])
     doc["start"]["orientation"] = [0.038, 0.955, -0.283, 0.078]
     res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e", limits={"joint_velocity": 1.0})
     traj = res.trajectory
     assert len(res.steps) == 4 and not res.collision
-    for step in res.steps:
-        assert np.linalg.norm(traj["position"][step.stop - 1] - buttons[int(step.args[0][1]) - 1]) < 2e-3
+    for step in res.steps:  # each press 4 mm (its travel) into its button, along the tool's z
+        button = np.array(buttons[int(step.args[0][1]) - 1])
+        assert np.linalg.norm(step.goal - button) == pytest.approx(0.004, abs=1e-12)
+        assert np.linalg.norm(traj["position"][step.stop - 1] - step.goal) < 2e-3
+    assert res.clearance >= 0.005  # every link and the gripper, every sample, against the post and itself
     J = traj["joints"]
     assert res.join_error["joints"] < 1e-9 and np.abs(np.diff(J, axis=0)).max() < 0.05
     peak = np.abs(np.diff(J, axis=0) / np.diff(traj.t)[:, None]).max()
@@ -205,7 +217,7 @@ def test_a_start_on_another_ik_branch_is_followed_through_every_step(button_libr
     start_q = np.array([0.038, 0.955, -0.283, 0.078]) / np.linalg.norm([0.038, 0.955, -0.283, 0.078])
     start = robot.ik_all(np.array([[-0.356, -0.416, 0.176]]), start_q[None])[0, branch]
     doc = button_scene(buttons, goal=["b4", "b2", "b1", "b3"], orientation=q,
-                       obstacles={"post": "sphere:0.12,-0.58,0.16,0.03"})
+                       obstacles={"post": POST})
     doc["start"] = {"joints": start.tolist()}
     res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e", limits={"joint_velocity": 1.0})
     J = res.trajectory["joints"]
