@@ -222,7 +222,7 @@ def _markdown(result, rows, reuses, seg) -> str:
                   f"kinematics on a UR5e and joint speeds at most 1 rad/s: streams {ex['streams']}, "
                   f"{ex['duration']:.2f} s from t = 0, constraint error {ex['constraint_error']:.2g} m, "
                   f"orientation error {ex['orientation_error']:.2g} rad, peak joint speed "
-                  f"{ex['peak_joint_velocity']:.3g} rad/s.", "",
+                  f"{ex['peak_joint_velocity']:.3g} rad/s.", "", _physics_line(ex.get("simulation")), "",
                   f"![executable]({Path(ex['figure']).name})", ""]
     if result.get("planning"):
         lines += ["## Tasks never demonstrated", "", "Skills labelled in libraries of their own, "
@@ -269,7 +269,28 @@ def _executable(lib, out: Path, data, random_state) -> dict:
     return {"skill": skill, "csv": str(csv), "figure": str(figure), "used": d["used"],
             "streams": res.trajectory.stream_names, "duration": float(res.trajectory.t[-1]),
             "constraint_error": d["constraint_error"], "orientation_error": float(res.orientation_error),
-            "peak_joint_velocity": d.get("peak_joint_velocity"), "notes": list(res.notes)}
+            "peak_joint_velocity": d.get("peak_joint_velocity"), "notes": list(res.notes),
+            "simulation": _replayed(res.trajectory)}
+
+
+def _physics_line(sim) -> str:
+    if sim is None:
+        return "Not simulated: MuJoCo is not installed (pip install 'skillbank[sim]')."
+    touched = ", ".join(f"{c['robot_body']} touched {c['other']} at {c['t']:.2f} s" for c in sim["contacts"])
+    return (f"Replayed on the simulated UR5e with its 2F-85 (MuJoCo, {sim['real_time_factor']:.0f}x real "
+            f"time): joints tracked within {sim['tracking']['joint_max']:.2g} rad, the tool within "
+            f"{1000 * sim['tracking']['tool_max']:.2g} mm; {touched or 'no contact'}.")
+
+
+def _replayed(trajectory) -> dict | None:
+    """The reproduction replayed on the simulated UR5e in an empty world: tracking and any contact."""
+    try:
+        from ..planning import Scene  # the world's type
+        from ..simulation import simulate  # the simulator's layer; MuJoCo is the sim extra
+
+        return simulate(trajectory, Scene(objects={}, obstacles={}, init=[], goal=[])).to_dict()
+    except ImportError:  # without skillbank[sim]: the summary says it was not simulated
+        return None
 
 
 def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:

@@ -274,7 +274,25 @@ def _task(lib, name, doc, out: Path, *, robot, limits, random_state, title) -> d
     if "joints" in traj.streams:
         rates = np.abs(np.diff(traj["joints"], axis=0)) / np.diff(traj.t)[:, None]
         summary["peak_joint_velocity"] = float(rates.max())
+        summary["whole_robot_clearance"] = None if res.clearance is None else float(res.clearance)
+        summary["simulation"] = _physics(res, scene)
+        summary["command"] += " --simulate"
     return summary
+
+
+def _physics(res, scene) -> dict | None:
+    """What MuJoCo says of the plan (``SimulationResult.to_dict()`` and ``agree``), None without the extra."""
+    try:
+        from ..simulation import simulate  # the simulator's layer; MuJoCo is the sim extra
+    except ImportError:
+        return None
+    try:
+        sim = simulate(res.trajectory, scene, targets=res.targets())
+    except ImportError:  # the package is there, MuJoCo is not: the summary says so
+        return None
+    doc = sim.to_dict()
+    doc["agree"] = all(v is True for v in sim.facts.values()) and not sim.contacts
+    return doc
 
 
 def button_task(out, data, *, robot="ur5e", random_state=0) -> dict:
@@ -384,8 +402,22 @@ def _markdown(result) -> str:
                   + ", ".join(f"{k} {v:.2g}" for k, v in item["join_error"].items())
                   + (f"; peak joint speed {item['peak_joint_velocity']:.3g} rad/s"
                      if "peak_joint_velocity" in item else "") + ".", "",
+                  *_physics_lines(item.get("simulation"), "simulation" in item),
                   f"`{item['command']}`", "", f"![{name}]({Path(item['files']['figure']).name})", ""]
     return "\n".join(lines)
+
+
+def _physics_lines(sim, asked: bool) -> list:
+    if not asked:
+        return []
+    if sim is None:
+        return ["Not simulated: MuJoCo is not installed (pip install 'skillbank[sim]').", ""]
+    facts = ", ".join(f"{k} {'cannot judge' if v is None else ('holds' if v else 'FAILS')}"
+                      for k, v in sim["facts"].items())
+    touched = ", ".join(f"{c['robot_body']} touched {c['other']} at {c['t']:.2f} s" for c in sim["contacts"])
+    return [f"In MuJoCo ({sim['real_time_factor']:.0f}x real time): tool tracked within "
+            f"{1000 * sim['tracking']['tool_max']:.2g} mm; {touched or 'no unintended contact'}; {facts}; "
+            f"plan and physics {'agree' if sim['agree'] else 'do not agree'}.", ""]
 
 
 def run_planning_demo(out, *, data=None, robot="ur5e", random_state=0) -> dict:
