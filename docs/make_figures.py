@@ -86,3 +86,29 @@ import readme_numbers  # noqa: E402
 numbers = readme_numbers.measure(data)
 readme_numbers.README.write_text(readme_numbers.rewrite(readme_numbers.README.read_text(), numbers))
 print(f"README numbers: {numbers}")
+
+# issue 24: the whole UR5e past a wall, checked in MuJoCo (the scene of docs/planning.md)
+import json  # noqa: E402
+
+from skillbank.planning import plan_task, scene_from_dict  # noqa: E402
+from skillbank.plotting import plot_simulation  # noqa: E402
+from skillbank.simulation import simulate  # noqa: E402
+
+PRESS = """(:action press
+  :parameters (?b - button)
+  :precondition (free ?b)
+  :effect (and (pressed ?b) (not (free ?b))))"""
+text = (here.parent / "planning.md").read_text()
+wall = json.loads(text.split("A full scene with a world")[1].split("```json")[1].split("```")[0])
+with tempfile.TemporaryDirectory() as tmp, Library(Path(tmp) / "lib.sqlite", create=True) as lib:
+    lib.add(demo, assign="none")
+    for p in lib.primitives():
+        if p.demo["position"][[0, -1], 2].max() < 0.15:  # the presses from one button to the next
+            lib.label("press", primitive=p.id)
+    lib.describe("press", PRESS)
+    scene = scene_from_dict(wall)
+    res = plan_task(lib.store, scene, robot="ur5e")
+    sim = simulate(res.trajectory, scene, targets=res.targets())
+    plot_simulation(sim, scene, here / "simulation_wall.png",
+                    title="two presses either side of a wall, replayed in MuJoCo")
+    print(f"wall: clearance {res.clearance:.4f} m, facts {sim.facts}, contacts {sim.contacts}")
