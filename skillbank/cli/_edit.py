@@ -15,7 +15,16 @@ from ._options import (
     execution_params,
     export_params,
 )
-from ._world import agree, load_world, print_simulation, run_simulation, world_constraints
+from ._world import (
+    agree,
+    clearance_summary,
+    load_world,
+    print_clearance,
+    print_simulation,
+    run_simulation,
+    whole_robot,
+    world_constraints,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -72,6 +81,7 @@ def run(args) -> int:
     execution = execution_params(args)
     check_robot(args)
     world = load_world(args)
+    own = tuple(constraints.obstacles)
     constraints = world_constraints(constraints, world)
     kind = output_format(args)
     writing = export_params(args, kind, execution["duration"])
@@ -95,7 +105,9 @@ def run(args) -> int:
     metrics = comparison_metrics(Y, t, demos[0]["position"], constraints) if args.metrics else None
     traj.metadata.update(constraint_error=error, orientation_error=done.orientation_error,
                          collision=collision)
-    sim = run_simulation(args, traj, world, constraints) if args.simulate else None
+    arm = whole_robot(args, traj, world, own)
+    collision = bool(collision) or (arm is not None and arm.min_distance < 0)
+    sim = run_simulation(args, traj, world, own) if args.simulate else None
     status = 0 if sim is None or agree(sim) else 1
     if args.out is not None:
         write_trajectory(traj, args.out, format=kind, **writing)
@@ -114,6 +126,8 @@ def run(args) -> int:
             doc["metrics"] = metrics
         if plot is not None:
             doc["plot"] = str(plot)
+        if arm is not None:
+            doc["clearance"] = clearance_summary(arm)
         if sim is not None:
             doc["simulation"] = sim.to_dict()
         print(json.dumps(doc, allow_nan=False))
@@ -121,6 +135,8 @@ def run(args) -> int:
     print(f"{args.method}: {len(demos)} demonstration(s) -> {Y.shape[0]} samples, {Y.shape[1]} dimensions")
     print_execution(traj, error, done.orientation_error, collision, done.peaks, done.notes,
                     orientation=constraints.has_orientation)
+    if arm is not None:
+        print_clearance(arm)
     if metrics is not None:
         print("  " + ", ".join(f"{k} {v:.4g}" for k, v in metrics.items()))
     for note in notes:

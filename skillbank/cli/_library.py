@@ -27,7 +27,16 @@ from ._options import (
     segmentation_params,
     show_progress,
 )
-from ._world import agree, load_world, print_simulation, run_simulation, world_constraints
+from ._world import (
+    agree,
+    clearance_summary,
+    load_world,
+    print_clearance,
+    print_simulation,
+    run_simulation,
+    whole_robot,
+    world_constraints,
+)
 
 __all__ = ["add_parser"]
 
@@ -391,6 +400,7 @@ def _reuse(args) -> int:
     execution = execution_params(args)
     check_robot(args)
     world = load_world(args)
+    own = tuple(constraints.obstacles)
     constraints = world_constraints(constraints, world)
     kind = output_format(args)
     writing = export_params(args, kind, execution["duration"])
@@ -403,7 +413,9 @@ def _reuse(args) -> int:
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
                            random_state=args.seed, progress=show_progress(args), **options, **execution)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
-    sim = run_simulation(args, result.trajectory, world, constraints) if args.simulate else None
+    arm = whole_robot(args, result.trajectory, world, own)
+    collision = bool(result.collision) or (arm is not None and arm.min_distance < 0)
+    sim = run_simulation(args, result.trajectory, world, own) if args.simulate else None
     status = 0 if sim is None or agree(sim) else 1
     if args.out is not None:
         io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
@@ -414,13 +426,18 @@ def _reuse(args) -> int:
                   constraints=constraints, title=f"skill {args.skill}")
     if args.json:
         doc = result.to_dict()
+        doc["collision"] = collision
+        if arm is not None:
+            doc["clearance"] = clearance_summary(arm)
         if sim is not None:
             doc["simulation"] = sim.to_dict()
         print(json.dumps(doc, allow_nan=False))
         return status
     print(f"{args.db}: skill {args.skill!r} reproduced with {args.method} from primitive(s) {result.used}")
-    print_execution(result.trajectory, result.constraint_error, result.orientation_error, result.collision,
+    print_execution(result.trajectory, result.constraint_error, result.orientation_error, collision,
                     result.peaks, result.notes, orientation=constraints.has_orientation)
+    if arm is not None:
+        print_clearance(arm)
     for pid, reason in result.rejected.items():
         print(f"  rejected {pid}: {reason}")
     if sim is not None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ._options import show_progress
 
 __all__ = ["add_world_options", "load_world", "world_constraints", "run_simulation", "print_simulation",
-           "agree"]
+           "agree", "whole_robot", "clearance_summary", "print_clearance"]
 
 
 def add_world_options(p) -> None:
@@ -50,15 +50,52 @@ def world_constraints(constraints, scene):
     return constraints.replace(obstacles=tuple(constraints.obstacles) + tuple(ob for _, ob in scene.world()))
 
 
-def run_simulation(args, trajectory, scene, constraints):
-    """Replay ``trajectory`` in ``scene`` (or, with no scene, a world of ``constraints``' obstacles)."""
+def whole_robot(args, trajectory, scene, obstacles):
+    """The whole robot's clearance along ``trajectory``'s joints (None without --robot or joints).
+
+    ``obstacles``: the command's own (``--obstacle``); the scene's obstacles, table and workspace are
+    added with their roles (the base stands on the table).
+    """
+    if getattr(args, "robot", None) is None or "joints" not in trajectory.streams:
+        return None
+    from ..robots import clearance, robot_model  # numpy only
+
+    named = {f"obstacles[{k}]": ob for k, ob in enumerate(obstacles)}
+    table = workspace = None
+    if scene is not None:
+        named.update(scene.obstacles)
+        table, workspace = scene.table, scene.workspace
+    return clearance(robot_model(args.robot), trajectory["joints"], named, table=table, workspace=workspace,
+                     t=trajectory.t)
+
+
+def clearance_summary(res) -> dict:
+    """``{"min_distance", "body", "other", "time"}`` of a :class:`~skillbank.robots.Clearance`."""
+    return {"min_distance": float(res.min_distance), "body": res.body, "other": res.other,
+            "time": None if res.time is None else float(res.time)}
+
+
+def print_clearance(res) -> None:
+    where = "" if res.time is None else f" at t = {res.time:.4g} s"
+    state = "TOUCHES" if res.min_distance < 0 else "clear"
+    print(f"  whole robot {state}: {res.min_distance * 1000:.3g} mm between its {res.body} and "
+          f"{res.other}{where}")
+
+
+def run_simulation(args, trajectory, scene, obstacles):
+    """Replay ``trajectory`` in ``scene`` with the command's own ``obstacles`` (``--obstacle``) added."""
+    import dataclasses  # stdlib
+
     from ..planning import Scene  # the world's type
     from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
 
+    own = {f"obstacles[{k}]": ob for k, ob in enumerate(obstacles)}
     if scene is None:
-        obstacles = {f"obstacles[{k}]": ob for k, ob in enumerate(constraints.obstacles)}
-        scene = Scene(objects={}, obstacles=obstacles, init=[], goal=[],
-                      specs={k: ob.spec() for k, ob in obstacles.items()})
+        scene = Scene(objects={}, obstacles=own, init=[], goal=[],
+                      specs={k: ob.spec() for k, ob in own.items()})
+    elif own:
+        scene = dataclasses.replace(scene, obstacles={**scene.obstacles, **own},
+                                    specs={**scene.specs, **{k: ob.spec() for k, ob in own.items()}})
     bar = None
     if show_progress(args):
         from tqdm import tqdm  # a bar on a terminal only

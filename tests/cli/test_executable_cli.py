@@ -13,7 +13,7 @@ from skillbank.io import load, read_npz, write_csv, write_npz
 from skillbank.robots import UR5e
 
 KEYS = {"t", "streams", "joint_names", "trajectory", "used", "rejected", "constraint_error",
-        "orientation_error", "collision", "peak_joint_velocity", "peaks", "notes"}
+        "orientation_error", "collision", "peak_joint_velocity", "peaks", "notes", "clearance"}
 
 
 def _q(q) -> str:
@@ -346,3 +346,61 @@ def test_execution_option_errors_exit_2_before_the_work(cli, tmp_path, argv, mat
         assert re.search(match, err), err
         after = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("plain.db-"))
         assert after == before
+
+
+# --- issue 24: the whole robot, and the reuse replayed in physics -------------------------------------
+
+
+def _forearm_ball(buttons):
+    """A ball round the forearm's middle at the reuse's last sample (the tool point never comes near)."""
+    code, text, _ = _reuse(cli_main, buttons, "--robot", "ur5e", "--json")
+    assert code == 0
+    J = np.array(json.loads(text)["streams"]["joints"])
+    robot = UR5e()
+    forearm = next(c for c in robot.bodies if c.name == "forearm")
+    F = robot.link_frames(J[-1])[0, forearm.frame]
+    m = F[:3, :3] @ (0.5 * (np.asarray(forearm.a) + np.asarray(forearm.b))) + F[:3, 3]
+    return "sphere:" + ",".join(f"{v:.6f}" for v in m) + ",0.03"
+
+
+def cli_main(*argv):
+    import contextlib
+    import io
+
+    from skillbank.cli import _main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = _main.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+def test_reuse_collision_is_the_whole_robots_and_names_the_forearm(cli, buttons):
+    ball = _forearm_ball(buttons)
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball, "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["collision"] is True  # the tool point is clear of it; the forearm is not
+    assert doc["clearance"]["body"] == "forearm" and doc["clearance"]["other"] == "obstacles[0]"
+    assert doc["clearance"]["min_distance"] < 0
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball)
+    assert "whole robot TOUCHES" in text and "forearm and obstacles[0]" in text
+
+
+def test_reuse_simulate_replays_it_and_a_ball_at_the_forearm_is_a_contact(cli, buttons):
+    pytest.importorskip("mujoco")
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--simulate", "--json")
+    assert code == 0, err
+    sim = json.loads(text)["simulation"]
+    assert sim["contacts"] == [] and sim["tracking"]["tool_max"] < 0.005
+    # the ball the forearm reaches at the end: the physics sees the forearm touch it, exit 1
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", _forearm_ball(buttons),
+                             "--simulate")
+    assert code == 1, err
+    assert "forearm touched obstacles[0]" in text and "simulation NOT ok" in text
+
+
+def test_simulate_needs_a_robot_in_one_line(cli, buttons):
+    code, text, err = _reuse(cli, buttons, "--simulate")
+    assert code == 2 and err.strip() == ("skillbank library reuse: error: simulate: a simulation replays "
+                                         "joints: give --robot too (--robot ur5e)")
