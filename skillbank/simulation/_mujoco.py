@@ -13,7 +13,7 @@ def import_mujoco():
 
     Examples
     --------
-    >>> import_mujoco().__version__  # doctest: +SKIP
+    >>> import_mujoco().__version__  # the version the sim extra pins
     '3.3.7'
     """
     try:
