@@ -346,5 +346,41 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         primitives = _retimed(primitives, duration)
     selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
                                   min_samples=cls.min_samples, progress=progress)
-    return reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state, t=t,
-                               duration=duration, robot=robot, limits=limits, branch=branch)
+    model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
+    while True:
+        result = reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state,
+                                     t=t, duration=duration, robot=model if model is not None else robot,
+                                     limits=limits, branch=branch)
+        reason = _whole_robot(model, result.trajectory, constraints)
+        if reason is None:
+            return result
+        # the reproduction from these candidates takes a body of the robot into an obstacle: reject them
+        # and learn from the next ones (the tool point of each was clear: the candidates were edited so)
+        more = {i: reason for i in result.used}
+        left = [c for c in selection.candidates if c.id not in more]
+        selection = Selection(candidates=left, rejected={**selection.rejected, **more}, rank=selection.rank)
+        if not left:
+            reasons = summarise((f"{i}: {r}" for i, r in selection.rejected.items()), sep="; ")
+            raise ValueError(f"no usable candidate: {reasons}")
+
+
+def _whole_robot(model, trajectory, constraints):
+    """Why the robot's bodies touch an obstacle along ``trajectory``'s joints, or None (also: no robot).
+
+    The bodies on the base frame are not checked: they never move, so no candidate can change them (a
+    table given as an obstacle is where the base stands).
+    """
+    if model is None or not constraints.obstacles or "joints" not in trajectory.streams:
+        return None
+    from ..robots import clearance  # numpy only; the robots layer's whole-arm check
+
+    fixed = [b.name for b in model.bodies if b.frame == 0]
+    res = clearance(model, trajectory["joints"], list(constraints.obstacles), t=trajectory.t, ignore=fixed)
+    hit = res.first_contact(0.0)
+    if hit is None:
+        return None
+    i, body, other = hit
+    k = int(other.split("[")[1].rstrip("]")) if other.startswith("obstacles[") else None
+    what = other if k is None else f"obstacle {k} ({constraints.obstacles[k].spec()})"
+    return (f"the robot's {body} touches {what} at t = {float(trajectory.t[i]):.4g} s (its tool point is "
+            "clear)")
