@@ -78,6 +78,8 @@ class PlanStep:
     segments: list = field(default_factory=list)
     #: With a robot: the whole robot's smallest distance over the step (``Clearance.summary``), else None.
     clearance: dict | None = None
+    #: Objects besides its arguments the step may touch: those the robot rests on at the plan's start.
+    touches: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """JSON-able: ``action``, ``args``, ``skill``, ``start``, ``stop``, ``used``, the step's errors,
@@ -88,7 +90,8 @@ class PlanStep:
                 "method": self.method, "constraint_error": float(self.constraint_error),
                 "orientation_error": float(self.orientation_error), "collision": bool(self.collision),
                 "notes": list(self.notes), "segments": [dict(s) for s in self.segments],
-                "clearance": None if self.clearance is None else dict(self.clearance)}
+                "clearance": None if self.clearance is None else dict(self.clearance),
+                "touches": list(self.touches)}
 
 
 @dataclass
@@ -148,7 +151,7 @@ class PlanResult:
             if k + 1 < len(self.steps):
                 after = self.steps[k + 1]
                 end = after.segments[0]["stop"] - 1 if after.segments else after.stop - 1
-            out.append((float(t[step.start]), float(t[end]), list(step.args)))
+            out.append((float(t[step.start]), float(t[end]), [*step.args, *step.touches]))
         return out
 
     def to_dict(self) -> dict:
@@ -448,14 +451,15 @@ def _first_contact(ob, Y) -> int:
 
 
 def check_step(world, streams, segments, where, model=None, *, scene=None, names=(), margin=CLEARANCE,
-               first=False):
+               first=False, objects=()):
     """Refuse a step whose path touches the world; with a robot, the whole robot's clearance summary.
 
     The tool path of every piece is checked against ``world`` (the step's obstacles, the table, the
     workspace), naming the piece, what it touches and the time. With ``model``, every sample of
     ``streams["joints"]`` is checked for every body of the robot (links and gripper,
-    :func:`skillbank.robots.clearance`) against the obstacles ``names`` of ``scene``, its table, its
-    workspace and the robot itself, with ``margin`` metres to spare; a step that comes closer is
+    :func:`skillbank.robots.clearance`) against the obstacles ``names`` of ``scene``, the solid
+    ``objects`` (the scene's objects the step does not act on), its table, its workspace and the robot
+    itself, with ``margin`` metres to spare; a step that comes closer is
     refused naming the body, what it comes near and the time. The one place a step's path is checked.
     """
     P, t = streams["position"], streams["t"]
@@ -467,7 +471,7 @@ def check_step(world, streams, segments, where, model=None, *, scene=None, names
                                  f"point {np.round(P[a + i], 4).tolist()})")
     if model is None or scene is None:
         return None
-    res = arm_clearance(model, scene, names, streams["joints"], t)
+    res = arm_clearance(model, scene, names, streams["joints"], t, objects=objects)
     hit = res.first_contact(margin)
     if hit is not None:
         i, body, other = hit
@@ -512,10 +516,52 @@ def _grown(world, scene, grow) -> list:
     return out
 
 
-def arm_clearance(model, scene, names, joints, t=None):
-    """The whole robot's :class:`~skillbank.robots.Clearance` along ``joints`` in ``scene``'s world."""
+def arm_clearance(model, scene, names, joints, t=None, *, objects=None):
+    """The whole robot's :class:`~skillbank.robots.Clearance` along ``joints`` in ``scene``'s world.
+
+    ``names``: the obstacles that apply; ``objects``: the scene's objects with a shape that the robot
+    must not touch either (those its step acts on left out), as their solid shapes (:func:`solid`).
+    """
     obstacles = {n: scene.obstacles[n] for n in names}
+    for n in objects or ():
+        shape = solid(scene, scene.objects[n])
+        if shape is not None:
+            obstacles[n] = shape
     return clearance(model, joints, obstacles, table=scene.table, workspace=scene.workspace, t=t)
+
+
+def _resting(model, scene, q0, margin) -> set:
+    """The scene's solid objects the robot touches (within ``margin``) at its start ``q0`` ``(1, n)``."""
+    out = set()
+    for n, obj in scene.objects.items():
+        shape = solid(scene, obj)
+        if shape is not None and clearance(model, q0, {n: shape}, self_collision=False).min_distance < margin:
+            out.add(n)
+    return out
+
+
+def solid(scene, obj):
+    """The space an object of the scene fills, as an obstacle, or None (no shape: a pose only).
+
+    A button: its cap and housing, a box of its radius from its top face down to the table (5 cm where
+    there is none); a box: its extents; a cylinder: the box around it; a sphere: itself.
+    """
+    shape, size, p = getattr(obj, "shape", None), getattr(obj, "size", None), obj.position
+    if shape is None or size is None or p is None:
+        return None
+    size = np.asarray(size, dtype=float)
+    if shape == "button":
+        floor = float(scene.table.upper[2]) if scene.table is not None else p[2] - 0.05
+        r = float(size[0])
+        return Box([p[0] - r, p[1] - r, min(floor, p[2] - 1e-3)], [p[0] + r, p[1] + r, p[2]])
+    if shape == "box":
+        return Box(p - size / 2, p + size / 2)
+    if shape == "cylinder":
+        r, h = float(size[0]), float(size[1])
+        return Box(p - [r, r, h / 2], p + [r, r, h / 2])
+    if shape == "sphere":
+        return Sphere(p, float(size[0]))
+    return None
 
 
 def _summary(res) -> dict:
@@ -526,6 +572,8 @@ def _summary(res) -> dict:
 def _other_label(scene, other: str) -> str:
     if other in scene.obstacles:
         return f"obstacle {other} ({scene.specs.get(other, scene.obstacles[other].spec())})"
+    if other in scene.objects:
+        return f"object {other} (a {scene.objects[other].shape} the step does not act on)"
     if other == "table":
         return f"the table (top at z = {float(scene.table.upper[2]):.6g} m)"
     if other == "workspace":
@@ -703,16 +751,27 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 if note:
                     step_notes.append(f"{where}: {note}")
                 streams["t"] = t
+                # objects the step and the one before act on may be touched (pressed, left); others not
+                if steps:
+                    resting = set(steps[-1].args)
+                elif model is not None:  # where the robot starts: objects it rests on it may leave
+                    resting = _resting(model, scene, streams["joints"][:1], clearance_margin)
+                else:
+                    resting = set()
+                acted = set(args) | resting
+                others = [n for n in scene.objects if n not in acted]
                 arm = check_step(world, streams, segments, where, model, scene=scene,
-                                 names=_obstacles(scene, b, where), margin=clearance_margin, first=not steps)
+                                 names=_obstacles(scene, b, where), margin=clearance_margin, first=not steps,
+                                 objects=others)
                 break
             except _ArmContact as contact:
                 # a repair: the tool path keeps further from what a body came near, by what it lacked
                 growable = contact.other in scene.obstacles or contact.other == "table"
                 if not growable or attempt == MAX_REPAIRS:
                     if repaired:
-                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing it for the "
-                                         "tool path)") from None
+                        grown = ", ".join(f"{n} by {g * 1000:.3g} mm" for n, g in grow.items())
+                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing {grown} for "
+                                         "the tool path)") from None
                     raise ValueError(str(contact)) from None
                 grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
                 repaired.append(contact.other)
@@ -746,7 +805,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                             # it dropped the recorded joints does not apply
                             if not (model is not None and x.startswith("joints"))],
                         segments=[{"kind": k, "start": first + a, "stop": first + z} for k, a, z in segments],
-                        clearance=arm)
+                        clearance=arm, touches=sorted(resting - set(args)) if not steps else [])
         steps.append(step)
         notes += step_notes
         position, orientation = streams["position"][-1], streams.get("orientation", [None])[-1]

@@ -94,16 +94,26 @@ def test_plan_simulate_json_reports_clearance_and_the_simulation_side_by_side(cl
     assert sim["contacts"] == [] and sim["tracking"]["tool_max"] < 0.005
 
 
-def test_a_box_left_on_the_way_is_what_the_world_shows_and_the_exit_is_1(cli, button_library, tmp_path):
-    """The planner knows the crate only as an object (no obstacle): the simulation sees the gripper hit it."""
+def test_a_crate_left_over_the_button_is_an_object_the_whole_robot_check_sees(cli, button_library, tmp_path):
+    """Objects with a shape are solid for the robot's bodies unless the step acts on them: the press
+    under the crate is refused naming the crate, the body and the time, in one line, exit 2."""
     doc = wall_scene()
     doc["objects"]["crate"] = {"type": "crate", "shape": "box", "size": [0.06, 0.06, 0.06], "mass": 0.3,
                                "position": [-0.45, 0.2, 0.1]}
     scene = write_scene(tmp_path, doc)
     code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "ur5e",
                          "--simulate")
-    assert code == 1, err
-    assert "plan and simulation DISAGREE" in out and "touched crate" in out
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert __import__("re").search(r"step 1 \(press b2\): the robot's finger_(left|right) comes "
+                                   r"within [\d.]+ mm of object crate \(a box the step does not act on\) "
+                                   r"at t = ", err)
+
+
+def test_the_object_the_robot_starts_on_may_be_left(button_library):
+    """The start rests on b1 (the step presses b2): the first step may leave it, and says so."""
+    doc = wall_scene(start={"position": [-0.45, -0.2, 0.03], "orientation": DOWN})
+    res = plan_task(button_library.store, scene_from_dict(doc), robot="ur5e")
+    assert res.steps[0].touches == ["b1"] and res.targets()[0][2] == ["b2", "b1"]
 
 
 @pytest.mark.parametrize(("extra", "match"), [
