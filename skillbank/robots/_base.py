@@ -477,14 +477,23 @@ class RobotModel(ABC):
                 message = (f"position: sample {m} is out on branch {name!r} (reachable on {here}); no one "
                            "branch reaches the whole path: change the path")
             failures.append((m, 0, message, "unreachable"))
+        one = sols.shape[0] == 1
         for kind, measure in self._singularity(path).items():
-            threshold = self.singularity_thresholds[kind]
-            near = np.flatnonzero(measure < threshold)
+            # along a path, near a singularity the joints race: the threshold refuses it; one pose has no
+            # motion to race, so only an exactly singular pose (whose solution is not unique) is refused
+            threshold = 0.0 if one else self.singularity_thresholds[kind]
+            near = np.flatnonzero(measure <= 0.0 if one else measure < threshold)
             if near.size:
                 k = int(near[0])
-                failures.append((k, 1, f"position: sample {k} is near the {kind} singularity "
-                                 f"({self.SINGULARITIES[kind].measure} = {float(measure[k]):.3g} < "
-                                 f"{threshold:g}; {near.size} such samples)", "singularity"))
+                if one:
+                    message = (f"position: the pose is exactly at the {kind} singularity "
+                               f"({self.SINGULARITIES[kind].measure} = 0): its joints are not unique; move "
+                               "it off the singularity")
+                else:
+                    message = (f"position: sample {k} is near the {kind} singularity "
+                               f"({self.SINGULARITIES[kind].measure} = {float(measure[k]):.3g} < "
+                               f"{threshold:g}; {near.size} such samples)")
+                failures.append((k, 1, message, "singularity"))
         failures.extend(self._jumps(sols, path, b))
         path, outside = self._fit_limits(path, seed, name)
         failures.extend(outside)

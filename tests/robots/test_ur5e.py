@@ -392,3 +392,21 @@ def test_registry_builds_the_model_with_its_parameters():
     assert repr(model) == "UR5e(tool=...)" and repr(UR5e()) == "UR5e()"
     turn = [-2 * np.pi, 2 * np.pi]
     assert model.limits.tolist() == [turn, turn, [-np.pi, np.pi], turn, turn, turn]
+
+
+def test_one_pose_is_solved_wherever_a_branch_reaches_it_even_near_a_singularity():
+    """Issue 27: the one-pose IK refused 12-14 % of reachable poses as 'singularity'; one pose has no motion
+    to race, so it is solved on the branch nearest the seed, reaching the pose to round-off."""
+    robot = UR5e(tool="flange")
+    q = np.random.default_rng(7).uniform(-np.pi, np.pi, (2000, 6))
+    P, Q = robot.fk(q)
+    for p, quat in zip(P, Q, strict=True):
+        got_p, got_q = robot.fk(robot.ik(p, quat))
+        assert np.abs(got_p - p).max() < 1e-9 and quaternion_angle(got_q, quat) < 1e-9
+    # near the wrist singularity (|sin(wrist_2)| = 0.01 < 0.05): one pose is solved, a path into it is not
+    near = np.array(HOME) + [0.0, 0.0, 0.0, 0.0, -np.pi / 2 + 0.01, 0.0]
+    p, quat = robot.fk(near)
+    np.testing.assert_allclose(robot.fk(robot.ik(p, quat, q_seed=near))[0], p, atol=1e-9)
+    path_p, path_q = robot.fk(np.stack([HOME, near]))
+    with pytest.raises(KinematicsError, match=r"sample 1 is near the wrist singularity"):
+        robot.ik(path_p, path_q, q_seed=HOME)
