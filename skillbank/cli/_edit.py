@@ -17,7 +17,6 @@ from ._options import (
 )
 from ._world import (
     agree,
-    clearance_summary,
     load_world,
     print_clearance,
     print_simulation,
@@ -127,7 +126,7 @@ def run(args) -> int:
         if plot is not None:
             doc["plot"] = str(plot)
         if arm is not None:
-            doc["clearance"] = clearance_summary(arm)
+            doc["clearance"] = arm.summary()
         if sim is not None:
             doc["simulation"] = sim.to_dict()
         print(json.dumps(doc, allow_nan=False))

@@ -29,7 +29,6 @@ from ._options import (
 )
 from ._world import (
     agree,
-    clearance_summary,
     load_world,
     print_clearance,
     print_simulation,
@@ -428,7 +427,7 @@ def _reuse(args) -> int:
         doc = result.to_dict()
         doc["collision"] = collision
         if arm is not None:
-            doc["clearance"] = clearance_summary(arm)
+            doc["clearance"] = arm.summary()
         if sim is not None:
             doc["simulation"] = sim.to_dict()
         print(json.dumps(doc, allow_nan=False))

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ._options import show_progress
 
 __all__ = ["add_world_options", "load_world", "world_constraints", "run_simulation", "print_simulation",
-           "agree", "whole_robot", "clearance_summary", "print_clearance"]
+           "agree", "whole_robot", "print_clearance"]
 
 
 def add_world_options(p) -> None:
@@ -67,12 +67,6 @@ def whole_robot(args, trajectory, scene, obstacles):
         table, workspace = scene.table, scene.workspace
     return clearance(robot_model(args.robot), trajectory["joints"], named, table=table, workspace=workspace,
                      t=trajectory.t)
-
-
-def clearance_summary(res) -> dict:
-    """``{"min_distance", "body", "other", "time"}`` of a :class:`~skillbank.robots.Clearance`."""
-    return {"min_distance": float(res.min_distance), "body": res.body, "other": res.other,
-            "time": None if res.time is None else float(res.time)}
 
 
 def print_clearance(res) -> None:

@@ -488,7 +488,7 @@ def check_step(world, streams, segments, where, model=None, *, scene=None, names
         raise _ArmContact(f"{where}: the robot's {body} comes {depth} {what} at t = {t[i]:.4g} s (clearance "
                           f"margin {margin * 1000:g} mm; --clearance sets it)", other=other,
                           lack=reach + margin - d + 0.5 * margin)
-    return _summary(res)
+    return res.summary()
 
 
 class _ArmContact(ValueError):
@@ -562,11 +562,6 @@ def solid(scene, obj):
     if shape == "sphere":
         return Sphere(p, float(size[0]))
     return None
-
-
-def _summary(res) -> dict:
-    return {"min_distance": float(res.min_distance), "body": res.body, "other": res.other,
-            "time": None if res.time is None else float(res.time)}
 
 
 def _other_label(scene, other: str) -> str:

@@ -231,6 +231,11 @@ class Clearance:
         body, other = self.pairs[int(self.pair[k])]
         return k, body, other
 
+    def summary(self) -> dict:
+        """The limiting pair only: ``{"min_distance", "body", "other", "time"}``."""
+        return {"min_distance": float(self.min_distance), "body": self.body, "other": self.other,
+                "time": None if self.time is None else float(self.time)}
+
     def to_dict(self) -> dict:
         """JSON-able summary: the limiting sample and pair, and every pair's smallest distance."""
         order = sorted(self.per_pair.items(), key=lambda item: item[1])
