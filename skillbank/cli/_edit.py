@@ -16,7 +16,6 @@ from ._options import (
     export_params,
 )
 from ._world import (
-    agree,
     load_world,
     print_clearance,
     print_simulation,
@@ -107,7 +106,7 @@ def run(args) -> int:
     arm = whole_robot(args, traj, world, own)
     collision = bool(collision) or (arm is not None and arm.min_distance < 0)
     sim = run_simulation(args, traj, world, own) if args.simulate else None
-    status = 0 if sim is None or agree(sim) else 1
+    status = 0 if sim is None or sim.confirmed else 1
     if args.out is not None:
         write_trajectory(traj, args.out, format=kind, **writing)
     plot = None

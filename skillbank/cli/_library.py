@@ -28,7 +28,6 @@ from ._options import (
     show_progress,
 )
 from ._world import (
-    agree,
     load_world,
     print_clearance,
     print_simulation,
@@ -415,7 +414,7 @@ def _reuse(args) -> int:
     arm = whole_robot(args, result.trajectory, world, own)
     collision = bool(result.collision) or (arm is not None and arm.min_distance < 0)
     sim = run_simulation(args, result.trajectory, world, own) if args.simulate else None
-    status = 0 if sim is None or agree(sim) else 1
+    status = 0 if sim is None or sim.confirmed else 1
     if args.out is not None:
         io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
     if args.plot is not None:

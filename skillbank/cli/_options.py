@@ -13,6 +13,7 @@ import argparse
 import os
 import re
 import sys
+from pathlib import Path
 
 from ..core import Constraints, ViaPoint, parse_obstacle
 from ._execution_options import (
@@ -27,7 +28,8 @@ from ._execution_options import (
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
-    "add_repair_option", "add_reader_options", "reader_options", "show_progress", "add_execution_options",
+    "add_repair_option", "add_reader_options", "reader_options", "show_progress", "check_folder",
+    "add_execution_options",
     "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE", "add_robot_options",
     "robot_params", "add_export_options", "export_params",
 ]
@@ -107,6 +109,13 @@ def ratio_or_none(value: str):
 def show_progress(args) -> bool:
     """Progress bars for a person watching: on a terminal, and not under ``--json``."""
     return not getattr(args, "json", False) and sys.stderr.isatty()
+
+
+def check_folder(path, name: str) -> None:
+    """An output's folder must exist: found before the work, not after part of it is written."""
+    if path is not None and not Path(path).parent.is_dir():
+        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
+                         f"{str(Path(path).parent)!r} does not exist")
 
 
 def _workers(value: str) -> int:

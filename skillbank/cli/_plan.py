@@ -10,8 +10,15 @@ from pathlib import Path
 
 from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
-from ._options import add_export_options, add_robot_options, export_params, robot_params, show_progress
-from ._world import agree, print_simulation
+from ._options import (
+    add_export_options,
+    add_robot_options,
+    check_folder,
+    export_params,
+    robot_params,
+    show_progress,
+)
+from ._world import check_simulation, print_simulation, run_simulation
 
 __all__ = ["add_parser"]
 
@@ -71,13 +78,7 @@ def _plan(args) -> int:
     from ..store import open_store  # the store, when a plan runs (not for --help)
 
     check_robot(args)
-    if args.simulate:
-        if args.robot is None:
-            raise ValueError("simulate: a simulation replays the plan's joints: give --robot too "
-                             "(--robot ur5e)")
-        from ..simulation import import_mujoco  # the extra is checked before the plan, not after
-
-        import_mujoco()
+    check_simulation(args, "the plan's joints")
     limits, branch = (robot_params(args)[k] for k in ("limits", "branch"))
     kind = output_format(args)
     writing = export_params(args, kind)
@@ -86,7 +87,7 @@ def _plan(args) -> int:
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     for name in ("out", "plot"):
-        _check_folder(getattr(args, name), name)
+        check_folder(getattr(args, name), name)
     scene = load_scene(args.scene)
     if branch is not None:
         scene.branch = branch  # the command line's branch over the scene's
@@ -117,7 +118,8 @@ def _plan(args) -> int:
         return _empty(args, result, scene)
     # before anything is written: a world that refuses the plan (the robot starting in an obstacle)
     # leaves no output behind
-    sim = _simulate(args, result, scene) if args.simulate else None
+    # each step may touch only the objects it acts on, while it acts on them
+    sim = run_simulation(args, result.trajectory, scene, targets=result.targets()) if args.simulate else None
     with _all_or_nothing(args) as written:
         if args.out is not None:
             io.write_trajectory(result.trajectory, args.out, format=kind, **writing)
@@ -127,7 +129,7 @@ def _plan(args) -> int:
 
             written += list(write_pddl(result, _stem(args.plot)))
             written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
-    status = 0 if sim is None or agree(sim) else 1
+    status = 0 if sim is None or sim.confirmed else 1
     if args.json:
         doc = result.to_dict()
         doc["written"] = [str(p) for p in written]
@@ -152,30 +154,6 @@ def _plan(args) -> int:
     if sim is not None:
         print_simulation(sim, planned=True)
     return status
-
-
-def _simulate(args, result, scene):
-    """The plan replayed in physics; each step may touch only the objects it acts on, during its samples."""
-    from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
-
-    targets = result.targets()
-    bar = None
-    if show_progress(args):
-        from tqdm import tqdm  # a bar on a terminal only
-
-        bar = tqdm(desc="physics steps", unit="step", leave=False)
-    try:
-        return simulate(result.trajectory, scene, robot=args.robot, targets=targets, progress=bar)
-    finally:
-        if bar is not None:
-            bar.close()
-
-
-def _check_folder(path, name: str) -> None:
-    """An output's folder must exist: found before the plan is computed, not after part is written."""
-    if path is not None and not Path(path).parent.is_dir():
-        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
-                         f"{str(Path(path).parent)!r} does not exist")
 
 
 def _stem(plot: Path) -> Path:

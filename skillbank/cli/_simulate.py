@@ -10,7 +10,8 @@ import json
 from pathlib import Path
 
 from ._library import check_robot
-from ._options import show_progress
+from ._options import check_folder
+from ._world import run_simulation
 
 __all__ = ["add_parser"]
 
@@ -47,16 +48,9 @@ def add_parser(sub):
     return p
 
 
-def _check_folder(path, name: str) -> None:
-    if path is not None and not Path(path).parent.is_dir():
-        raise ValueError(f"{name}: expected a file in an existing folder, got {str(path)!r}, whose folder "
-                         f"{str(Path(path).parent)!r} does not exist")
-
-
 def _simulate(args) -> int:
     from .. import io  # the readers, when a trajectory is read
     from ..planning import load_scene  # scene files, when a simulation runs
-    from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
 
     check_robot(args)
     if args.plot is not None:
@@ -64,20 +58,11 @@ def _simulate(args) -> int:
 
         figure_path(args.plot, name="plot")
     for name in ("plot", "video"):
-        _check_folder(getattr(args, name), name)
+        check_folder(getattr(args, name), name)
     io.check_input_file(args.trajectory, name="trajectory")
     scene = load_scene(args.scene)
     demo = io.load(args.trajectory)
-    bar = None
-    if show_progress(args):
-        from tqdm import tqdm  # a bar on a terminal only
-
-        bar = tqdm(desc="physics steps", unit="step", leave=False)
-    try:
-        result = simulate(demo, scene, robot=args.robot, progress=bar, video=args.video)
-    finally:
-        if bar is not None:
-            bar.close()
+    result = run_simulation(args, demo, scene, video=args.video)
     written = []
     if args.plot is not None:
         from ..plotting import plot_simulation  # matplotlib only when a figure is asked for

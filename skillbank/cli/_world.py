@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from ._options import show_progress
 
-__all__ = ["add_world_options", "load_world", "world_constraints", "run_simulation", "print_simulation",
-           "agree", "whole_robot", "print_clearance"]
+__all__ = ["add_world_options", "check_simulation", "load_world", "world_constraints", "run_simulation",
+           "print_simulation", "whole_robot", "print_clearance"]
 
 
 def add_world_options(p) -> None:
@@ -28,14 +28,20 @@ def add_world_options(p) -> None:
                         "buttons and objects or a goal fact fails")
 
 
+def check_simulation(args, what: str = "joints") -> None:
+    """With ``--simulate``: a robot and the extra, checked before the work (a simulation replays ``what``)."""
+    if not getattr(args, "simulate", False):
+        return
+    if getattr(args, "robot", None) is None:
+        raise ValueError(f"simulate: a simulation replays {what}: give --robot too (--robot ur5e)")
+    from ..simulation import import_mujoco  # the extra is checked before the work, not after
+
+    import_mujoco()
+
+
 def load_world(args):
     """The ``--scene`` world (a :class:`~skillbank.planning.Scene`, goal optional) or None, checked first."""
-    if getattr(args, "simulate", False):
-        if getattr(args, "robot", None) is None:
-            raise ValueError("simulate: a simulation replays joints: give --robot too (--robot ur5e)")
-        from ..simulation import import_mujoco  # the extra is checked before the work, not after
-
-        import_mujoco()
+    check_simulation(args)
     if getattr(args, "scene", None) is None:
         return None
     from ..planning import load_scene  # scene files, when one is given
@@ -76,8 +82,12 @@ def print_clearance(res) -> None:
           f"{res.other}{where}")
 
 
-def run_simulation(args, trajectory, scene, obstacles):
-    """Replay ``trajectory`` in ``scene`` with the command's own ``obstacles`` (``--obstacle``) added."""
+def run_simulation(args, trajectory, scene, obstacles=(), *, targets=None, video=None):
+    """Replay ``trajectory`` in ``scene`` with the command's own ``obstacles`` (``--obstacle``) added.
+
+    ``targets`` and ``video`` as :func:`skillbank.simulation.simulate` takes them; a tqdm bar of the
+    physics steps on a terminal.
+    """
     import dataclasses  # stdlib
 
     from ..planning import Scene  # the world's type
@@ -96,18 +106,10 @@ def run_simulation(args, trajectory, scene, obstacles):
 
         bar = tqdm(desc="physics steps", unit="step", leave=False)
     try:
-        return simulate(trajectory, scene, robot=args.robot, progress=bar)
+        return simulate(trajectory, scene, robot=args.robot, targets=targets, progress=bar, video=video)
     finally:
         if bar is not None:
             bar.close()
-
-
-def agree(sim) -> bool:
-    """The world saw success: every goal fact seen to hold and nothing touched that no step targets.
-
-    A fact the simulation cannot judge is not success: what the world did not show is not reported.
-    """
-    return all(value is True for value in sim.facts.values()) and not sim.contacts
 
 
 def print_simulation(sim, *, planned: bool = False) -> None:
@@ -126,6 +128,6 @@ def print_simulation(sim, *, planned: bool = False) -> None:
     for c in sim.contacts:
         print(f"    contact {c['t']:.3f} s: {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
     if planned:
-        print(f"  plan and simulation {'agree' if agree(sim) else 'DISAGREE'}")
+        print(f"  plan and simulation {'agree' if sim.confirmed else 'DISAGREE'}")
     else:
-        print(f"  simulation {'ok' if agree(sim) else 'NOT ok'}")
+        print(f"  simulation {'ok' if sim.confirmed else 'NOT ok'}")

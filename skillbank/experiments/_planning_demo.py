@@ -291,7 +291,7 @@ def _physics(res, scene) -> dict | None:
     except ImportError:  # the package is there, MuJoCo is not: the summary says so
         return None
     doc = sim.to_dict()
-    doc["agree"] = all(v is True for v in sim.facts.values()) and not sim.contacts
+    doc["agree"] = sim.confirmed
     return doc
 
 

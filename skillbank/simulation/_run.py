@@ -95,6 +95,15 @@ class SimulationResult:
         """Every goal fact the simulation can judge holds and no unintended contact happened."""
         return not self.contacts and all(v is not False for v in self.facts.values())
 
+    @property
+    def confirmed(self) -> bool:
+        """Every goal fact was seen to hold and no unintended contact happened.
+
+        Stricter than :attr:`ok`: a fact the simulation cannot judge is not confirmed (what a plan or a
+        reuse claims is reported done only when the world showed it).
+        """
+        return not self.contacts and all(v is True for v in self.facts.values())
+
     def to_dict(self) -> dict:
         """The JSON contract (docs/simulation.md): plain floats, bools, strings and None."""
         return {
