@@ -115,6 +115,21 @@ class Obstacle(ABC):
             return True
         return P.shape[0] > 1 and bool(self._segment_hits(P[:-1], P[1:]).any())
 
+    def first_contact(self, Y) -> int:
+        """The first sample :meth:`collides` would find: strictly inside, or whose segment to the next
+        crosses the inside (its earlier end); -1 when none.
+
+        Examples
+        --------
+        >>> Sphere([0.5, 0.0], 0.1).first_contact([[0.0, 0.0], [0.2, 0.0], [1.0, 0.0]])
+        1
+        """
+        P = self._points(Y)
+        inside = np.flatnonzero(self.signed_distance(P) < 0.0)
+        crossing = np.flatnonzero(self._segment_hits(P[:-1], P[1:])) if P.shape[0] > 1 else inside[:0]
+        hits = [int(x[0]) for x in (inside, crossing) if x.size]
+        return min(hits) if hits else -1
+
     def spec(self) -> str:
         """The text spec, e.g. ``"sphere:0.5,0,0.1"``; :func:`parse_obstacle` reads it back."""
         return f"{self.kind}:" + ",".join(repr(float(v)) for v in self.values())

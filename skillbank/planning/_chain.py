@@ -442,14 +442,6 @@ def _gripper(recorded, binding, carried, n):
     return G, None
 
 
-def _first_contact(ob, Y) -> int:
-    """The first sample inside ``ob``, or the first whose segment to the next crosses it (-1: none)."""
-    inside = np.flatnonzero(ob.signed_distance(Y) < 0.0)
-    crossing = np.flatnonzero(ob.segment_hits(Y)) if len(Y) > 1 else np.zeros(0, int)
-    hits = [int(x[0]) for x in (inside, crossing) if x.size]
-    return min(hits) if hits else -1
-
-
 def check_step(world, streams, segments, where, model=None, *, scene=None, names=(), margin=CLEARANCE,
                first=False, objects=()):
     """Refuse a step whose path touches the world; with a robot, the whole robot's clearance summary.
@@ -465,7 +457,7 @@ def check_step(world, streams, segments, where, model=None, *, scene=None, names
     P, t = streams["position"], streams["t"]
     for kind, a, b in segments:
         for label, ob in world:
-            i = _first_contact(ob, P[a:b])
+            i = ob.first_contact(P[a:b])
             if i >= 0:
                 raise ValueError(f"{where}: its {kind} passes through {label} at t = {t[a + i]:.4g} s (tool "
                                  f"point {np.round(P[a + i], 4).tolist()})")
