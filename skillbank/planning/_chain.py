@@ -512,11 +512,11 @@ def arm_clearance(model, scene, names, joints, t=None, *, objects=None):
     """The whole robot's :class:`~skillbank.robots.Clearance` along ``joints`` in ``scene``'s world.
 
     ``names``: the obstacles that apply; ``objects``: the scene's objects with a shape that the robot
-    must not touch either (those its step acts on left out), as their solid shapes (:func:`solid`).
+    must not touch either (those its step acts on left out), as their solid shapes (:meth:`Scene.solid`).
     """
     obstacles = {n: scene.obstacles[n] for n in names}
     for n in objects or ():
-        shape = solid(scene, scene.objects[n])
+        shape = scene.solid(n)
         if shape is not None:
             obstacles[n] = shape
     return clearance(model, joints, obstacles, table=scene.table, workspace=scene.workspace, t=t)
@@ -525,35 +525,11 @@ def arm_clearance(model, scene, names, joints, t=None, *, objects=None):
 def _resting(model, scene, q0, margin) -> set:
     """The scene's solid objects the robot touches (within ``margin``) at its start ``q0`` ``(1, n)``."""
     out = set()
-    for n, obj in scene.objects.items():
-        shape = solid(scene, obj)
+    for n in scene.objects:
+        shape = scene.solid(n)
         if shape is not None and clearance(model, q0, {n: shape}, self_collision=False).min_distance < margin:
             out.add(n)
     return out
-
-
-def solid(scene, obj):
-    """The space an object of the scene fills, as an obstacle, or None (no shape: a pose only).
-
-    A button: its cap and housing, a box of its radius from its top face down to the table (5 cm where
-    there is none); a box: its extents; a cylinder: the box around it; a sphere: itself.
-    """
-    shape, size, p = getattr(obj, "shape", None), getattr(obj, "size", None), obj.position
-    if shape is None or size is None or p is None:
-        return None
-    size = np.asarray(size, dtype=float)
-    if shape == "button":
-        floor = float(scene.table.upper[2]) if scene.table is not None else p[2] - 0.05
-        r = float(size[0])
-        return Box([p[0] - r, p[1] - r, min(floor, p[2] - 1e-3)], [p[0] + r, p[1] + r, p[2]])
-    if shape == "box":
-        return Box(p - size / 2, p + size / 2)
-    if shape == "cylinder":
-        r, h = float(size[0]), float(size[1])
-        return Box(p - [r, r, h / 2], p + [r, r, h / 2])
-    if shape == "sphere":
-        return Sphere(p, float(size[0]))
-    return None
 
 
 def _other_label(scene, other: str) -> str:

@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Box, parse_obstacle
+from ..core import Box, Sphere, parse_obstacle
 from ..core._constraints import Constraints
 from ..core._rotations import check_quaternions
 from ._json import check_depth, describe, load_json, number, numbers, short
@@ -146,6 +146,38 @@ class Scene:
     workspace: tuple | None = None
     #: Height (m) the moves between steps go up to (``transit.height``), or None.
     transit: float | None = None
+
+    def solid(self, name: str):
+        """The space object ``name`` fills, as an obstacle, or None (no shape: a pose only).
+
+        A button: its cap and housing, a box of its radius from its top face down to the table (5 cm
+        where there is none); a box: its extents; a cylinder: the box around it; a sphere: itself. The
+        whole-robot check of a plan keeps the robot out of the objects a step does not act on.
+
+        Examples
+        --------
+        >>> s = scene_from_dict({"objects": {"b1": {"type": "button", "position": [0.1, -0.5, 0.15]}},
+        ...                      "goal": ["(pressed b1)"], "table": {"height": 0.1}})
+        >>> s.solid("b1")
+        Box([0.08, -0.52, 0.1], [0.12000000000000001, -0.48, 0.15])
+        """
+        obj = self.objects[name]
+        shape, size, p = obj.shape, obj.size, obj.position
+        if shape is None or size is None or p is None:
+            return None
+        size = np.asarray(size, dtype=float)
+        if shape == "button":
+            floor = float(self.table.upper[2]) if self.table is not None else p[2] - 0.05
+            r = float(size[0])
+            return Box([p[0] - r, p[1] - r, min(floor, p[2] - 1e-3)], [p[0] + r, p[1] + r, p[2]])
+        if shape == "box":
+            return Box(p - size / 2, p + size / 2)
+        if shape == "cylinder":
+            r, h = float(size[0]), float(size[1])
+            return Box(p - [r, r, h / 2], p + [r, r, h / 2])
+        if shape == "sphere":
+            return Sphere(p, float(size[0]))
+        return None
 
     def world(self, names=None) -> list:
         """``[(label, Obstacle)]`` the tool point stays out of: obstacles ``names`` (default all), the table,
