@@ -15,7 +15,7 @@ from ..io import load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..plotting import plot_executable, plot_reuse, plot_skills
 from ._demo import fresh_library, run_segmentation_demo, synthetic_multistream, synthetic_ur5e
-from ._planning_demo import run_planning_demo
+from ._planning_demo import run_planning_demo, simulated
 
 __all__ = ["run_library_demo"]
 
@@ -273,6 +273,12 @@ def _executable(lib, out: Path, data, random_state) -> dict:
             "simulation": _replayed(res.trajectory)}
 
 
+def _replayed(trajectory) -> dict | None:
+    """The reproduction replayed on the simulated UR5e in an empty world: tracking and any contact."""
+    sim = simulated(trajectory)
+    return None if sim is None else sim.to_dict()
+
+
 def _physics_line(sim) -> str:
     if sim is None:
         return "Not simulated: MuJoCo is not installed (pip install 'skillbank[sim]')."
@@ -280,17 +286,6 @@ def _physics_line(sim) -> str:
     return (f"Replayed on the simulated UR5e with its 2F-85 (MuJoCo, {sim['real_time_factor']:.0f}x real "
             f"time): joints tracked within {sim['tracking']['joint_max']:.2g} rad, the tool within "
             f"{1000 * sim['tracking']['tool_max']:.2g} mm; {touched or 'no contact'}.")
-
-
-def _replayed(trajectory) -> dict | None:
-    """The reproduction replayed on the simulated UR5e in an empty world: tracking and any contact."""
-    try:
-        from ..planning import Scene  # the world's type
-        from ..simulation import simulate  # the simulator's layer; MuJoCo is the sim extra
-
-        return simulate(trajectory, Scene(objects={}, obstacles={}, init=[], goal=[])).to_dict()
-    except ImportError:  # without skillbank[sim]: the summary says it was not simulated
-        return None
 
 
 def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:

@@ -280,19 +280,22 @@ def _task(lib, name, doc, out: Path, *, robot, limits, random_state, title) -> d
     return summary
 
 
+def simulated(trajectory, scene=None, targets=None):
+    """``trajectory`` replayed in MuJoCo in ``scene`` (default an empty world), or None without the extra."""
+    from ..planning import Scene  # the world's type
+    from ..simulation import simulate  # the simulator's layer (MuJoCo, the sim extra, is imported in it)
+
+    try:
+        return simulate(trajectory, Scene(objects={}, obstacles={}, init=[], goal=[]) if scene is None
+                        else scene, targets=targets)
+    except ImportError:  # without skillbank[sim]: the summary says it was not simulated
+        return None
+
+
 def _physics(res, scene) -> dict | None:
     """What MuJoCo says of the plan (``SimulationResult.to_dict()`` and ``agree``), None without the extra."""
-    try:
-        from ..simulation import simulate  # the simulator's layer; MuJoCo is the sim extra
-    except ImportError:
-        return None
-    try:
-        sim = simulate(res.trajectory, scene, targets=res.targets())
-    except ImportError:  # the package is there, MuJoCo is not: the summary says so
-        return None
-    doc = sim.to_dict()
-    doc["agree"] = sim.confirmed
-    return doc
+    sim = simulated(res.trajectory, scene, res.targets())
+    return None if sim is None else {**sim.to_dict(), "agree": sim.confirmed}
 
 
 def button_task(out, data, *, robot="ur5e", random_state=0) -> dict:
