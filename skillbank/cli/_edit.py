@@ -16,6 +16,7 @@ from ._options import (
     export_params,
 )
 from ._world import (
+    clearance_margin,
     load_world,
     print_clearance,
     print_simulation,
@@ -69,7 +70,8 @@ def run(args) -> int:
     from ..io import load_positions, write_trajectory
     from ..metrics import comparison_metrics
     from ..representations import fit_reproduce, representation
-    from ..selection import executable_dict, make_executable, retime
+    from ..robots import CLEARANCE, robot_model
+    from ..selection import executable_dict, keep_clear, make_executable, retime
 
     representation(args.method)  # an unknown name fails first, listing the registry's
     constraints = constraints_from_args(args.start, args.goal, args.via, args.obstacle,
@@ -78,6 +80,9 @@ def run(args) -> int:
                                         via_orientation=args.via_orientation)
     execution = execution_params(args)
     check_robot(args)
+    margin = clearance_margin(args)
+    if margin is None:
+        margin = CLEARANCE
     world = load_world(args)
     own = tuple(constraints.obstacles)
     constraints = world_constraints(constraints, world)
@@ -92,11 +97,25 @@ def run(args) -> int:
     demos = [Demonstration(d.t, {"position": d["position"]}, {"source": str(p)})
              for d, p in zip(sources, args.input, strict=True)]
     constraints.check_dims(demos[0]["position"].shape[1])
-    out, collision, notes = fit_reproduce(args.method, demos, constraints)
     meta = {"method": args.method, "inputs": [str(p) for p in args.input]}
-    done = make_executable(Demonstration(out.t - out.t[0], {"position": out["position"]}, meta), sources,
-                           constraints, ids=[Path(p).name for p in args.input], robot=execution["robot"],
-                           limits=execution["limits"], kind="file", branch=execution["branch"])
+
+    def make(task):
+        out, collision, notes = fit_reproduce(args.method, demos, task)
+        done = make_executable(Demonstration(out.t - out.t[0], {"position": out["position"]}, dict(meta)),
+                               sources, task, ids=[Path(p).name for p in args.input],
+                               robot=execution["robot"], limits=execution["limits"], kind="file",
+                               branch=execution["branch"])
+        return (collision, notes, done), done.trajectory
+
+    if execution["robot"] is None:
+        (collision, notes, done), _ = make(constraints)
+    else:
+        # every moving body keeps the margin from the obstacles: repaired with via points, or refused
+        kept = keep_clear(make, constraints, robot_model(execution["robot"]), margin=margin)
+        if kept.reason is not None:
+            raise ValueError(f"edit: {kept.reason}; nothing was written")
+        (collision, notes, done), constraints = kept.result, kept.constraints
+        notes = notes + kept.notes
     traj = done.trajectory
     Y, t = traj["position"], traj.t
     error = constraints.position_error(Y)

@@ -28,6 +28,7 @@ from ._options import (
     show_progress,
 )
 from ._world import (
+    clearance_margin,
     load_world,
     print_clearance,
     print_simulation,
@@ -397,6 +398,7 @@ def _reuse(args) -> int:
     options = {"shortlist": args.shortlist} if hasattr(args, "shortlist") else {}
     execution = execution_params(args)
     check_robot(args)
+    margin = clearance_margin(args)
     world = load_world(args)
     own = tuple(constraints.obstacles)
     constraints = world_constraints(constraints, world)
@@ -409,7 +411,8 @@ def _reuse(args) -> int:
     with _open(args, readonly=True) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
-                           random_state=args.seed, progress=show_progress(args), **options, **execution)
+                           random_state=args.seed, progress=show_progress(args), clearance_margin=margin,
+                           **options, **execution)
         used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
     arm = whole_robot(args, result.trajectory, world, own)
     collision = bool(result.collision) or (arm is not None and arm.min_distance < 0)

@@ -18,7 +18,7 @@ from ._options import (
     robot_params,
     show_progress,
 )
-from ._world import check_simulation, print_simulation, run_simulation
+from ._world import CLEARANCE_HELP, check_simulation, clearance_margin, print_simulation, run_simulation
 
 __all__ = ["add_parser"]
 
@@ -60,10 +60,7 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="print plan, steps (action, args, skill, start, stop, used), t, streams, collision, "
                         "constraint_error as JSON")
-    p.add_argument("--clearance", type=float, default=None, metavar="METRES",
-                   help="with --robot: the distance every body of the robot (links, gripper) keeps from the "
-                        "obstacles, the table, the workspace bounds and itself (default 0.005, beyond its "
-                        "capsules, which already envelop the links)")
+    p.add_argument("--clearance", type=float, default=None, metavar="METRES", help=CLEARANCE_HELP)
     p.add_argument("--simulate", action="store_true",
                    help="replay the plan's joints in a MuJoCo simulation of the scene (needs --robot and "
                         "skillbank[sim]) and report the planned and the achieved goal facts side by side; "
@@ -107,9 +104,7 @@ def _plan(args) -> int:
         bound = {k: v for k, v in (("max_groundings", args.max_groundings), ("time_limit", args.time_limit))
                  if v is not None}
         if args.clearance is not None:
-            if args.robot is None:
-                raise ValueError("clearance: the whole robot's clearance needs joints: give --robot too")
-            bound["clearance"] = args.clearance
+            bound["clearance"] = clearance_margin(args)
         result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
                            random_state=args.seed, progress=tick, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \

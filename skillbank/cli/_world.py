@@ -11,7 +11,11 @@ from __future__ import annotations
 from ._options import show_progress
 
 __all__ = ["add_world_options", "check_simulation", "load_world", "world_constraints", "run_simulation",
-           "print_simulation", "whole_robot", "print_clearance"]
+           "print_simulation", "whole_robot", "print_clearance", "clearance_margin", "CLEARANCE_HELP"]
+
+CLEARANCE_HELP = ("with --robot: the distance every body of the robot (links, gripper) keeps from the "
+                  "obstacles, the table, the workspace bounds and itself (default 0.005, beyond its "
+                  "capsules, which already envelop the links)")
 
 
 def add_world_options(p) -> None:
@@ -22,10 +26,25 @@ def add_world_options(p) -> None:
                    help="a scene file (JSON, docs/planning.md) as the world: its obstacles, table and "
                         "workspace bound the path like --obstacle; its buttons and objects are simulated "
                         "with --simulate; its goal facts, if any, are judged there")
+    p.add_argument("--clearance", type=float, default=None, metavar="METRES",
+                   help=CLEARANCE_HELP.replace("and itself", "(a reproduction that comes closer is repaired "
+                                               "with via points, or refused)"))
     p.add_argument("--simulate", action="store_true",
                    help="replay the result's joints in a MuJoCo simulation of the world (needs --robot "
                         "and skillbank[sim]); exit 1 when the robot touches anything but the scene's "
                         "buttons and objects or a goal fact fails")
+
+
+def clearance_margin(args):
+    """``--clearance`` checked (metres, >= 0; needs ``--robot``), or None for the default."""
+    value = getattr(args, "clearance", None)
+    if value is None:
+        return None
+    if getattr(args, "robot", None) is None:
+        raise ValueError("clearance: the whole robot's clearance needs joints: give --robot too")
+    from ..core._validation import check_positive  # numpy only
+
+    return check_positive(value, name="clearance", allow_zero=True)
 
 
 def check_simulation(args, what: str = "joints") -> None:

@@ -368,7 +368,7 @@ class Library(Adding):
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
               shortlist: int = SHORTLIST, random_state=None, progress: bool = False, duration=None,
-              robot=None, limits=None, branch=None):
+              robot=None, limits=None, branch=None, clearance_margin=None):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -380,7 +380,10 @@ class Library(Adding):
         (the result is the same). ``duration``, ``robot``, ``limits`` and ``branch`` make
         the reproduction executable (time from 0, gripper and other streams
         of the best primitive, joints by inverse kinematics, velocity and
-        acceleration limits): see :func:`skillbank.selection.reuse`.
+        acceleration limits): see :func:`skillbank.selection.reuse`. With a
+        robot, ``clearance_margin`` (m, default 5 mm) is what every moving body
+        keeps from the obstacles; a reproduction that comes closer is repaired
+        with via points or its candidates are rejected.
 
         Returns
         -------
@@ -398,7 +401,7 @@ class Library(Adding):
             return reuse([p.demo for p in prims], constraints, method=method, k=k,
                          ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
                          progress=_ticker(bar) if progress else None, duration=duration, robot=robot,
-                         limits=limits, branch=branch)
+                         limits=limits, branch=branch, clearance_margin=clearance_margin)
 
     # -- planning ---------------------------------------------------------------------------------
     def describe(self, label, action, binding=None) -> int:

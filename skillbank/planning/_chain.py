@@ -17,15 +17,12 @@ import numpy as np
 
 from ..core import Box, Constraints, Demonstration, Sphere, quaternion_angle, quaternion_to_matrix, slerp
 from ..core._validation import check_positive, summarise
-from ..robots import RobotModel, clearance, robot_model
+from ..robots import CLEARANCE, RobotModel, clearance, robot_model
 from ..selection import reuse
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
 __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE", "arm_clearance"]
 
-#: Metres every body of the robot keeps from obstacles, the table, the workspace bounds and itself, on top
-#: of its capsules (already envelopes of the links' collision meshes, docs/robots.md).
-CLEARANCE = 0.005
 #: How far a press pushes a button in, as a fraction of its travel: to the bottom, where a real button clicks
 #: (the simulator counts half as pressed; the servo and the spring leave it short of the bottom).
 PRESS_DEPTH = 1.0

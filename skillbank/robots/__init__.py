@@ -20,8 +20,10 @@ Examples
 from ._base import KinematicsError, RobotModel, Singularity
 from ._bodies import GRIPPERS, ROBOTIQ_2F85, Capsule, Gripper
 from ._clearance import Clearance, clearance
+from ._clearing import CLEARANCE, clearing_move
 from ._registry import ROBOTS, robot_model
 from ._ur5e import UR5E_DH, UR5e
 
 __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "robot_model",
-           "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "Clearance", "clearance"]
+           "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "Clearance", "clearance",
+           "CLEARANCE", "clearing_move"]

@@ -9,8 +9,9 @@ import numpy as np
 from ..core import Demonstration
 from ..core._validation import check_array, check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, fit_reproduce, representation
-from ..robots import RobotModel, robot_model
+from ..robots import CLEARANCE, RobotModel, robot_model
 from ._candidates import SHORTLIST, Selection, select_candidates
+from ._clear import keep_clear
 from ._execution import check_duration, check_limits, executable_dict, make_executable, retime
 
 __all__ = ["ReuseResult", "reuse", "reproduce_selection", "METHODS"]
@@ -59,7 +60,10 @@ class ReuseResult:
     time_scale : float
         How much the time base was stretched to meet the limits (1.0: not at all).
     notes : list of str
-        Streams carried or dropped, time scaling, the representation's warnings.
+        Streams carried or dropped, time scaling, the representation's warnings, repairs.
+    clearance : Clearance or None
+        With a robot and obstacles: every moving body's clearance along ``trajectory``'s joints
+        (:func:`skillbank.robots.clearance`), after any repair.
     """
 
     trajectory: Demonstration
@@ -77,6 +81,7 @@ class ReuseResult:
     peaks: dict = field(default_factory=dict)
     time_scale: float = 1.0
     notes: list = field(default_factory=list)
+    clearance: object = None
 
     def to_dict(self) -> dict:
         """JSON-able summary: time, every stream as nested lists, ids as int or str.
@@ -237,7 +242,7 @@ def _retimed(primitives, duration):
 
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
           rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None, duration=None, robot=None,
-          limits=None, branch=None) -> ReuseResult:
+          limits=None, branch=None, clearance_margin=None) -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
@@ -303,6 +308,12 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     branch : int or str, optional
         With ``robot``: the inverse-kinematics branch to follow (a name of the
         robot's ``branch_names``), instead of the recorded joints' branch.
+    clearance_margin : float, optional
+        With ``robot``: metres every moving body of the robot (links and gripper) keeps from every
+        obstacle (default :data:`skillbank.robots.CLEARANCE`, 5 mm). A reproduction that comes closer
+        is repaired with via points that move that body away (:func:`keep_clear`), up to
+        ``MAX_REPAIRS`` of them; if it still does, its candidates are rejected with a reason naming
+        the body, the obstacle and the time, and the next ones are tried.
     limits : dict, optional
         Velocity and acceleration limits (keys ``velocity``,
         ``acceleration``, ``angular_velocity``, ``angular_acceleration``,
@@ -347,40 +358,37 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
                                   min_samples=cls.min_samples, progress=progress)
     model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
+    margin = CLEARANCE if clearance_margin is None else check_positive(
+        clearance_margin, name="clearance_margin", allow_zero=True)
     while True:
-        result = reproduce_selection(selection, constraints, method=method, k=k, random_state=random_state,
-                                     t=t, duration=duration, robot=model if model is not None else robot,
-                                     limits=limits, branch=branch)
-        reason = _whole_robot(model, result.trajectory, constraints)
-        if reason is None:
+        def make(task, selection=selection):
+            if task is not constraints:  # a repair's via points: the same candidates, edited to them too
+                again = select_candidates(primitives, task, ids=ids, t=t, rank=rank, shortlist=shortlist,
+                                          min_samples=cls.min_samples)
+                keep = {c.id for c in selection.candidates}
+                lost = {i: r for i, r in again.rejected.items() if i in keep}
+                selection = Selection(candidates=[c for c in again.candidates if c.id in keep],
+                                      rejected={**selection.rejected, **lost}, rank=again.rank)
+            result = reproduce_selection(selection, task, method=method, k=k, random_state=random_state, t=t,
+                                         duration=duration, robot=model if model is not None else robot,
+                                         limits=limits, branch=branch)
+            return result, result.trajectory
+
+        if model is None:
+            return make(constraints)[0]
+        done = keep_clear(make, constraints, model, margin=margin)
+        result = done.result
+        if done.reason is None:
+            result.clearance = done.clearance
+            result.notes = result.notes + done.notes
+            if done.via:
+                result.message += "; " + "; ".join(done.notes)
             return result
-        # the reproduction from these candidates takes a body of the robot into an obstacle: reject them
-        # and learn from the next ones (the tool point of each was clear: the candidates were edited so)
-        more = {i: reason for i in result.used}
+        # even repaired, the reproduction from these candidates takes a body of the robot into an obstacle:
+        # reject them and learn from the next ones (the tool point of each was clear: they were edited so)
+        more = {i: done.reason for i in result.used}
         left = [c for c in selection.candidates if c.id not in more]
         selection = Selection(candidates=left, rejected={**selection.rejected, **more}, rank=selection.rank)
         if not left:
             reasons = summarise((f"{i}: {r}" for i, r in selection.rejected.items()), sep="; ")
             raise ValueError(f"no usable candidate: {reasons}")
-
-
-def _whole_robot(model, trajectory, constraints):
-    """Why the robot's bodies touch an obstacle along ``trajectory``'s joints, or None (also: no robot).
-
-    The bodies on the base frame are not checked: they never move, so no candidate can change them (a
-    table given as an obstacle is where the base stands).
-    """
-    if model is None or not constraints.obstacles or "joints" not in trajectory.streams:
-        return None
-    from ..robots import clearance  # numpy only; the robots layer's whole-arm check
-
-    fixed = [b.name for b in model.bodies if b.frame == 0]
-    res = clearance(model, trajectory["joints"], list(constraints.obstacles), t=trajectory.t, ignore=fixed)
-    hit = res.first_contact(0.0)
-    if hit is None:
-        return None
-    i, body, other = hit
-    k = int(other.split("[")[1].rstrip("]")) if other.startswith("obstacles[") else None
-    what = other if k is None else f"obstacle {k} ({constraints.obstacles[k].spec()})"
-    return (f"the robot's {body} touches {what} at t = {float(trajectory.t[i]):.4g} s (its tool point is "
-            "clear)")

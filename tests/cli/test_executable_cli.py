@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from skillbank import Demonstration
-from skillbank.core import exp_map, quaternion_angle
+from skillbank.core import Sphere, exp_map, quaternion_angle
 from skillbank.io import load, read_npz, write_csv, write_npz
-from skillbank.robots import UR5e
+from skillbank.robots import UR5e, clearance
 
 KEYS = {"t", "streams", "joint_names", "trajectory", "used", "rejected", "constraint_error",
         "orientation_error", "collision", "peak_joint_velocity", "peaks", "notes", "clearance"}
@@ -383,8 +383,9 @@ def test_a_reuse_whose_forearm_meets_an_obstacle_is_refused_naming_it(cli, butto
     out = tmp_path / "reach.csv"
     code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball, "--out", out)
     assert code == 2 and len(err.strip().splitlines()) == 1 and not out.exists()
-    assert re.search(r"no usable candidate: \d+: the robot's forearm touches obstacle 0 "
-                     r"\(sphere:[-\d.,]+\) at t = [\d.]+ s \(its tool point is clear\)", err)
+    assert re.search(r"no usable candidate: \d+: the robot's forearm comes [\d.]+ mm into obstacle 0 "
+                     r"\(sphere:[-\d.,]+\) at t = [\d.]+ s \(its tool point is clear; clearance margin "
+                     r"5 mm\); at its goal, which no repair moves", err)
 
 
 def test_reuse_clearance_is_the_whole_robots(cli, buttons):
@@ -408,3 +409,71 @@ def test_simulate_needs_a_robot_in_one_line(cli, buttons):
     code, text, err = _reuse(cli, buttons, "--simulate")
     assert code == 2 and err.strip() == ("skillbank library reuse: error: simulate: a simulation replays "
                                          "joints: give --robot too (--robot ur5e)")
+
+
+def _ball_beside(J, name, direction, overlap=0.01, radius=0.03):
+    """A ball overlapping body ``name`` by ``overlap`` where it is furthest from its start and goal."""
+    robot = UR5e()
+    body = next(c for c in robot.bodies if c.name == name)
+    F = robot.link_frames(J)[:, body.frame]
+    M = np.einsum("nij,j->ni", F[:, :3, :3], 0.5 * (np.asarray(body.a) + np.asarray(body.b))) + F[:, :3, 3]
+    i = int(np.argmax(np.minimum(np.linalg.norm(M - M[0], axis=1), np.linalg.norm(M - M[-1], axis=1))))
+    u = np.asarray(direction, float)
+    return Sphere(M[i] + u * (body.radius + radius - overlap), radius)
+
+
+def test_a_reuse_whose_upper_arm_meets_an_obstacle_midway_is_repaired_with_via_points(cli, buttons):
+    """The ball overlaps the upper arm halfway along the reuse, 0.4 m from the tool: the tool point's
+    edit never sees it; the repair adds via points that move the upper arm away, and every body then
+    keeps the 5 mm margin, the goal still met."""
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--json")
+    assert code == 0, err
+    plain = json.loads(text)
+    ball = _ball_beside(np.array(plain["streams"]["joints"]), "upper_arm", (1, 0, 0))
+    robot = UR5e()
+    assert clearance(robot, np.array(plain["streams"]["joints"]), [ball]).min_distance < -0.005
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    repairs = [n for n in doc["notes"] if n.startswith("repair: via point")]
+    assert repairs and all("upper_arm clear of obstacles[0]" in n for n in repairs)
+    J = np.array(doc["streams"]["joints"])
+    kept = clearance(robot, J, [ball], self_collision=False)
+    assert kept.min_distance >= 0.005 - 1e-9
+    assert doc["collision"] is False and doc["clearance"]["min_distance"] > 0
+    P = np.array(doc["streams"]["position"])
+    assert np.linalg.norm(P[-1] - buttons["goal"]) < 1e-6
+    # a larger margin asks for more: repaired further, or refused naming the body
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--clearance",
+                             "0.03", "--json")
+    if code == 0:
+        J = np.array(json.loads(text)["streams"]["joints"])
+        assert clearance(robot, J, [ball], self_collision=False).min_distance >= 0.03 - 1e-9
+    else:
+        assert code == 2 and re.search(r"no usable candidate: .*clearance margin 30 mm", err)
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--clearance", "0.01"], r"clearance: the whole robot's clearance needs joints: give --robot too"),
+    (["--robot", "ur5e", "--clearance", "-0.01"], r"clearance"),
+    (["--robot", "ur5e", "--clearance", "nan"], r"clearance"),
+])
+def test_bad_clearance_is_one_line(cli, buttons, argv, match):
+    code, text, err = _reuse(cli, buttons, *argv)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and re.search(match, err), err
+
+
+def test_an_edit_whose_forearm_meets_an_obstacle_at_its_goal_is_refused(cli, buttons, tmp_path):
+    path = write_npz(load(buttons["file"]).slice(1385, 2074), tmp_path / "move.npz")
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--json")
+    assert code == 0, err
+    J = np.array(json.loads(text)["streams"]["joints"])
+    robot = UR5e()
+    forearm = next(c for c in robot.bodies if c.name == "forearm")
+    F = robot.link_frames(J[-1])[0, forearm.frame]
+    m = F[:3, :3] @ (0.5 * (np.asarray(forearm.a) + np.asarray(forearm.b))) + F[:3, 3]
+    out = tmp_path / "edited.csv"
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--obstacle", Sphere(m, 0.03).spec(), "--out", out)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and not out.exists()
+    assert re.search(r"edit: the robot's forearm comes [\d.]+ mm into obstacle 0 .* at its goal, which no "
+                     r"repair moves; nothing was written", err), err
