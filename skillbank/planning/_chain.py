@@ -15,9 +15,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Box, Constraints, Demonstration, Sphere, quaternion_angle, quaternion_to_matrix, slerp
+from ..core import (
+    Box,
+    Constraints,
+    Demonstration,
+    Sphere,
+    ViaPoint,
+    quaternion_angle,
+    quaternion_to_matrix,
+    slerp,
+)
 from ..core._validation import check_positive, summarise
-from ..robots import CLEARANCE, RobotModel, clearance, robot_model
+from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model
 from ..selection import reuse
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
@@ -27,7 +36,9 @@ __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE"
 #: (the simulator counts half as pressed; the servo and the spring leave it short of the bottom).
 PRESS_DEPTH = 1.0
 #: Times a step is reproduced again, keeping the tool further from what a body of the robot came near.
-MAX_REPAIRS = 4
+MAX_REPAIRS = 6
+#: Earlier repair via points nearer than this phase to a new one move with it (the contact moved a little).
+_SAME_PLACE = 0.04
 #: The note of a plan of no steps.
 EMPTY_PLAN = "the goal already holds in the initial facts: the plan has no steps and nothing is reproduced"
 
@@ -476,16 +487,62 @@ def check_step(world, streams, segments, where, model=None, *, scene=None, names
         reach = 0.0 if shape is None else max(float(shape.signed_distance(P[i][None])[0]), 0.0)
         raise _ArmContact(f"{where}: the robot's {body} comes {depth} {what} at t = {t[i]:.4g} s (clearance "
                           f"margin {margin * 1000:g} mm; --clearance sets it)", other=other,
-                          lack=reach + margin - d + 0.5 * margin)
+                          lack=reach + margin - d + 0.5 * margin, body=body, segments=segments,
+                          samples=_contact_run(res, i, margin, streams["joints"], P))
     return res.summary()
 
 
-class _ArmContact(ValueError):
-    """A body of the robot too near ``other``; ``lack`` metres more would clear it with some to spare."""
+def _moved_with(via, added) -> list:
+    """Earlier repair via points ``[(ViaPoint, what)]`` near a new one ``(phase, point, move)`` moved by its
+    move (the nearest one's), those at a new one's phase dropped: a contact that reappears a few samples
+    away moves the region together, instead of the earlier point springing back and undoing its repair."""
+    out = []
+    for v, what in via:
+        gaps = [(abs(v.phase - phase), k) for k, (phase, _, _) in enumerate(added)]
+        gap, k = min(gaps)
+        if gap == 0.0:
+            continue
+        if gap <= _SAME_PLACE:
+            v = ViaPoint(v.position + added[k][2], phase=v.phase)
+        out.append((v, what))
+    return out
 
-    def __init__(self, message, *, other, lack):
+
+def _contact_run(res, i, margin, J, P) -> list:
+    """``[(index, joints, tool point, lack)]`` where a via-point repair moves the body: the first sample
+    too near. (Via points at the start, the deepest sample and the end of the run of such samples too
+    were tried: on the wall-and-post benchmark they repaired fewer plans, 2 of 8 against 3.)"""
+    # what the body lacks, and twice the margin again: the first-order move falls short where the arm
+    # bends, and the contact's neighbours move less than the via point does
+    return [(i, J[i], P[i], 3 * margin - float(res.distance[i]))]
+
+
+class _ArmContact(ValueError):
+    """A body of the robot too near ``other`` at the step's sample ``index``.
+
+    ``lack``: metres the tool path must keep further from ``other`` to clear it, with some to spare;
+    ``samples``: where a via-point repair would move the body, and by how much (:func:`_contact_run`).
+    """
+
+    def __init__(self, message, *, other, lack, body=None, segments=(), samples=()):
         super().__init__(message)
-        self.other, self.lack = other, lack
+        self.other, self.lack, self.body, self.segments, self.samples = other, lack, body, segments, samples
+
+    def phase(self, index):
+        """Where step sample ``index`` is in the step's primitive piece (a phase strictly inside), or None."""
+        for kind, a, b in self.segments:
+            if kind == "primitive" and a < index < b - 1:
+                return (index - a) / (b - 1 - a)
+        return None
+
+
+def _shape(scene, other):
+    """The solid shape of ``other`` (an obstacle, the table or an object of the scene), or None (itself)."""
+    if other == "table":
+        return scene.table
+    if other in scene.obstacles:
+        return scene.obstacles[other]
+    return scene.solid(other) if other in scene.objects else None
 
 
 def _grown(world, scene, grow) -> list:
@@ -633,8 +690,19 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
             if isinstance(b.orientation, str) else b.orientation
         if b.offset is None:
             goal = goal + _press_depth(obj, goal_q)
-        grow, repaired = {}, []
-        for attempt in range(MAX_REPAIRS + 1):
+        # two repairs of a body that comes too near: first the tool path keeps further from the obstacle
+        # (right for the gripper and the wrist, near the tool); if that fails, via points in the primitive
+        # move the body itself away (right for the forearm and the upper arm, and for objects, which are
+        # never grown)
+        strategies = ("grow", "via") if model is not None else ("grow",)
+        grow, repaired, via, failed, failing = {}, [], [], None, None
+        for strategy, attempt in [(s, k) for s in strategies for k in range(MAX_REPAIRS + 1)]:
+            if failed is not None and strategy == "grow":
+                continue  # the growth failed: on to the via points
+            if failed is not None and attempt == 0:
+                # the growths that worked stay; what growing could not clear gets via points instead
+                grow = {n: g for n, g in grow.items() if n != failing}
+                repaired, via = list(grow), []
             try:
                 world = _grown(_world(scene, _obstacles(scene, b, where)), scene, grow)
                 with_q = all("orientation" in p.demo.streams for p in skill.primitives)
@@ -649,7 +717,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 extra = near is not None or away is not None or height is not None
                 zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
                 constraints = Constraints(start=position, goal=goal if near is None else near,
-                                          start_velocity=zero, end_velocity=zero,
+                                          via=[v for v, _ in via], start_velocity=zero, end_velocity=zero,
                                           obstacles=[ob for _, ob in world],
                                           start_orientation=orientation if with_q else None,
                                           goal_orientation=step_q)
@@ -725,25 +793,65 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                                  objects=others)
                 break
             except _ArmContact as contact:
-                # a repair: the tool path keeps further from what a body came near, by what it lacked
+                if strategy == "via" and contact.other not in grow:
+                    # a via point in the primitive that moves the body away (skillbank.robots.clearing_move,
+                    # through the robot's kinematics, so links far from the tool are repaired too)
+                    shape = _shape(scene, contact.other)
+                    added, why = [], "moving the tool cannot clear it"
+                    for index, q, point, lack in contact.samples:
+                        phase = contact.phase(index)
+                        if phase is None:
+                            why = "it is not in the primitive"
+                            continue
+                        if shape is None or attempt == MAX_REPAIRS:
+                            why = "its body is itself" if shape is None else f"after {len(via)} via point(s)"
+                            break
+                        move = clearing_move(model, q, contact.body, shape, lack)
+                        if move is not None:
+                            added.append((phase, point, move))
+                    if not via and attempt == MAX_REPAIRS:
+                        raise failed from None  # no via point could be tried: the growth's reason
+                    if not added or shape is None or attempt == MAX_REPAIRS:
+                        what = str(contact).split(": ", 1)[-1].split(" (clearance margin")[0]
+                        raise ValueError(f"{failed}; via points in the primitive did not clear it either: "
+                                         f"{what} ({why})") from None
+                    via = _moved_with(via, added) + [
+                        (ViaPoint(point + move, phase=phase), f"{contact.body} off {contact.other} (tool "
+                                                               f"moved {np.linalg.norm(move) * 1000:.3g} mm)")
+                        for phase, point, move in added]
+                    repaired.append(contact.other)
+                    continue
+                # the tool path keeps further from what the body came near, by what it lacked
                 growable = contact.other in scene.obstacles or contact.other == "table"
                 if not growable or attempt == MAX_REPAIRS:
-                    if repaired:
-                        grown = ", ".join(f"{n} by {g * 1000:.3g} mm" for n, g in grow.items())
-                        raise ValueError(f"{contact} (after {len(repaired)} repair(s) growing {grown} for "
-                                         "the tool path)") from None
-                    raise ValueError(str(contact)) from None
+                    grown = ", ".join(f"{n} by {g * 1000:.3g} mm" for n, g in grow.items())
+                    failed = ValueError(f"{contact} (after {len(repaired)} repair(s) growing {grown} for the "
+                                        "tool path)" if repaired else str(contact))
+                    # what growing failed on: this obstacle, or (a body or an object, never grown) the last
+                    # one grown, whose growth brought the arm here
+                    failing = contact.other if growable else (repaired[-1] if repaired else None)
+                    if strategy == strategies[-1]:
+                        raise failed from None
+                    continue
                 grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
                 repaired.append(contact.other)
             except ValueError as exc:
                 if not repaired:
                     raise
-                raise ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it for "
-                                 f"the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no path "
-                                 f"({' '.join(str(exc).split())})") from None
-        if repaired:
+                if failed is not None:
+                    raise failed from None  # the via points left no path: the growth's reason
+                failing = repaired[-1]
+                failed = ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it for "
+                                    f"the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no path "
+                                    f"({' '.join(str(exc).split())})")
+                if strategy == strategies[-1]:
+                    raise failed from None
+        if grow:
             step_notes.append(f"{where}: kept the whole robot clear by keeping the tool further from "
                               + ", ".join(f"{n} (by {g * 1000:.3g} mm)" for n, g in grow.items()))
+        for v, what in via:
+            step_notes.append(f"{where}: repair: via point at phase {v.phase:.3f} of the primitive keeps the "
+                              f"robot's {what}")
         if pieces_all:
             prev = pieces_all[-1]
             errors["position"] = max(errors["position"],

@@ -23,7 +23,7 @@ Examples
 """
 
 from ._candidates import RANKINGS, SHORTLIST, Candidate, Selection, select_candidates
-from ._clear import MAX_REPAIRS, keep_clear
+from ._clear import MAX_REPAIRS, keep_clear, shift_near
 from ._execution import (
     DISCRETE_STREAMS,
     LIMITS,
@@ -36,7 +36,7 @@ from ._execution import (
 from ._reuse import METHODS, ReuseResult, reproduce_selection, reuse
 
 __all__ = [
-    "keep_clear", "MAX_REPAIRS",
+    "keep_clear", "MAX_REPAIRS", "shift_near",
     "reuse", "ReuseResult", "select_candidates", "reproduce_selection", "Selection", "Candidate",
     "METHODS", "RANKINGS", "SHORTLIST", "make_executable", "Executable", "retime", "peak_rates", "LIMITS",
     "DISCRETE_STREAMS", "executable_dict",

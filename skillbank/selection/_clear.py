@@ -23,12 +23,29 @@ import numpy as np
 from ..core import ViaPoint
 from ..robots import clearance, clearing_move
 
-__all__ = ["MAX_REPAIRS", "keep_clear", "Repaired"]
+__all__ = ["MAX_REPAIRS", "keep_clear", "Repaired", "shift_near"]
 
 #: Via points added to keep the robot clear before the reproduction is given up.
 MAX_REPAIRS = 6
-#: Via points nearer than this phase to an earlier repair's replace it (a contact that moved a little).
+#: Earlier repair via points nearer than this phase to a new one move with it (the contact moved a little).
 _SAME_PLACE = 0.04
+
+
+def shift_near(via, phase, move, near):
+    """Repair via points ``[(ViaPoint, *info)]`` within ``near`` of ``phase`` moved by ``move``, the same
+    phase dropped (the new one takes it), the others kept.
+
+    A contact that a via point pushed off often reappears a few samples away: the region moves together,
+    instead of the earlier point springing back (which would undo its repair) or two points pulling apart.
+    """
+    out = []
+    for v, *info in via:
+        if v.phase == phase:
+            continue
+        if abs(v.phase - phase) <= near:
+            v = ViaPoint(v.position + move, phase=v.phase)
+        out.append((v, *info))
+    return out
 
 
 class Repaired:
@@ -112,7 +129,6 @@ def keep_clear(make, constraints, model, *, margin, max_repairs=MAX_REPAIRS) -> 
         attempts += 1
         phase = i / (n - 1)
         point = traj["position"][i] + move
-        via = [v for v in via if abs(v[0].phase - phase) > _SAME_PLACE]
-        via.append((ViaPoint(point, phase=phase), body, other, move))
+        via = shift_near(via, phase, move, _SAME_PLACE) + [(ViaPoint(point, phase=phase), body, other, move)]
         user = tuple(constraints.via)
         task = constraints.replace(via=user + tuple(v for v, *_ in via))

@@ -32,6 +32,9 @@ GRIPPER_RANGE = (0.0, 100.0)
 MERGE_GAP = 0.05
 #: An object is lifted when its centre rises more than this (m) above its start while it is held.
 LIFT_HEIGHT = 0.01
+#: Goal atoms of one object the simulation judges, and what decides them: ``(holding o)`` or
+#: ``(held o)``, both fingers on it at the end; ``(lifted o)``, it rose LIFT_HEIGHT while held.
+OBJECT_FACTS = {"holding": "held", "held": "held", "lifted": "lifted"}
 
 
 @dataclass
@@ -417,14 +420,19 @@ class _Runner:
                            "held": bool(held[o]), "lifted": bool(lifted[o])} for o, body in objects.items()}
         facts, notes = {}, []
         lower = {b.lower(): b for b in out_buttons}
+        things = {o.lower(): o for o in out_objects}
         for pred, args in self.goal:
             key = "(" + " ".join([pred, *args]) + ")"
-            if pred.lower() == "pressed" and len(args) == 1 and args[0].lower() in lower:
-                facts[key] = out_buttons[lower[args[0].lower()]]["pressed"]
+            name = args[0].lower() if len(args) == 1 else None
+            if pred.lower() == "pressed" and name in lower:
+                facts[key] = out_buttons[lower[name]]["pressed"]
+            elif pred.lower() in OBJECT_FACTS and name in things:
+                facts[key] = out_objects[things[name]][OBJECT_FACTS[pred.lower()]]
             else:
                 facts[key] = None
                 notes.append(f"{key}: the simulation cannot judge this fact (it judges (pressed BUTTON) for "
-                             "buttons with a shape)")
+                             "buttons, and (holding OBJECT), (held OBJECT), (lifted OBJECT) for objects with "
+                             "a shape)")
         duration = float(times[-1]) if len(times) else 0.0
         contacts = [{"robot_body": e["robot_body"], "other": e["other"], "t": e["t"],
                      "force": float(e["force"])} for e in events]

@@ -125,3 +125,28 @@ def test_bad_simulate_and_clearance_options_are_one_line(cli, button_library, tm
     code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--simulate", *extra)
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert __import__("re").match(match, err)
+
+
+#: A post beside the wrist halfway along the wall plan, 0.1 m from the tool point's path (found by
+#: benchmarks/bench_whole_arm_repair.py, seed 0, case 1): growing it for the tool path cannot clear it.
+WRIST_POST = "sphere:-0.62933,0.12237,0.51591,0.03715"
+
+
+def test_a_link_that_growing_cannot_clear_is_repaired_with_via_points(button_library, monkeypatch):
+    scene = scene_from_dict(wall_scene(obstacles={"wall": WALL, "post": WRIST_POST}))
+    res = plan_task(button_library.store, scene, robot="ur5e")
+    vias = [n for n in res.notes if "repair: via point at phase" in n]
+    assert vias and all("off post" in n for n in vias)
+    assert any("keeping the tool further from wall" in n for n in res.notes)  # the wall's growth stays
+    model = robot_model("ur5e")
+    check = arm_clearance(model, scene, list(scene.obstacles), res.trajectory["joints"], res.trajectory.t)
+    assert check.min_distance >= _chain.CLEARANCE - 1e-9
+    np.testing.assert_allclose(res.trajectory["position"][-1], [-0.45, 0.2, 0.03 - 0.004], atol=1e-6)
+    sim = simulate(res.trajectory, scene, targets=res.targets())
+    assert sim.facts == {"(pressed b2)": True} and sim.contacts == []
+    # without the via points (the repair before): refused, naming what growing the post did
+    monkeypatch.setattr(_chain, "clearing_move", lambda *a, **k: None)
+    with pytest.raises(ValueError, match=r"^step 1 \(press b2\): .*growing wall by [\d.]+ mm, post by "
+                                         r"[\d.]+ mm for the tool path\); via points in the primitive did "
+                                         r"not clear it either: .*\(moving the tool cannot clear it\)$"):
+        plan_task(button_library.store, scene, robot="ur5e")

@@ -188,3 +188,36 @@ def test_without_mujoco_one_line_names_the_extra(ur5e, monkeypatch):
     monkeypatch.setitem(sys.modules, "mujoco", None)  # as if the extra were not installed
     with pytest.raises(ImportError, match=r"^simulation needs MuJoCo: pip install 'skillbank\[sim\]'$"):
         simulate(sweep(ur5e.home, 0, 0.1, 0.2, n=11), scene())
+
+
+def _pick(ur5e, centre, close: bool) -> Demonstration:
+    """Down onto a cube with the gripper open, close it (or not), lift it 20 cm: minimum-jerk moves."""
+    def move(a, b, n):
+        s = np.linspace(0.0, 1.0, n)
+        s = 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+        return a + s[:, None] * (b - a)
+
+    above, up = centre + [0.0, 0.0, 0.15], centre + [0.0, 0.0, 0.2]
+    P = np.vstack([move(above, centre, 150), np.tile(centre, (100, 1)), move(centre, up, 150),
+                   np.tile(up, (50, 1))])
+    closing = np.linspace(0.0, 100.0, 60) if close else np.zeros(60)
+    G = np.r_[np.zeros(150), closing, np.full(240, closing[-1])]
+    down = np.array([0.0, 1.0, 0.0, 0.0])
+    J = ur5e.ik(P, np.tile(down, (len(P), 1)), q_seed=ur5e.home)
+    return Demonstration(np.arange(len(P)) * 0.01, {"joints": J, "gripper": G[:, None]})
+
+
+@pytest.mark.parametrize("close", [True, False])
+def test_a_cube_grasped_and_lifted_is_held_and_lifted_and_its_facts_say_so(ur5e, close):
+    centre = np.array([-0.45, -0.25, 0.025])
+    cube = SceneObject("cube", "box", position=centre, shape="box", size=np.array([0.04, 0.04, 0.05]),
+                       mass=0.1)
+    goal = [("holding", ("cube",)), ("lifted", ("cube",)), ("on", ("cube", "table"))]
+    result = simulate(_pick(ur5e, centre, close), scene([cube], table=TABLE, goal=goal))
+    state = result.objects["cube"]
+    assert state["held"] is close and state["lifted"] is close
+    # closed: it went up with the gripper (20 cm); open: the fingers passed round it and left it there
+    assert (state["displacement"] > 0.15) if close else (state["displacement"] < 0.01)
+    assert result.facts == {"(holding cube)": close, "(lifted cube)": close, "(on cube table)": None}
+    assert any(n.startswith("(on cube table): the simulation cannot judge") for n in result.notes)
+    assert result.contacts == []  # the cube is a target, the table untouched
