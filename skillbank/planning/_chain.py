@@ -37,6 +37,8 @@ __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE"
 PRESS_DEPTH = 1.0
 #: Times a step is reproduced again, keeping the tool further from what a body of the robot came near.
 MAX_REPAIRS = 6
+#: Times a step is reproduced again with one more via point keeping a body off what it came near.
+MAX_VIA_POINTS = 12
 #: Earlier repair via points nearer than this phase to a new one move with it (the contact moved a little).
 _SAME_PLACE = 0.04
 #: The note of a plan of no steps.
@@ -696,7 +698,8 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         # never grown)
         strategies = ("grow", "via") if model is not None else ("grow",)
         grow, repaired, via, failed, failing = {}, [], [], None, None
-        for strategy, attempt in [(s, k) for s in strategies for k in range(MAX_REPAIRS + 1)]:
+        tries = {"grow": MAX_REPAIRS, "via": MAX_VIA_POINTS}
+        for strategy, attempt in [(s, k) for s in strategies for k in range(tries[s] + 1)]:
             if failed is not None and strategy == "grow":
                 continue  # the growth failed: on to the via points
             if failed is not None and attempt == 0:
@@ -803,15 +806,15 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                         if phase is None:
                             why = "it is not in the primitive"
                             continue
-                        if shape is None or attempt == MAX_REPAIRS:
+                        if shape is None or attempt == MAX_VIA_POINTS:
                             why = "its body is itself" if shape is None else f"after {len(via)} via point(s)"
                             break
                         move = clearing_move(model, q, contact.body, shape, lack)
                         if move is not None:
                             added.append((phase, point, move))
-                    if not via and attempt == MAX_REPAIRS:
+                    if not via and attempt == MAX_VIA_POINTS:
                         raise failed from None  # no via point could be tried: the growth's reason
-                    if not added or shape is None or attempt == MAX_REPAIRS:
+                    if not added or shape is None or attempt == MAX_VIA_POINTS:
                         what = str(contact).split(": ", 1)[-1].split(" (clearance margin")[0]
                         raise ValueError(f"{failed}; via points in the primitive did not clear it either: "
                                          f"{what} ({why})") from None

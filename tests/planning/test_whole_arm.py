@@ -62,6 +62,7 @@ def test_a_plan_past_the_wall_keeps_every_link_clear_and_the_physics_agrees(arou
 def test_the_fingers_would_touch_the_wall_without_the_repair(button_library, monkeypatch):
     """The tool point alone clears the wall; the gripper around it does not, and that is what is named."""
     monkeypatch.setattr(_chain, "MAX_REPAIRS", 0)
+    monkeypatch.setattr(_chain, "MAX_VIA_POINTS", 0)
     with pytest.raises(ValueError, match=r"^step 1 \(press b2\): the robot's finger_(left|right) comes "
                                          r"within [\d.]+ mm of obstacle wall \(box:-0.6,-0.02,0.0,-0.3,0.02,"
                                          r"0.25\) at t = [\d.]+ s \(clearance margin 5 mm; --clearance "
