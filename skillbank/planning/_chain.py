@@ -841,8 +841,9 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
             except ValueError as exc:
                 if not repaired:
                     raise
-                if failed is not None:
-                    raise failed from None  # the via points left no path: the growth's reason
+                if failed is not None:  # the via points left no path: the growth's reason, and why
+                    raise ValueError(f"{failed}; via points in the primitive left no path either "
+                                     f"({' '.join(str(exc).split())})") from None
                 failing = repaired[-1]
                 failed = ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it for "
                                     f"the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no path "
