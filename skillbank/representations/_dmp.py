@@ -48,12 +48,21 @@ class DMP(Representation):
         ``K = alpha * beta``; default ``alpha / 4`` (critical damping).
     alpha_phase : float, default=8.0
         Decay of the phase; ``s(T) = exp(-alpha_phase)``. The goal-change term
-        ``K (g - x0) s`` is not yet zero at ``T``: a changed start or goal is
-        met to about ``s(T)`` of the change (measured 1e-3 of it with the
-        defaults; 5e-2 with the common ``alpha=25, alpha_phase=4``).
+        ``K (g - x0) s`` is not yet zero at ``T``, nor has the system settled:
+        the dynamics alone meet a changed start or goal to about ``s(T)`` of
+        the change (measured 1e-3 of it with the defaults; 5e-2 with the
+        common ``alpha=25, alpha_phase=4``). See ``meet_goal``.
     reg : float, default=1e-8
         Ridge regularisation of the weights, relative to the mean diagonal of
         the normal matrix.
+    meet_goal : bool, default=True
+        The goal is a constraint: the offset the integration leaves at ``T``
+        (above) is added back along a minimum-jerk ramp ``10 u^3 - 15 u^4 +
+        6 u^5`` of the phase time ``u``, so the last sample is the goal
+        exactly, while the start, the initial velocity and the final velocity
+        are unchanged (the ramp and its slope are 0 at the start, its slope 0
+        at the end) and no sample moves by more than the offset. False: the
+        dynamics' own end.
 
     Attributes
     ----------
@@ -82,12 +91,13 @@ class DMP(Representation):
     supports_via = False
     supports_end_velocity = False
 
-    def __init__(self, *, n_basis=50, alpha=50.0, beta=None, alpha_phase=8.0, reg=1e-8):
+    def __init__(self, *, n_basis=50, alpha=50.0, beta=None, alpha_phase=8.0, reg=1e-8, meet_goal=True):
         self.n_basis = n_basis
         self.alpha = alpha
         self.beta = beta
         self.alpha_phase = alpha_phase
         self.reg = reg
+        self.meet_goal = meet_goal
 
     def _gains(self):
         alpha = check_positive(self.alpha, name="alpha")
@@ -140,8 +150,15 @@ class DMP(Representation):
                 "constraints: DMP does not support an end velocity; it converges to the goal at rest"
             )
         constraints = self._constraints(constraints, np.vstack([self.start_, self.goal_]))
+        if not isinstance(self.meet_goal, (bool, np.bool_)):
+            raise ValueError(f"meet_goal: expected True or False, got {self.meet_goal!r}")
         v0 = self.start_velocity_ if constraints.start_velocity is None else constraints.start_velocity
-        return self._integrate(constraints.start, constraints.goal, v0, n_steps)
+        x = self._integrate(constraints.start, constraints.goal, v0, n_steps)
+        if self.meet_goal:
+            u = np.linspace(0.0, 1.0, n_steps)
+            x += (10 * u ** 3 - 15 * u ** 4 + 6 * u ** 5)[:, None] * (constraints.goal - x[-1])
+            x[-1] = constraints.goal  # exactly, not to round-off
+        return x
 
     def _integrate(self, x0, g, xd0, n_steps):
         """Exact discretisation for piecewise-linear input, run with lfilter."""

@@ -35,7 +35,7 @@ def test_start_velocity_sets_the_initial_state(arc):
 
 
 def test_integration_matches_an_ode_solver(arc):
-    model = DMP().fit(arc)
+    model = DMP(meet_goal=False).fit(arc)  # the dynamics alone
     K, D, a_s = model.alpha * model.alpha / 4, model.alpha, model.alpha_phase
     tau, x0, g, v0 = model.tau_, np.array([-1.0, 0.2]), np.array([-1.3, 0.4]), np.array([0.1, -0.3])
 
@@ -50,6 +50,26 @@ def test_integration_matches_an_ode_solver(arc):
     ref = solve_ivp(rhs, (0, tau), np.concatenate([x0, tau * v0]), t_eval=t, rtol=1e-11, atol=1e-12)
     out = model.reproduce(Constraints(start=x0, goal=g, start_velocity=v0), n_steps=2000)
     assert np.abs(out["position"] - ref.y[:2].T).max() < 1e-5
+
+
+def test_the_goal_is_met_exactly_and_nothing_else_changes_but_by_the_offset(arc):
+    """meet_goal blends in what the dynamics leave at T: the goal exact, start and both end velocities as
+    they were, no sample moved by more than that offset."""
+    x0, g, v0 = np.array([-1.0, 0.2]), np.array([-1.3, 0.4]), np.array([0.1, -0.3])
+    c = Constraints(start=x0, goal=g, start_velocity=v0)
+    raw = DMP(meet_goal=False).fit(arc).reproduce(c, n_steps=2000)
+    met = DMP().fit(arc).reproduce(c, n_steps=2000)
+    P, R = met["position"], raw["position"]
+    offset = np.linalg.norm(R[-1] - g)
+    assert offset > 1e-4  # the dynamics alone leave the goal short
+    np.testing.assert_array_equal(P[-1], g)
+    np.testing.assert_array_equal(P[0], R[0])
+    dt = met.t[1] - met.t[0]
+    np.testing.assert_allclose((P[1] - P[0]) / dt, (R[1] - R[0]) / dt, atol=1e-9 * offset / dt)
+    np.testing.assert_allclose((P[-1] - P[-2]) / dt, (R[-1] - R[-2]) / dt, atol=1e-4 * offset / dt + 1e-12)
+    assert np.linalg.norm(P - R, axis=1).max() <= offset * (1 + 1e-12)
+    with pytest.raises(ValueError, match=r"meet_goal: expected True or False, got 'yes'"):
+        DMP(meet_goal="yes").fit(arc).reproduce(c)
 
 
 def test_several_demos_are_averaged(arc):
