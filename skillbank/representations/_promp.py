@@ -128,7 +128,17 @@ class ProMP(Representation):
         return check_positive(self.width, name="width")
 
     def _basis(self, n_steps: int) -> np.ndarray:
-        return gaussian_basis(np.linspace(0.0, 1.0, n_steps), int(self.n_basis), self._width())
+        # a reproduction asks for the same grid again and again (reuse, planning): computed once per
+        # (grid, n_basis, width), read-only so no caller can change the cached one
+        key = (int(n_steps), int(self.n_basis), self._width())
+        cache = self.__dict__.setdefault("_basis_cache", {})
+        if key not in cache:
+            if len(cache) >= 8:
+                cache.clear()
+            Phi = gaussian_basis(np.linspace(0.0, 1.0, key[0]), key[1], key[2])
+            Phi.setflags(write=False)
+            cache[key] = Phi
+        return cache[key]
 
     def _fit(self, Ys):
         self._width()
@@ -177,25 +187,31 @@ class ProMP(Representation):
             H[j * m:(j + 1) * m, j * K:(j + 1) * K] = rows
         return H, values.T.ravel(), np.tile(noise, d)
 
-    def _posterior(self, constraints, n_steps):
-        """Weight mean and covariance given ``constraints`` (None: the prior), and the basis."""
+    def _posterior(self, constraints, n_steps, *, covariance=True):
+        """Weight mean and covariance given ``constraints`` (None: the prior), and the basis.
+
+        ``covariance=False``: the mean only (the covariance returned is None), what a reproduction needs.
+        """
         self._check_fitted()
         n_steps = self._n_steps(n_steps)
         Phi = self._basis(n_steps)
-        mean, cov = self.mean_w_.copy(), self.cov_w_.copy()
+        mean, cov = self.mean_w_.copy(), self.cov_w_
         if constraints is None:
-            return mean, cov, Phi
+            return mean, (cov.copy() if covariance else None), Phi
         constraints = as_constraints(constraints)
         constraints.check_dims(self.n_dims_)
-        constraints = constraints.with_defaults(self._trajectory(mean, Phi))
+        constraints = constraints.with_defaults(self._trajectory(mean, Phi[[0, -1]]))  # its two ends
         H, o, noise = self._observations(constraints, n_steps, Phi)
         if H.shape[0] == 0:
-            return mean, cov, Phi
-        S = H @ cov @ H.T
+            return mean, (cov.copy() if covariance else None), Phi
+        HC = H @ cov
+        S = HC @ H.T
         S[np.diag_indices_from(S)] += noise
-        gain = cho_solve(cho_factor(S), H @ cov).T  # Σ Hᵀ S⁻¹
+        gain = cho_solve(cho_factor(S), HC).T  # Σ Hᵀ S⁻¹
         mean = mean + gain @ (o - H @ mean)
-        cov = cov - gain @ H @ cov
+        if not covariance:
+            return mean, None, Phi
+        cov = cov - gain @ HC
         return mean, 0.5 * (cov + cov.T), Phi
 
     def _trajectory(self, w, Phi):
@@ -203,7 +219,7 @@ class ProMP(Representation):
 
     def _reproduce(self, constraints, n_steps):
         use = None if constraints.is_empty and not constraints.has_velocity else constraints
-        mean, _, Phi = self._posterior(use, n_steps)
+        mean, _, Phi = self._posterior(use, n_steps, covariance=False)
         return self._trajectory(mean, Phi)
 
     def mean_and_std(self, constraints=None, n_steps=None):

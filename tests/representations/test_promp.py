@@ -109,3 +109,20 @@ def test_errors():
         model.sample(0)
     with pytest.raises(ValueError, match="constraints: via\\[0\\] has 3 dimensions"):
         model.mean_and_std(Constraints(via=[(0.5, [0.0, 0.0, 0.0])]))
+
+
+def test_the_cached_basis_changes_nothing_and_cannot_be_changed():
+    """reproduce computes the basis once per grid and skips the posterior covariance: the same result as
+    the full posterior's mean, call after call, and after set_params the new basis."""
+    s = np.linspace(0, 1, 300)
+    Ys = [np.column_stack([s, np.sin(np.pi * s) * (1 + 0.1 * k)]) for k in range(4)]
+    c = Constraints(start=[0.1, 0.0], goal=[1.1, 0.1], via=[(0.5, [0.5, 1.2])])
+    model = ProMP().fit(Ys)
+    first = model.reproduce(c)["position"]
+    np.testing.assert_array_equal(model.reproduce(c)["position"], first)
+    mean, _ = model.mean_and_std(c)
+    np.testing.assert_allclose(first, mean, atol=1e-12)
+    with pytest.raises(ValueError, match="read-only"):
+        model._basis(300)[0, 0] = 1.0
+    fresh = ProMP(n_basis=12).fit(Ys).reproduce(c)["position"]
+    np.testing.assert_array_equal(model.set_params(n_basis=12).fit(Ys).reproduce(c)["position"], fresh)
