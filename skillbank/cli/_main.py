@@ -8,13 +8,13 @@ import sys
 
 from ..core import __version__
 from ..io import check_output_path
-from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment, _simulate
+from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment, _sim, _simulate
 from ._options import join_negative_values
 from ._output import error_line, escaped_stdout
 
 __all__ = ["main", "build_parser", "leaf_parsers"]
 
-_COMMANDS = (_segment, _demo, _cluster, _experiment, _library, _edit, _plan, _simulate)
+_COMMANDS = (_segment, _demo, _cluster, _experiment, _library, _edit, _plan, _simulate, _sim)
 
 
 class _OneLineParser(argparse.ArgumentParser):

@@ -76,7 +76,10 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     -------
     list of Demonstration
         Streams: each observation key (``robot0_eef_pos``, ...) and
-        ``actions``. ``t = arange(n) / rate``. Metadata: ``source``,
+        ``actions``; and, when recorded, the tool pose under skillbank's
+        names: ``position`` (``robot0_eef_pos``) and ``orientation``
+        (``robot0_eef_quat``, x, y, z, w), so that a library can add it.
+        ``t = arange(n) / rate``. Metadata: ``source``,
         ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
         ``episode`` (``N``), ``label`` (the environment's name, when
         recorded), ``rate_hz``, ``rate_from`` and ``skipped_obs``.
@@ -123,6 +126,11 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
 
 
+#: skillbank's stream, robosuite's observation of it and its width: the tool position (m, world frame)
+#: and orientation (x, y, z, w, robosuite's order and skillbank's), added beside the observations.
+STANDARD_STREAMS = (("position", "robot0_eef_pos", 3), ("orientation", "robot0_eef_quat", 4))
+
+
 def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration:
     obs = group.get("obs")
     available = sorted(obs.keys()) if hasattr(obs, "keys") else []
@@ -146,6 +154,10 @@ def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration
     if len(set(lengths.values())) != 1 or 0 in lengths.values():
         raise FormatError(p, f"expected the streams of '{name}' to have one non-zero length, found {lengths}")
     n = next(iter(lengths.values()))
+    for stream, key, width in STANDARD_STREAMS:
+        # robosuite's tool pose is the pose a library learns: also under the names skillbank uses
+        if stream not in raw and key in raw and raw[key].ndim == 2 and raw[key].shape[1] == width:
+            raw[stream] = raw[key]
     metadata = {**common, "demo": name, "episode": number}
     if skipped:
         metadata["skipped_obs"] = skipped

@@ -9,9 +9,10 @@ is compiled, not when this package is imported.
 """
 
 from ._mujoco import MISSING, import_mujoco
+from ._robosuite import TASKS, record
 from ._run import GRIPPER_RANGE, SimulationResult, simulate
 from ._servo import SERVO_GAINS
 from ._world import GRIP_FORCE, LINK_MASSES, PRESS_FORCE, World, build_world
 
 __all__ = ["simulate", "SimulationResult", "GRIPPER_RANGE", "build_world", "World", "LINK_MASSES",
-           "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco"]
+           "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco", "record", "TASKS"]

@@ -56,7 +56,8 @@ def test_demos_read_back(tmp_path):
     assert [d.metadata["episode"] for d in demos] == [0, 1, 10]
     assert [d.n_steps for d in demos] == [6, 5, 4]
     demo = demos[1]
-    assert demo.stream_names == ["robot0_eef_pos", "robot0_gripper_qpos", "actions"]
+    assert demo.stream_names == ["robot0_eef_pos", "robot0_gripper_qpos", "actions", "position"]
+    np.testing.assert_array_equal(demo["position"], demo["robot0_eef_pos"])  # the tool pose, for a library
     np.testing.assert_array_equal(demo["robot0_eef_pos"][:, 0], 10 + np.arange(5))
     np.testing.assert_array_equal(demo["actions"], np.column_stack([np.arange(5), np.arange(5) + 1]))
     np.testing.assert_allclose(demo.t, np.arange(5) / 25)
@@ -69,7 +70,7 @@ def test_demos_read_back(tmp_path):
     assert load(path, index=2).metadata["demo"] == "demo_10"
     assert [d.metadata["demo"] for d in read_robomimic(path, filter_key="train")] == ["demo_0", "demo_10"]
     only = read_robomimic(path, episodes=[10], obs_keys=["robot0_eef_pos"], control_freq=50)
-    assert only[0].stream_names == ["robot0_eef_pos", "actions"]
+    assert only[0].stream_names == ["robot0_eef_pos", "actions", "position"]
     assert only[0].metadata["rate_from"] == "argument"
     np.testing.assert_allclose(only[0].t, np.arange(4) / 50)
 

@@ -1,0 +1,278 @@
+"""Demonstrations recorded in robosuite, in robomimic's HDF5 layout: ``skillbank sim record``.
+
+A scripted demonstrator drives robosuite's UR5e (with its default Robotiq
+2F-85 and operational-space controller, ``OSC_POSE`` with delta inputs) the
+way a person teleoperating would: it reaches above the object, comes down,
+closes the gripper, lifts, carries and places, each move a minimum-jerk
+profile of the tool point, the tool held at its start orientation. From
+episode to episode the speed of every move, the pauses, the approach
+direction and the grasp point vary (drawn from the seed), and only
+episodes that the environment's own ``_check_success()`` accepts are kept.
+
+What a task asks is data, not code: :data:`TASKS` names, per robosuite
+environment, the object to pick (by its observation name, ``cube`` for
+``cube_pos``) and where it goes (lifted by a height, or onto another
+object). The recorder writes, per kept episode, ``data/demo_K`` with
+``obs/`` (the tool pose ``robot0_eef_pos`` / ``robot0_eef_quat`` (x, y, z,
+w), ``robot0_joint_pos``, ``robot0_gripper_qpos`` and every object's
+``<name>_pos`` / ``<name>_quat``), ``actions``, ``rewards``, ``dones`` and
+``states`` (MuJoCo's flattened state, so an episode can be replayed), and
+the environment's arguments in ``data.attrs["env_args"]``, as robomimic
+does; :func:`skillbank.io.read_robomimic` reads it back.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..core import log_map
+from ..core._rotations import quaternion_conjugate, quaternion_multiply
+from ..core._validation import check_positive
+
+__all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ"]
+
+MISSING_ROBOSUITE = "sim record needs robosuite: pip install 'skillbank[sim]'"
+#: Control steps per second (robosuite's default, and robomimic's datasets').
+CONTROL_FREQ = 20
+
+
+@dataclass(frozen=True)
+class Task:
+    """What the demonstrator does in one robosuite environment.
+
+    ``pick``: the object to grasp (its observation name). ``lift``: metres to
+    raise it (a lifting task); ``onto``: the object it is put on (a stacking
+    task), whose top is ``onto_height`` metres above its centre.
+    """
+
+    pick: str
+    lift: float = 0.0
+    onto: str | None = None
+    onto_height: float = 0.0
+
+
+#: The robosuite tasks the recorder knows (their objects are robosuite's own).
+TASKS = {
+    "Lift": Task(pick="cube", lift=0.15),
+    "Stack": Task(pick="cubeA", onto="cubeB", onto_height=0.025),
+}
+
+
+def import_robosuite():
+    """The ``robosuite`` module, or an ImportError of one line naming the extra."""
+    try:
+        import robosuite  # the optional extra skillbank[sim], only when an environment is made
+    except ImportError:
+        raise ImportError(MISSING_ROBOSUITE) from None
+    return robosuite
+
+
+def parse_env(spec: str) -> str:
+    """The task of ``robosuite:TASK``, checked against :data:`TASKS`.
+
+    Examples
+    --------
+    >>> parse_env("robosuite:Lift")
+    'Lift'
+    """
+    if not isinstance(spec, str) or not spec.startswith("robosuite:"):
+        raise ValueError(f"env: expected robosuite:TASK (TASK one of {sorted(TASKS)}), got {spec!r}")
+    task = spec.split(":", 1)[1]
+    if task not in TASKS:
+        raise ValueError(f"env: the recorder knows robosuite tasks {sorted(TASKS)}, got {task!r}")
+    return task
+
+
+def _min_jerk(n: int) -> np.ndarray:
+    s = np.linspace(0.0, 1.0, max(int(n), 2))
+    return 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+
+
+class _Driver:
+    """Steps the environment towards tool targets with OSC deltas, and keeps what robomimic records."""
+
+    def __init__(self, env, objects):
+        self.env, self.objects = env, objects
+        self.obs = env.reset()
+        self.quat = np.array(self.obs["robot0_eef_quat"], float)  # held all episode
+        arm = env.robots[0].part_controllers["right"]
+        self.scale = np.abs(np.asarray(arm.output_max, float))  # metres and radians per unit input
+        self.rows = {"obs": [], "actions": [], "rewards": [], "dones": [], "states": []}
+        self.grip = -1.0  # open
+
+    def step(self, target):
+        obs = self.obs
+        pos_err = np.asarray(target, float) - obs["robot0_eef_pos"]
+        rot_err = log_map(quaternion_multiply(self.quat, quaternion_conjugate(obs["robot0_eef_quat"])))
+        action = np.concatenate([np.clip(pos_err / self.scale[:3], -1, 1),
+                                 np.clip(rot_err / self.scale[3:], -1, 1), [self.grip]])
+        self.rows["states"].append(np.array(self.env.sim.get_state().flatten()))
+        self.rows["obs"].append({k: np.array(obs[k], float) for k in self._keys()})
+        self.obs, reward, done, _ = self.env.step(action)
+        self.rows["actions"].append(action)
+        self.rows["rewards"].append(float(reward))
+        self.rows["dones"].append(int(done))
+
+    def _keys(self):
+        keys = ["robot0_eef_pos", "robot0_eef_quat", "robot0_joint_pos", "robot0_gripper_qpos"]
+        return keys + [f"{o}_{part}" for o in self.objects for part in ("pos", "quat")]
+
+    def move(self, goal, steps):
+        start = np.array(self.obs["robot0_eef_pos"], float)
+        for s in _min_jerk(steps)[1:]:
+            self.step(start + s * (np.asarray(goal, float) - start))
+
+    def hold(self, steps, grip=None):
+        if grip is not None:
+            self.grip = grip
+        here = np.array(self.obs["robot0_eef_pos"], float)
+        for _ in range(int(steps)):
+            self.step(here)
+
+
+def _yaw(q) -> float:
+    x, y, z, w = (float(v) for v in q)
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def _facing(tool_q, object_q) -> np.ndarray:
+    """``tool_q`` turned about the vertical by the object's turn, modulo a quarter turn (at most 45°)."""
+    a = (_yaw(object_q) + math.pi / 4) % (math.pi / 2) - math.pi / 4
+    turn = np.array([0.0, 0.0, math.sin(a / 2), math.cos(a / 2)])
+    return quaternion_multiply(turn, np.asarray(tool_q, float))
+
+
+def _objects(obs) -> list:
+    """Every object with a pose in the observations (``X_pos`` and ``X_quat``, not the robot's)."""
+    return sorted(k[:-4] for k in obs if k.endswith("_pos") and not k.startswith("robot")
+                  and f"{k[:-4]}_quat" in obs)
+
+
+def _episode(env, task: Task, rng) -> tuple:
+    """One scripted episode; ``(rows, success)``."""
+    obs = env.reset()
+    driver = _Driver(env, _objects(obs))
+    speed = rng.uniform(0.7, 1.4)  # the person's pace, this episode
+
+    def steps(seconds):
+        return max(3, int(round(seconds * speed * CONTROL_FREQ)))
+
+    target = np.array(driver.obs[f"{task.pick}_pos"], float)
+    # the wrist turns to the object's faces (its turn about the vertical, modulo a quarter turn): a
+    # parallel gripper closes on two faces, not on two edges
+    driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"])
+    grasp = target + np.r_[rng.uniform(-0.006, 0.006, 2), rng.uniform(-0.004, 0.002)]
+    side = rng.uniform(0, 2 * math.pi)
+    above = grasp + np.r_[0.04 * math.cos(side), 0.04 * math.sin(side), rng.uniform(0.10, 0.16)]
+    driver.move(above, steps(1.6))  # the approach comes from a side that varies ...
+    driver.hold(steps(rng.uniform(0.0, 0.4)))
+    driver.move(grasp + [0.0, 0.0, 0.05], steps(0.8))  # ... and ends straight down onto the object
+    driver.move(grasp, steps(0.8))
+    driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)  # close and let the fingers settle
+    if task.onto is None:
+        driver.move(grasp + [0.0, 0.0, task.lift], steps(1.4))
+        driver.hold(steps(rng.uniform(0.3, 0.6)))
+    else:
+        base = np.array(driver.obs[f"{task.onto}_pos"], float)
+        held = np.array(driver.obs[f"{task.pick}_pos"], float) - driver.obs["robot0_eef_pos"]
+        place = base + [0.0, 0.0, task.onto_height + (grasp - target)[2] + 0.026] - held * [1, 1, 0]
+        driver.move(driver.obs["robot0_eef_pos"] + [0.0, 0.0, 0.1], steps(0.8))
+        driver.move(place + [0.0, 0.0, 0.05], steps(1.5))
+        driver.move(place, steps(0.8))
+        driver.hold(steps(rng.uniform(0.3, 0.5)), grip=-1.0)
+        driver.move(place + [0.0, 0.0, 0.08], steps(0.8))
+    return driver.rows, bool(env._check_success())
+
+
+def _env_args(task: str, horizon: int, seed: int) -> dict:
+    # robosuite 1.5 draws every placement from its own generator, seeded here
+    return {"env_name": task, "type": 1, "env_version": None,
+            "env_kwargs": {"robots": ["UR5e"], "control_freq": CONTROL_FREQ, "horizon": horizon, "seed": seed,
+                           "has_renderer": False, "has_offscreen_renderer": False,
+                           "use_camera_obs": False, "ignore_done": True, "reward_shaping": False}}
+
+
+def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progress=None) -> dict:
+    """Record ``episodes`` successful scripted demonstrations of robosuite task ``env`` into ``out``.
+
+    Parameters
+    ----------
+    env : str
+        ``robosuite:TASK``, TASK a key of :data:`TASKS`.
+    episodes : int
+        Successful episodes to keep.
+    out : path-like
+        The HDF5 file written (robomimic's layout); it must not exist. Written whole or not at all.
+    seed : int, default=0
+        Seeds robosuite's object placement and the demonstrator's variations.
+    max_tries : int, optional
+        Episodes run at most (default ``3 * episodes``); fewer successes are an error.
+    progress : callable, optional
+        ``progress(kept, tried)`` after each episode.
+
+    Returns
+    -------
+    dict
+        ``{"env", "episodes", "tried", "seed", "out", "samples"}``.
+    """
+    task = parse_env(env)
+    episodes = check_positive(episodes, name="episodes", integer=True)
+    tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    out = Path(out)
+    if out.exists():
+        raise ValueError(f"out: {out} exists; give a new file")
+    if not out.parent.is_dir():
+        raise ValueError(f"out: the folder {out.parent} does not exist")
+    suite = import_robosuite()
+    import h5py  # core dependency; only when a file is written
+
+    horizon = 1000
+    args = _env_args(task, horizon, int(seed))
+    rng = np.random.default_rng(seed)
+    environment = suite.make(task, **args["env_kwargs"])
+    kept, tried = [], 0
+    try:
+        while len(kept) < episodes and tried < tries:
+            rows, ok = _episode(environment, TASKS[task], rng)
+            tried += 1
+            if ok:
+                kept.append(rows)
+            if progress is not None:
+                progress(len(kept), tried)
+    finally:
+        environment.close()
+    if len(kept) < episodes:
+        raise ValueError(f"{env}: only {len(kept)} of {tried} scripted episodes succeeded, {episodes} were "
+                         "asked; nothing was written (try another --seed)")
+    part = out.with_name(out.name + ".part")
+    try:
+        with h5py.File(part, "w") as h5:
+            data = h5.create_group("data")
+            data.attrs["env_args"] = json.dumps(args)
+            total = 0
+            for k, rows in enumerate(kept):
+                g = data.create_group(f"demo_{k}")
+                n = len(rows["actions"])
+                g.attrs["num_samples"] = n
+                total += n
+                obs = g.create_group("obs")
+                for key in rows["obs"][0]:
+                    obs.create_dataset(key, data=np.stack([o[key] for o in rows["obs"]]))
+                g.create_dataset("actions", data=np.stack(rows["actions"]))
+                g.create_dataset("rewards", data=np.asarray(rows["rewards"], float))
+                g.create_dataset("dones", data=np.asarray(rows["dones"], np.int64))
+                g.create_dataset("states", data=np.stack(rows["states"]))
+            data.attrs["total"] = total
+        part.replace(out)
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise
+    return {"env": env, "episodes": len(kept), "tried": tried, "seed": int(seed), "out": str(out),
+            "samples": int(total)}

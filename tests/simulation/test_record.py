@@ -1,0 +1,115 @@
+"""``skillbank sim record``: scripted robosuite episodes on the UR5e, in robomimic's layout, read back.
+
+Real robosuite episodes (short ones): Lift and Stack, the environment's own success check keeping each.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import h5py
+import numpy as np
+import pytest
+
+pytest.importorskip("robosuite")  # the extra skillbank[sim]
+
+from skillbank.cli import main  # noqa: E402
+from skillbank.io import read_robomimic  # noqa: E402
+from skillbank.pipeline import Library  # noqa: E402
+from skillbank.simulation import record  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def lift(tmp_path_factory):
+    out = tmp_path_factory.mktemp("lift") / "lift.hdf5"
+    report = record("robosuite:Lift", episodes=2, out=out, seed=3)
+    return out, report
+
+
+def test_a_lift_recording_has_robomimics_layout_and_every_object_pose(lift):
+    out, report = lift
+    assert report["episodes"] == 2 and report["tried"] >= 2 and report["out"] == str(out)
+    with h5py.File(out, "r") as h5:
+        args = json.loads(h5["data"].attrs["env_args"])
+        assert args["env_name"] == "Lift" and args["env_kwargs"]["control_freq"] == 20
+        assert args["env_kwargs"]["robots"] == ["UR5e"] and args["env_kwargs"]["seed"] == 3
+        assert sorted(h5["data"].keys()) == ["demo_0", "demo_1"]
+        total = 0
+        for name in ("demo_0", "demo_1"):
+            g = h5["data"][name]
+            n = int(g.attrs["num_samples"])
+            total += n
+            assert sorted(g["obs"].keys()) == ["cube_pos", "cube_quat", "robot0_eef_pos", "robot0_eef_quat",
+                                               "robot0_gripper_qpos", "robot0_joint_pos"]
+            assert g["actions"].shape == (n, 7) and np.abs(g["actions"][()]).max() <= 1.0
+            assert g["states"].shape[0] == n and g["rewards"].shape == (n,) and g["dones"].shape == (n,)
+            # the episode did what the environment counted as success: the cube went up with the tool
+            cube = g["obs"]["cube_pos"][()]
+            assert cube[-1, 2] - cube[0, 2] > 0.1
+            assert np.linalg.norm(cube[-1] - g["obs"]["robot0_eef_pos"][-1]) < 0.05
+        assert h5["data"].attrs["total"] == total == report["samples"]
+
+
+def test_the_episodes_vary_as_a_person_would(lift):
+    out, _ = lift
+    with h5py.File(out, "r") as h5:
+        lengths = [int(h5["data"][k].attrs["num_samples"]) for k in ("demo_0", "demo_1")]
+        starts = [h5["data"][k]["obs"]["cube_pos"][0] for k in ("demo_0", "demo_1")]
+    assert lengths[0] != lengths[1]  # pace and pauses drawn per episode
+    assert np.linalg.norm(starts[0] - starts[1]) > 1e-3  # robosuite's own placement, seeded
+
+
+def test_the_recording_reads_back_into_a_library_with_the_tool_pose(lift, tmp_path):
+    out, _ = lift
+    demos = read_robomimic(out)
+    assert [d.metadata["label"] for d in demos] == ["Lift", "Lift"]
+    d = demos[0]
+    np.testing.assert_array_equal(d["position"], d["robot0_eef_pos"])
+    np.testing.assert_array_equal(d["orientation"], d["robot0_eef_quat"])
+    np.testing.assert_allclose(np.diff(d.t), 1 / 20)
+    assert "cube_pos" in d.streams and "cube_quat" in d.streams
+    with Library(tmp_path / "lib.db") as lib:
+        report = lib.add_files([out])
+        assert len(report["demonstrations"]) == 2 and lib.primitives()
+
+
+def test_a_stack_episode_puts_cube_a_on_cube_b(tmp_path):
+    out = tmp_path / "stack.hdf5"
+    assert record("robosuite:Stack", episodes=1, out=out, seed=1)["episodes"] == 1
+    with h5py.File(out, "r") as h5:
+        obs = h5["data"]["demo_0"]["obs"]
+        a, b = obs["cubeA_pos"][-1], obs["cubeB_pos"][-1]
+    assert np.linalg.norm((a - b)[:2]) < 0.02 and 0.03 < a[2] - b[2] < 0.06
+
+
+def test_the_command_records_and_says_so(tmp_path, capsys):
+    out = tmp_path / "lift.hdf5"
+    assert main(["sim", "record", "robosuite:Lift", "--episodes", "1", "--seed", "5", "--out", str(out),
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["episodes"] == 1 and doc["env"] == "robosuite:Lift" and out.exists()
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'Stack'\]\), got 'Lift'"),
+    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'Stack'\], got 'Door'"),
+    (["robosuite:Lift", "--episodes", "0"], r"episodes"),
+    (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
+     r"out: expected a file in an existing folder"),
+])
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, argv, match):
+    args = ["sim", "record", *argv]
+    if "--out" not in argv:
+        args += ["--out", str(tmp_path / "x.hdf5")]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and re.search(match, err), err
+    assert not (tmp_path / "x.hdf5").exists()
+
+
+def test_an_existing_file_is_not_overwritten(tmp_path, capsys):
+    out = tmp_path / "x.hdf5"
+    out.write_bytes(b"keep")
+    assert main(["sim", "record", "robosuite:Lift", "--out", str(out)]) == 2
+    assert "exists; give a new file" in capsys.readouterr().err and out.read_bytes() == b"keep"
