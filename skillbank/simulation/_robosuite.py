@@ -47,19 +47,25 @@ class Task:
 
     ``pick``: the object to grasp (its observation name). ``lift``: metres to
     raise it (a lifting task); ``onto``: the object it is put on (a stacking
-    task), whose top is ``onto_height`` metres above its centre.
+    task), the picked object's centre ``onto_height`` metres above its centre when it rests on it; ``into``:
+    the name of the environment's attribute that lists its objects' places
+    and the key of this one (a sorting task: ``target_bin_placements``
+    indexed by ``object_to_id``), where it is let go ``drop`` metres above.
     """
 
     pick: str
     lift: float = 0.0
     onto: str | None = None
     onto_height: float = 0.0
+    into: tuple | None = None
+    drop: float = 0.0
 
 
 #: The robosuite tasks the recorder knows (their objects are robosuite's own).
 TASKS = {
     "Lift": Task(pick="cube", lift=0.15),
-    "Stack": Task(pick="cubeA", onto="cubeB", onto_height=0.025),
+    "Stack": Task(pick="cubeA", onto="cubeB", onto_height=0.045),  # robosuite's 2 cm and 2.5 cm half-cubes
+    "PickPlaceCan": Task(pick="Can", into=("target_bin_placements", "object_to_id", "can"), drop=0.08),
 }
 
 
@@ -122,10 +128,17 @@ class _Driver:
         keys = ["robot0_eef_pos", "robot0_eef_quat", "robot0_joint_pos", "robot0_gripper_qpos"]
         return keys + [f"{o}_{part}" for o in self.objects for part in ("pos", "quat")]
 
-    def move(self, goal, steps):
+    def move(self, goal, steps, *, within=0.005, settle=CONTROL_FREQ):
+        """A minimum-jerk move to ``goal``, then up to ``settle`` steps more until the tool is ``within``
+        metres of it (the controller lags the profile; the next move starts where the tool is)."""
+        goal = np.asarray(goal, float)
         start = np.array(self.obs["robot0_eef_pos"], float)
         for s in _min_jerk(steps)[1:]:
-            self.step(start + s * (np.asarray(goal, float) - start))
+            self.step(start + s * (goal - start))
+        for _ in range(int(settle)):
+            if np.linalg.norm(goal - self.obs["robot0_eef_pos"]) < within:
+                break
+            self.step(goal)
 
     def hold(self, steps, grip=None):
         if grip is not None:
@@ -150,7 +163,7 @@ def _facing(tool_q, object_q) -> np.ndarray:
 def _objects(obs) -> list:
     """Every object with a pose in the observations (``X_pos`` and ``X_quat``, not the robot's)."""
     return sorted(k[:-4] for k in obs if k.endswith("_pos") and not k.startswith("robot")
-                  and f"{k[:-4]}_quat" in obs)
+                  and "_to_" not in k and f"{k[:-4]}_quat" in obs)  # not the relative poses
 
 
 def _episode(env, task: Task, rng) -> tuple:
@@ -174,13 +187,24 @@ def _episode(env, task: Task, rng) -> tuple:
     driver.move(grasp + [0.0, 0.0, 0.05], steps(0.8))  # ... and ends straight down onto the object
     driver.move(grasp, steps(0.8))
     driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)  # close and let the fingers settle
-    if task.onto is None:
+    if task.into is not None:
+        places, ids, key = task.into
+        goal = np.asarray(getattr(env, places)[getattr(env, ids)[key]], float)
+        held = np.array(driver.obs[f"{task.pick}_pos"], float) - driver.obs["robot0_eef_pos"]
+        over = goal - held * [1, 1, 0] + np.r_[rng.uniform(-0.01, 0.01, 2), 0.0]
+        lift = max(float(driver.obs["robot0_eef_pos"][2]), float(goal[2])) + rng.uniform(0.15, 0.2)
+        driver.move(driver.obs["robot0_eef_pos"] * [1, 1, 0] + [0.0, 0.0, lift], steps(1.0))
+        driver.move(over * [1, 1, 0] + [0.0, 0.0, lift], steps(1.8))
+        driver.move(over + [0.0, 0.0, task.drop - held[2]], steps(1.0))
+        driver.hold(steps(rng.uniform(0.3, 0.5)), grip=-1.0)
+        driver.move(driver.obs["robot0_eef_pos"] + [0.0, 0.0, 0.1], steps(0.8))
+    elif task.onto is None:
         driver.move(grasp + [0.0, 0.0, task.lift], steps(1.4))
         driver.hold(steps(rng.uniform(0.3, 0.6)))
     else:
         base = np.array(driver.obs[f"{task.onto}_pos"], float)
         held = np.array(driver.obs[f"{task.pick}_pos"], float) - driver.obs["robot0_eef_pos"]
-        place = base + [0.0, 0.0, task.onto_height + (grasp - target)[2] + 0.026] - held * [1, 1, 0]
+        place = base + [0.0, 0.0, task.onto_height + 0.004] - held  # the tool, with the object 4 mm above
         driver.move(driver.obs["robot0_eef_pos"] + [0.0, 0.0, 0.1], steps(0.8))
         driver.move(place + [0.0, 0.0, 0.05], steps(1.5))
         driver.move(place, steps(0.8))

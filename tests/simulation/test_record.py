@@ -83,6 +83,14 @@ def test_a_stack_episode_puts_cube_a_on_cube_b(tmp_path):
     assert np.linalg.norm((a - b)[:2]) < 0.02 and 0.03 < a[2] - b[2] < 0.06
 
 
+def test_a_can_goes_into_its_own_bin(tmp_path):
+    out = tmp_path / "can.hdf5"
+    assert record("robosuite:PickPlaceCan", episodes=1, out=out, seed=2)["episodes"] == 1
+    with h5py.File(out, "r") as h5:
+        can = h5["data"]["demo_0"]["obs"]["Can_pos"][()]
+    assert can[-1, 1] - can[0, 1] > 0.3  # carried from the first bin to the second, where the can's place is
+
+
 def test_the_command_records_and_says_so(tmp_path, capsys):
     out = tmp_path / "lift.hdf5"
     assert main(["sim", "record", "robosuite:Lift", "--episodes", "1", "--seed", "5", "--out", str(out),
@@ -92,8 +100,10 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'Stack'\]\), got 'Lift'"),
-    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'Stack'\], got 'Door'"),
+    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'PickPlaceCan', 'Stack'\]\), got "
+               r"'Lift'"),
+    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'PickPlaceCan', 'Stack'\], got "
+                         r"'Door'"),
     (["robosuite:Lift", "--episodes", "0"], r"episodes"),
     (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
      r"out: expected a file in an existing folder"),
