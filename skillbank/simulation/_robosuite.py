@@ -153,9 +153,37 @@ def _yaw(q) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-def _facing(tool_q, object_q) -> np.ndarray:
-    """``tool_q`` turned about the vertical by the object's turn, modulo a quarter turn (at most 45°)."""
+def _closing_axis(env) -> np.ndarray:
+    """The horizontal direction the gripper closes along, from its finger pads (robosuite's names)."""
+    gripper = env.robots[0].gripper
+    gripper = gripper["right"] if isinstance(gripper, dict) else gripper
+    geoms = gripper.important_geoms
+    pad = {side: np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
+                          for n in geoms[f"{side}_fingerpad"]], axis=0) for side in ("left", "right")}
+    axis = (pad["left"] - pad["right"]) * [1, 1, 0]
+    return axis / max(np.linalg.norm(axis), 1e-9)
+
+
+def _facing(tool_q, object_q, closing, neighbours=()) -> np.ndarray:
+    """``tool_q`` turned about the vertical so the gripper closes on two faces of the object.
+
+    The turns that align it with the object's faces differ by quarter turns; the smallest is taken,
+    unless another object stands near (``neighbours``, horizontal offsets from the object within
+    0.12 m): then the one whose fingers open away from the nearest, as a person would.
+    """
     a = (_yaw(object_q) + math.pi / 4) % (math.pi / 2) - math.pi / 4
+    turns = [a, a + math.pi / 2, a - math.pi / 2]
+    near = [np.asarray(v, float) * [1, 1, 0] for v in neighbours if np.linalg.norm(np.asarray(v)[:2]) < 0.12]
+    if near:
+        towards = min(near, key=np.linalg.norm)
+        towards = towards / max(np.linalg.norm(towards), 1e-9)
+
+        def along(turn):  # how much the fingers, turned, open towards the neighbour
+            c, s_ = math.cos(turn), math.sin(turn)
+            turned = [c * closing[0] - s_ * closing[1], s_ * closing[0] + c * closing[1], 0.0]
+            return abs(float(towards @ turned))
+
+        a = min(turns, key=lambda turn: (round(along(turn), 1), abs(turn)))
     turn = np.array([0.0, 0.0, math.sin(a / 2), math.cos(a / 2)])
     return quaternion_multiply(turn, np.asarray(tool_q, float))
 
@@ -178,7 +206,8 @@ def _episode(env, task: Task, rng) -> tuple:
     target = np.array(driver.obs[f"{task.pick}_pos"], float)
     # the wrist turns to the object's faces (its turn about the vertical, modulo a quarter turn): a
     # parallel gripper closes on two faces, not on two edges
-    driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"])
+    others = [np.asarray(driver.obs[f"{o}_pos"], float) - target for o in driver.objects if o != task.pick]
+    driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"], _closing_axis(env), others)
     grasp = target + np.r_[rng.uniform(-0.006, 0.006, 2), rng.uniform(-0.004, 0.002)]
     side = rng.uniform(0, 2 * math.pi)
     above = grasp + np.r_[0.04 * math.cos(side), 0.04 * math.sin(side), rng.uniform(0.10, 0.16)]
