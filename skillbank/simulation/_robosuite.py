@@ -50,7 +50,14 @@ class Task:
     task), the picked object's centre ``onto_height`` metres above its centre when it rests on it; ``into``:
     the name of the environment's attribute that lists its objects' places
     and the key of this one (a sorting task: ``target_bin_placements``
-    indexed by ``object_to_id``), where it is let go ``drop`` metres above.
+    indexed by ``object_to_id``), where it is let go ``drop`` metres above;
+    ``peg``: a body the object goes over (an assembly task), let go with its
+    centre ``release`` metres above the body's centre, turned about the
+    vertical to a multiple of ``align`` radians first (a square hole on a
+    square peg). ``site``: where to grasp (a site of the model, default the
+    object's position), ``site_out`` metres further from the object's centre;
+    ``across``: the object's axis (0, 1) the fingers
+    close along (default: any two faces).
     """
 
     pick: str
@@ -59,6 +66,12 @@ class Task:
     onto_height: float = 0.0
     into: tuple | None = None
     drop: float = 0.0
+    site: str | None = None
+    site_out: float = 0.0
+    across: int | None = None
+    peg: str | None = None
+    release: float = 0.0
+    align: float = 0.0
 
 
 #: The robosuite tasks the recorder knows (their objects are robosuite's own).
@@ -66,6 +79,10 @@ TASKS = {
     "Lift": Task(pick="cube", lift=0.15),
     "Stack": Task(pick="cubeA", onto="cubeB", onto_height=0.045),  # robosuite's 2 cm and 2.5 cm half-cubes
     "PickPlaceCan": Task(pick="Can", into=("target_bin_placements", "object_to_id", "can"), drop=0.08),
+    # the square nut by its handle (3.2 cm across its y axis), 1 cm out along it, clear of the ring, onto
+    # the square peg (its top 0.1 m above the peg's centre)
+    "NutAssemblySquare": Task(pick="SquareNut", site="SquareNut_handle_site", site_out=0.01, across=1,
+                              peg="peg1", release=0.13, align=math.pi / 2),
 }
 
 
@@ -164,6 +181,20 @@ def _closing_axis(env) -> np.ndarray:
     return axis / max(np.linalg.norm(axis), 1e-9)
 
 
+def _turn(q, angle) -> np.ndarray:
+    """``q`` turned by ``angle`` about the vertical."""
+    return quaternion_multiply(np.array([0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)]),
+                               np.asarray(q, float))
+
+
+def _across(tool_q, object_q, closing, axis) -> np.ndarray:
+    """``tool_q`` turned about the vertical so the gripper closes along the object's ``axis`` (0 or 1)."""
+    want = _yaw(object_q) + axis * math.pi / 2
+    have = math.atan2(closing[1], closing[0])
+    a = (want - have + math.pi / 2) % math.pi - math.pi / 2  # either way along it: at most a quarter turn
+    return _turn(tool_q, a)
+
+
 def _facing(tool_q, object_q, closing, neighbours=()) -> np.ndarray:
     """``tool_q`` turned about the vertical so the gripper closes on two faces of the object.
 
@@ -203,11 +234,19 @@ def _episode(env, task: Task, rng) -> tuple:
     def steps(seconds):
         return max(3, int(round(seconds * speed * CONTROL_FREQ)))
 
+    driver.hold(max(3, int(rng.uniform(0.3, 0.6) * CONTROL_FREQ)))  # a look at the scene: objects settle
     target = np.array(driver.obs[f"{task.pick}_pos"], float)
+    if task.site is not None:
+        target = np.array(env.sim.data.site_xpos[env.sim.model.site_name2id(task.site)], float)
+        out = (target - driver.obs[f"{task.pick}_pos"]) * [1, 1, 0]
+        target = target + task.site_out * out / max(np.linalg.norm(out), 1e-9)  # clear of the object's body
     # the wrist turns to the object's faces (its turn about the vertical, modulo a quarter turn): a
     # parallel gripper closes on two faces, not on two edges
     others = [np.asarray(driver.obs[f"{o}_pos"], float) - target for o in driver.objects if o != task.pick]
-    driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"], _closing_axis(env), others)
+    if task.across is not None:
+        driver.quat = _across(driver.quat, driver.obs[f"{task.pick}_quat"], _closing_axis(env), task.across)
+    else:
+        driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"], _closing_axis(env), others)
     grasp = target + np.r_[rng.uniform(-0.006, 0.006, 2), rng.uniform(-0.004, 0.002)]
     side = rng.uniform(0, 2 * math.pi)
     above = grasp + np.r_[0.04 * math.cos(side), 0.04 * math.sin(side), rng.uniform(0.10, 0.16)]
@@ -216,7 +255,26 @@ def _episode(env, task: Task, rng) -> tuple:
     driver.move(grasp + [0.0, 0.0, 0.05], steps(0.8))  # ... and ends straight down onto the object
     driver.move(grasp, steps(0.8))
     driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)  # close and let the fingers settle
-    if task.into is not None:
+    if task.peg is not None:
+        peg = np.array(env.sim.data.body_xpos[env.sim.model.body_name2id(task.peg)], float)
+        driver.move(driver.obs["robot0_eef_pos"] + [0.0, 0.0, 0.15], steps(1.0))
+        # turn the object to the peg's square while it is held: the held offset turns with the wrist
+        for _ in range(3 if task.align else 0):  # a held object can slip as it turns: look and turn again
+            yaw = _yaw(driver.obs[f"{task.pick}_quat"])
+            turn = -(((yaw + task.align / 2) % task.align) - task.align / 2)
+            if abs(turn) < 0.02:
+                break
+            driver.quat = _turn(driver.quat, turn)
+            driver.hold(steps(0.8))
+        held = np.array(driver.obs[f"{task.pick}_pos"], float) - driver.obs["robot0_eef_pos"]
+        over = peg - held + [0.0, 0.0, task.release]
+        lift = float(driver.obs["robot0_eef_pos"][2])
+        driver.move(over * [1, 1, 0] + [0.0, 0.0, lift], steps(1.6))
+        driver.move(over + [0.0, 0.0, 0.03], steps(0.8))
+        driver.move(over, steps(0.6), within=0.002)
+        driver.hold(steps(rng.uniform(0.3, 0.5)), grip=-1.0)
+        driver.move(driver.obs["robot0_eef_pos"] + [0.0, 0.0, 0.1], steps(0.8))
+    elif task.into is not None:
         places, ids, key = task.into
         goal = np.asarray(getattr(env, places)[getattr(env, ids)[key]], float)
         held = np.array(driver.obs[f"{task.pick}_pos"], float) - driver.obs["robot0_eef_pos"]

@@ -91,6 +91,18 @@ def test_a_can_goes_into_its_own_bin(tmp_path):
     assert can[-1, 1] - can[0, 1] > 0.3  # carried from the first bin to the second, where the can's place is
 
 
+def test_a_square_nut_goes_round_its_peg(tmp_path):
+    out = tmp_path / "nut.hdf5"
+    assert record("robosuite:NutAssemblySquare", episodes=1, out=out, seed=7)["episodes"] == 1
+    with h5py.File(out, "r") as h5:
+        obs = h5["data"]["demo_0"]["obs"]
+        nut, q = obs["SquareNut_pos"][()], obs["SquareNut_quat"][-1]
+    assert nut[:, 2].max() - nut[0, 2] > 0.1  # lifted over the peg's top
+    np.testing.assert_allclose(nut[-1, :2], [0.23, 0.1], atol=0.01)  # round robosuite's square peg
+    yaw = np.arctan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+    assert abs((yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4) < 0.05  # turned to the square
+
+
 def test_the_command_records_and_says_so(tmp_path, capsys):
     out = tmp_path / "lift.hdf5"
     assert main(["sim", "record", "robosuite:Lift", "--episodes", "1", "--seed", "5", "--out", str(out),
@@ -100,10 +112,10 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'PickPlaceCan', 'Stack'\]\), got "
-               r"'Lift'"),
-    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'PickPlaceCan', 'Stack'\], got "
-                         r"'Door'"),
+    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'NutAssemblySquare', 'PickPlaceCan', "
+               r"'Stack'\]\), got 'Lift'"),
+    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'NutAssemblySquare', "
+                         r"'PickPlaceCan', 'Stack'\], got 'Door'"),
     (["robosuite:Lift", "--episodes", "0"], r"episodes"),
     (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
      r"out: expected a file in an existing folder"),
