@@ -76,9 +76,10 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     -------
     list of Demonstration
         Streams: each observation key (``robot0_eef_pos``, ...) and
-        ``actions``; and, when recorded, the tool pose under skillbank's
-        names: ``position`` (``robot0_eef_pos``) and ``orientation``
-        (``robot0_eef_quat``, x, y, z, w), so that a library can add it.
+        ``actions``, except the tool pose, read under skillbank's names
+        (so that a library can add it): ``robot0_eef_pos`` as ``position``
+        and ``robot0_eef_quat`` (x, y, z, w) as ``orientation``
+        (``metadata["renamed"]`` lists them).
         ``t = arange(n) / rate``. Metadata: ``source``,
         ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
         ``episode`` (``N``), ``label`` (the environment's name, when
@@ -95,7 +96,7 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     Examples
     --------
     >>> demos = read_robomimic("lift/ph/low_dim.hdf5", episodes="0:5")  # doctest: +SKIP
-    >>> demos[0].metadata["label"], demos[0]["robot0_eef_pos"].shape[1]  # doctest: +SKIP
+    >>> demos[0].metadata["label"], demos[0]["position"].shape[1]  # doctest: +SKIP
     ('Lift', 3)
     """
     p = as_file(path)
@@ -127,7 +128,7 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
 
 
 #: skillbank's stream, robosuite's observation of it and its width: the tool position (m, world frame)
-#: and orientation (x, y, z, w, robosuite's order and skillbank's), added beside the observations.
+#: and orientation (x, y, z, w, robosuite's order and skillbank's), read under skillbank's names.
 STANDARD_STREAMS = (("position", "robot0_eef_pos", 3), ("orientation", "robot0_eef_quat", 4))
 
 
@@ -154,11 +155,13 @@ def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration
     if len(set(lengths.values())) != 1 or 0 in lengths.values():
         raise FormatError(p, f"expected the streams of '{name}' to have one non-zero length, found {lengths}")
     n = next(iter(lengths.values()))
-    for stream, key, width in STANDARD_STREAMS:
-        # robosuite's tool pose is the pose a library learns: also under the names skillbank uses
-        if stream not in raw and key in raw and raw[key].ndim == 2 and raw[key].shape[1] == width:
-            raw[stream] = raw[key]
     metadata = {**common, "demo": name, "episode": number}
+    for stream, key, width in STANDARD_STREAMS:
+        # robosuite's tool pose is the pose a library learns: under the name skillbank uses, once (a
+        # copy under both names would count twice as evidence for a cut)
+        if stream not in raw and key in raw and raw[key].ndim == 2 and raw[key].shape[1] == width:
+            raw[stream] = raw.pop(key)
+            metadata.setdefault("renamed", {})[key] = stream
     if skipped:
         metadata["skipped_obs"] = skipped
     with reading(p, f"invalid demonstration '{name}'"):

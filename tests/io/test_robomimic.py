@@ -56,9 +56,10 @@ def test_demos_read_back(tmp_path):
     assert [d.metadata["episode"] for d in demos] == [0, 1, 10]
     assert [d.n_steps for d in demos] == [6, 5, 4]
     demo = demos[1]
-    assert demo.stream_names == ["robot0_eef_pos", "robot0_gripper_qpos", "actions", "position"]
-    np.testing.assert_array_equal(demo["position"], demo["robot0_eef_pos"])  # the tool pose, for a library
-    np.testing.assert_array_equal(demo["robot0_eef_pos"][:, 0], 10 + np.arange(5))
+    # the tool pose under skillbank's name, once, so a library takes the file as it is
+    assert demo.stream_names == ["robot0_gripper_qpos", "actions", "position"]
+    assert demo.metadata["renamed"] == {"robot0_eef_pos": "position"}
+    np.testing.assert_array_equal(demo["position"][:, 0], 10 + np.arange(5))
     np.testing.assert_array_equal(demo["actions"], np.column_stack([np.arange(5), np.arange(5) + 1]))
     np.testing.assert_allclose(demo.t, np.arange(5) / 25)
     meta = demo.metadata
@@ -70,7 +71,7 @@ def test_demos_read_back(tmp_path):
     assert load(path, index=2).metadata["demo"] == "demo_10"
     assert [d.metadata["demo"] for d in read_robomimic(path, filter_key="train")] == ["demo_0", "demo_10"]
     only = read_robomimic(path, episodes=[10], obs_keys=["robot0_eef_pos"], control_freq=50)
-    assert only[0].stream_names == ["robot0_eef_pos", "actions", "position"]
+    assert only[0].stream_names == ["actions", "position"]
     assert only[0].metadata["rate_from"] == "argument"
     np.testing.assert_allclose(only[0].t, np.arange(4) / 50)
 
@@ -150,7 +151,7 @@ def test_three_button_reads_as_the_hdf5_file_of_the_same_samples(uniform_three_b
     demo, = read_robomimic(path)
     h5 = read_robot_h5(u["h5"])
     np.testing.assert_allclose(demo.t, h5.t, atol=1e-9)
-    keys = {"joints": "robot0_joint_pos", "position": "robot0_eef_pos", "orientation": "robot0_eef_quat",
+    keys = {"joints": "robot0_joint_pos", "position": "position", "orientation": "orientation",
             "force": "ft_force", "torque": "ft_torque", "gripper": "robot0_gripper_qpos"}
     as_h5 = Demonstration(demo.t, {name: demo[key] for name, key in keys.items()})
     for name in h5.stream_names:
