@@ -17,6 +17,7 @@ pytest.importorskip("robosuite")  # the extra skillbank[sim]
 from skillbank.cli import main  # noqa: E402
 from skillbank.io import read_robomimic  # noqa: E402
 from skillbank.pipeline import Library  # noqa: E402
+from skillbank.selection import acted_on, compose  # noqa: E402
 from skillbank.simulation import record  # noqa: E402
 
 
@@ -74,6 +75,25 @@ def test_the_recording_reads_back_into_a_library_with_the_tool_pose(lift, tmp_pa
     with Library(tmp_path / "lib.db") as lib:
         report = lib.add_files([out])
         assert len(report["demonstrations"]) == 2 and lib.primitives()
+
+
+def test_each_primitive_knows_the_cube_it_acts_on_and_its_pose_on_it(lift, tmp_path):
+    """From the library (the store's copy of the samples), found from the data alone: the primitive that
+    lifts the cube moves with it, and the relative end pose put back on the cube's end pose is the
+    recorded tool pose to well under a millimetre."""
+    out, _ = lift
+    with Library(tmp_path / "lib.db") as lib:
+        lib.add_files([out])
+        prims = lib.primitives()
+    relations = [(p, acted_on(p.demo)) for p in prims]
+    assert all(r is None or r.object == "cube" for _, r in relations)
+    carried = [(p, r) for p, r in relations if r is not None and r.moves_with]
+    assert carried, [(p.start, p.stop, r) for p, r in relations]
+    for p, r in carried:
+        position, orientation = compose(r, p.demo["cube_pos"][-1], p.demo["cube_quat"][-1])
+        assert np.linalg.norm(position - p.demo["position"][-1]) < 1e-9
+        assert abs(abs(float(orientation @ p.demo["orientation"][-1])) - 1.0) < 1e-9
+        assert r.distance < 0.05  # held between the fingers
 
 
 def test_a_stack_episode_puts_cube_a_on_cube_b(tmp_path):

@@ -1,0 +1,161 @@
+"""What a primitive acts on: the object it moves with or ends at, and its end pose in that object's frame.
+
+A demonstration that records object poses (robosuite's and robomimic's
+``<name>_pos`` (n, 3) and ``<name>_quat`` (n, 4, x, y, z, w) streams) says
+which object each primitive acts on, from the data alone: the object that
+moves *with* the tool during the primitive (it is carried: it moves by more
+than ``moved`` metres while its distance to the tool stays within
+``rigid`` metres of its first value), else the object the tool *ends*
+nearest (within ``near`` metres; a reach to a grasp). Nothing is named by
+hand. The tool's end pose in that object's frame (:class:`Relation`) is
+what a new scene needs: :func:`compose` puts it on the object's new pose,
+``T_tool = T_object_new · T_relative`` (the goal of the primitive there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core import Demonstration, quaternion_to_matrix
+from ..core._rotations import check_quaternions, quaternion_conjugate, quaternion_multiply
+from ..core._validation import check_positive
+
+__all__ = ["Relation", "object_streams", "acted_on", "compose"]
+
+
+@dataclass(frozen=True)
+class Relation:
+    """The object a primitive acts on and the tool's end pose in its frame.
+
+    Attributes
+    ----------
+    object : str
+        Its name (``cube`` for the streams ``cube_pos`` and ``cube_quat``).
+    moves_with : bool
+        True when the object moved with the tool during the primitive (carried), False when the tool
+        only ended near it (a reach).
+    distance : float
+        Tool to object at the primitive's end (m).
+    position : ndarray of shape (3,)
+        The tool's end position in the object's frame (m).
+    orientation : ndarray of shape (4,) or None
+        The tool's end orientation in the object's frame (x, y, z, w), if the tool's is recorded.
+    """
+
+    object: str
+    moves_with: bool
+    distance: float
+    position: np.ndarray
+    orientation: np.ndarray | None
+
+    def to_dict(self) -> dict:
+        return {"object": self.object, "moves_with": self.moves_with, "distance": float(self.distance),
+                "position": self.position.tolist(),
+                "orientation": None if self.orientation is None else self.orientation.tolist()}
+
+
+def object_streams(demo: Demonstration) -> list:
+    """Names of the objects whose pose ``demo`` records (``X_pos`` (n, 3) beside ``X_quat`` (n, 4)).
+
+    Examples
+    --------
+    >>> t = np.arange(3.0)
+    >>> d = Demonstration(t, {"position": np.zeros((3, 3)), "cube_pos": np.zeros((3, 3)),
+    ...                       "cube_quat": np.tile([0.0, 0.0, 0.0, 1.0], (3, 1))})
+    >>> object_streams(d)
+    ['cube']
+    """
+    out = []
+    for name in demo.stream_names:
+        if name.endswith("_pos") and "_to_" not in name:  # robosuite's relative poses are not objects
+            base = name[:-4]
+            if f"{base}_quat" in demo.streams and demo[name].shape[1:] == (3,) \
+                    and demo[f"{base}_quat"].shape[1:] == (4,):
+                out.append(base)
+    return sorted(out)
+
+
+def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, rigid: float = 0.02):
+    """The :class:`Relation` of primitive ``demo`` (with ``position`` and object poses), or None.
+
+    Parameters
+    ----------
+    demo : Demonstration
+        A primitive: stream ``position`` (the tool's, m) and, optionally, ``orientation``, and the object
+        poses of :func:`object_streams`.
+    near : float, default=0.15
+        Farthest an object may be from the tool's end and still be what a reach acts on (m).
+    moved : float, default=0.01
+        How far an object must move during the primitive to count as carried (m).
+    rigid : float, default=0.02
+        How much its distance to the tool may change meanwhile (m).
+
+    Returns
+    -------
+    Relation or None
+        None when no object moved with the tool and none is within ``near`` of its end (a move in free
+        space), or when ``demo`` records no object poses.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> tool = np.column_stack([t, 0 * t, 0.1 + 0 * t])
+    >>> d = Demonstration(t, {"position": tool, "cube_pos": np.tile([1.0, 0.0, 0.02], (5, 1)),
+    ...                       "cube_quat": np.tile([0.0, 0.0, 0.0, 1.0], (5, 1))})
+    >>> r = acted_on(d)
+    >>> r.object, r.moves_with, r.position.round(3).tolist()
+    ('cube', False, [0.0, 0.0, 0.08])
+    """
+    if not isinstance(demo, Demonstration) or "position" not in demo.streams:
+        raise ValueError("demo: expected a Demonstration with a 'position' stream (the tool's)")
+    near = check_positive(near, name="near")
+    moved = check_positive(moved, name="moved")
+    rigid = check_positive(rigid, name="rigid")
+    P = demo["position"]
+    if P.shape[1] != 3:
+        raise ValueError(f"demo.position: expected 3-D tool positions, got {P.shape[1]}-D")
+    carried, ends = [], []
+    for name in object_streams(demo):
+        where = demo[f"{name}_pos"]
+        gap = np.linalg.norm(where - P, axis=1)
+        travel = float(np.linalg.norm(where - where[0], axis=1).max())
+        if travel > moved and float(np.abs(gap - gap[0]).max()) <= rigid:
+            carried.append((travel, name))
+        ends.append((float(gap[-1]), name))
+    if carried:
+        name = max(carried)[1]  # the one carried furthest
+    else:
+        best = min(ends, default=None)
+        if best is None or best[0] > near:
+            return None
+        name = best[1]
+    q_obj = check_quaternions(demo[f"{name}_quat"][-1], name=f"{name}_quat")
+    R = quaternion_to_matrix(q_obj)
+    position = R.T @ (P[-1] - demo[f"{name}_pos"][-1])
+    orientation = None
+    if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
+        q_tool = check_quaternions(demo["orientation"][-1], name="orientation")
+        orientation = quaternion_multiply(quaternion_conjugate(q_obj), q_tool)
+    return Relation(name, bool(carried), float(np.linalg.norm(P[-1] - demo[f"{name}_pos"][-1])), position,
+                    orientation)
+
+
+def compose(relation: Relation, position, orientation) -> tuple:
+    """The tool pose ``(position (3,), orientation (4,) or None)`` of ``relation`` on an object's pose.
+
+    Examples
+    --------
+    >>> r = Relation("cube", False, 0.08, np.array([0.0, 0.0, 0.08]), None)
+    >>> p, q = compose(r, [0.5, 0.2, 0.02], [0.0, 0.0, 0.0, 1.0])
+    >>> p.round(3).tolist(), q
+    ([0.5, 0.2, 0.1], None)
+    """
+    q_obj = check_quaternions(orientation, name="orientation")
+    p_obj = np.asarray(position, dtype=float)
+    if p_obj.shape != (3,) or not np.isfinite(p_obj).all():
+        raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
+    p = p_obj + quaternion_to_matrix(q_obj) @ relation.position
+    q = None if relation.orientation is None else quaternion_multiply(q_obj, relation.orientation)
+    return p, q

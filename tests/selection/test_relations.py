@@ -1,0 +1,75 @@
+"""acted_on: the object a primitive moves with or ends at, from the data, and its end pose in its frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skillbank import Demonstration
+from skillbank.core import exp_map
+from skillbank.selection import Relation, acted_on, compose, object_streams
+
+T = np.linspace(0.0, 2.0, 41)
+UP = np.tile([0.0, 0.0, 0.0, 1.0], (41, 1))
+
+
+def _demo(tool, **objects):
+    streams = {"position": tool, "orientation": np.tile(exp_map([0.0, np.pi, 0.0]), (len(T), 1))}
+    for name, (pos, quat) in objects.items():
+        streams[f"{name}_pos"], streams[f"{name}_quat"] = pos, quat
+    return Demonstration(T, streams)
+
+
+def _reach(to):
+    s = (T / T[-1])[:, None]
+    return np.asarray([0.0, 0.0, 0.4]) + s * (np.asarray(to) - [0.0, 0.0, 0.4])
+
+
+def test_a_reach_acts_on_the_object_it_ends_nearest_and_composes_back():
+    a = np.tile([0.5, 0.1, 0.02], (41, 1))
+    b = np.tile([0.5, -0.1, 0.02], (41, 1))
+    yaw = exp_map([0.0, 0.0, 0.7])
+    r = acted_on(_demo(_reach([0.5, 0.1, 0.03]), a=(a, np.tile(yaw, (41, 1))), b=(b, UP)))
+    assert r.object == "a" and not r.moves_with and r.distance == pytest.approx(0.01)
+    # the tool's end pose, put back on the object's pose, is the tool's end pose
+    p, q = compose(r, a[-1], yaw)
+    np.testing.assert_allclose(p, [0.5, 0.1, 0.03], atol=1e-12)
+    np.testing.assert_allclose(np.abs(q @ exp_map([0.0, np.pi, 0.0])), 1.0, atol=1e-12)
+    # and on a new pose of the object, turned and moved, the same grasp relative to it
+    new_q = exp_map([0.0, 0.0, -1.2])
+    p2, _ = compose(r, [0.2, 0.3, 0.02], new_q)
+    np.testing.assert_allclose(p2 - [0.2, 0.3, 0.02], [0.0, 0.0, 0.01], atol=1e-12)
+
+
+def test_an_object_carried_with_the_tool_wins_over_one_nearer_at_the_end():
+    tool = _reach([0.2, 0.0, 0.3])
+    carried = tool - [0.0, 0.0, 0.03]  # held 3 cm below the tool all along
+    bystander = np.tile([0.2, 0.0, 0.31], (41, 1))  # nearer the tool's end, but still
+    r = acted_on(_demo(tool, held=(carried, UP), other=(bystander, UP)))
+    assert r.object == "held" and r.moves_with
+    np.testing.assert_allclose(r.position, [0.0, 0.0, 0.03], atol=1e-12)
+
+
+def test_a_move_in_free_space_acts_on_nothing():
+    far = np.tile([1.0, 1.0, 0.02], (41, 1))
+    assert acted_on(_demo(_reach([0.2, 0.0, 0.3]), box=(far, UP))) is None
+    assert acted_on(Demonstration(T, {"position": _reach([0.2, 0.0, 0.3])})) is None  # no objects recorded
+
+
+def test_object_streams_are_robosuites_pose_pairs_only():
+    pos = np.zeros((41, 3))
+    d = Demonstration(T, {"position": pos, "cube_pos": pos, "cube_quat": UP, "lone_pos": pos,
+                          "Can_to_robot0_eef_pos": pos, "Can_to_robot0_eef_quat": UP})
+    assert object_streams(d) == ["cube"]
+
+
+def test_bad_input_is_one_clear_error():
+    with pytest.raises(ValueError, match="demo: expected a Demonstration with a 'position' stream"):
+        acted_on(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="near"):
+        acted_on(_demo(_reach([0.2, 0.0, 0.3])), near=-1.0)
+    with pytest.raises(ValueError, match=r"demo.position: expected 3-D tool positions, got 2-D"):
+        acted_on(Demonstration(T, {"position": np.zeros((41, 2))}))
+    r = Relation("cube", False, 0.0, np.zeros(3), None)
+    with pytest.raises(ValueError, match=r"position: expected 3 finite numbers"):
+        compose(r, [0.0, np.nan, 0.0], [0.0, 0.0, 0.0, 1.0])
