@@ -42,6 +42,10 @@ class Relation:
         The tool's end position in the object's frame (m).
     orientation : ndarray of shape (4,) or None
         The tool's end orientation in the object's frame (x, y, z, w), if the tool's is recorded.
+    start_position, start_orientation : ndarray or None
+        The tool's end pose in the object's frame *at the primitive's start*: for a carried object
+        (``moves_with``), where the primitive takes it, relative to where it was (a lift's height, a
+        carry's displacement); the same as ``position`` and ``orientation`` for an object that stays.
     """
 
     object: str
@@ -49,11 +53,16 @@ class Relation:
     distance: float
     position: np.ndarray
     orientation: np.ndarray | None
+    start_position: np.ndarray | None = None
+    start_orientation: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         return {"object": self.object, "moves_with": self.moves_with, "distance": float(self.distance),
                 "position": self.position.tolist(),
-                "orientation": None if self.orientation is None else self.orientation.tolist()}
+                "orientation": None if self.orientation is None else self.orientation.tolist(),
+                "start_position": None if self.start_position is None else self.start_position.tolist(),
+                "start_orientation": None if self.start_orientation is None else
+                self.start_orientation.tolist()}
 
 
 def object_streams(demo: Demonstration) -> list:
@@ -131,19 +140,25 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         if best is None or best[0] > near:
             return None
         name = best[1]
-    q_obj = check_quaternions(demo[f"{name}_quat"][-1], name=f"{name}_quat")
-    R = quaternion_to_matrix(q_obj)
-    position = R.T @ (P[-1] - demo[f"{name}_pos"][-1])
-    orientation = None
+    q_tool = None
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         q_tool = check_quaternions(demo["orientation"][-1], name="orientation")
-        orientation = quaternion_multiply(quaternion_conjugate(q_obj), q_tool)
+    poses = []
+    for k in (-1, 0):  # the tool's end pose in the object's frame at the end, and at the start
+        q_obj = check_quaternions(demo[f"{name}_quat"][k], name=f"{name}_quat")
+        position = quaternion_to_matrix(q_obj).T @ (P[-1] - demo[f"{name}_pos"][k])
+        poses.append((position, None if q_tool is None else
+                      quaternion_multiply(quaternion_conjugate(q_obj), q_tool)))
+    (position, orientation), (start_position, start_orientation) = poses
     return Relation(name, bool(carried), float(np.linalg.norm(P[-1] - demo[f"{name}_pos"][-1])), position,
-                    orientation)
+                    orientation, start_position, start_orientation)
 
 
-def compose(relation: Relation, position, orientation) -> tuple:
+def compose(relation: Relation, position, orientation, *, at: str = "end") -> tuple:
     """The tool pose ``(position (3,), orientation (4,) or None)`` of ``relation`` on an object's pose.
+
+    ``at="end"``: the object's pose is where it is when the primitive ends (a reach: where it stands);
+    ``at="start"``: where it is when the primitive starts (a carry: from where it is picked up).
 
     Examples
     --------
@@ -152,10 +167,15 @@ def compose(relation: Relation, position, orientation) -> tuple:
     >>> p.round(3).tolist(), q
     ([0.5, 0.2, 0.1], None)
     """
+    if at not in ("end", "start"):
+        raise ValueError(f"at: expected 'end' or 'start', got {at!r}")
+    end = at == "end" or relation.start_position is None
+    rel_p, rel_q = ((relation.position, relation.orientation) if end
+                    else (relation.start_position, relation.start_orientation))
     q_obj = check_quaternions(orientation, name="orientation")
     p_obj = np.asarray(position, dtype=float)
     if p_obj.shape != (3,) or not np.isfinite(p_obj).all():
         raise ValueError(f"position: expected 3 finite numbers, got {position!r}")
-    p = p_obj + quaternion_to_matrix(q_obj) @ relation.position
-    q = None if relation.orientation is None else quaternion_multiply(q_obj, relation.orientation)
+    p = p_obj + quaternion_to_matrix(q_obj) @ rel_p
+    q = None if rel_q is None else quaternion_multiply(q_obj, rel_q)
     return p, q

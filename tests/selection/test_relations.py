@@ -31,6 +31,7 @@ def test_a_reach_acts_on_the_object_it_ends_nearest_and_composes_back():
     yaw = exp_map([0.0, 0.0, 0.7])
     r = acted_on(_demo(_reach([0.5, 0.1, 0.03]), a=(a, np.tile(yaw, (41, 1))), b=(b, UP)))
     assert r.object == "a" and not r.moves_with and r.distance == pytest.approx(0.01)
+    np.testing.assert_allclose(r.start_position, r.position, atol=1e-12)  # it stood still
     # the tool's end pose, put back on the object's pose, is the tool's end pose
     p, q = compose(r, a[-1], yaw)
     np.testing.assert_allclose(p, [0.5, 0.1, 0.03], atol=1e-12)
@@ -48,6 +49,12 @@ def test_an_object_carried_with_the_tool_wins_over_one_nearer_at_the_end():
     r = acted_on(_demo(tool, held=(carried, UP), other=(bystander, UP)))
     assert r.object == "held" and r.moves_with
     np.testing.assert_allclose(r.position, [0.0, 0.0, 0.03], atol=1e-12)
+    # relative to where it was picked up: where the carry takes the tool (0.2 m over, 0.1 m down)
+    np.testing.assert_allclose(r.start_position, [0.2, 0.0, -0.07], atol=1e-12)
+    p, _ = compose(r, [1.0, 1.0, 0.37], [0.0, 0.0, 0.0, 1.0], at="start")  # the same carry elsewhere
+    np.testing.assert_allclose(p, [1.2, 1.0, 0.3], atol=1e-12)
+    with pytest.raises(ValueError, match=r"at: expected 'end' or 'start', got 'middle'"):
+        compose(r, [1.0, 1.0, 0.37], [0.0, 0.0, 0.0, 1.0], at="middle")
 
 
 def test_a_move_in_free_space_acts_on_nothing():

@@ -94,6 +94,9 @@ def test_each_primitive_knows_the_cube_it_acts_on_and_its_pose_on_it(lift, tmp_p
         assert np.linalg.norm(position - p.demo["position"][-1]) < 1e-9
         assert abs(abs(float(orientation @ p.demo["orientation"][-1])) - 1.0) < 1e-9
         assert r.distance < 0.05  # held between the fingers
+        # from where the cube was picked up: the lift's end, as a pose relative to the cube's start
+        position, _ = compose(r, p.demo["cube_pos"][0], p.demo["cube_quat"][0], at="start")
+        assert np.linalg.norm(position - p.demo["position"][-1]) < 1e-9
 
 
 def test_a_stack_episode_puts_cube_a_on_cube_b(tmp_path):
