@@ -76,10 +76,12 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
     -------
     list of Demonstration
         Streams: each observation key (``robot0_eef_pos``, ...) and
-        ``actions``, except the tool pose, read under skillbank's names
-        (so that a library can add it): ``robot0_eef_pos`` as ``position``
-        and ``robot0_eef_quat`` (x, y, z, w) as ``orientation``
-        (``metadata["renamed"]`` lists them).
+        ``actions``, except the tool pose and the gripper, read under
+        skillbank's names (so that a library adds and cuts them as its
+        own): ``robot0_eef_pos`` as ``position``, ``robot0_eef_quat`` (x,
+        y, z, w) as ``orientation`` and ``robot0_gripper_qpos`` (the finger
+        joints, as recorded) as ``gripper`` (``metadata["renamed"]`` lists
+        them).
         ``t = arange(n) / rate``. Metadata: ``source``,
         ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
         ``episode`` (``N``), ``label`` (the environment's name, when
@@ -127,9 +129,12 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
 
 
-#: skillbank's stream, robosuite's observation of it and its width: the tool position (m, world frame)
-#: and orientation (x, y, z, w, robosuite's order and skillbank's), read under skillbank's names.
-STANDARD_STREAMS = (("position", "robot0_eef_pos", 3), ("orientation", "robot0_eef_quat", 4))
+#: skillbank's stream, robosuite's observation of it and its width (None: any): the tool position (m,
+#: world frame) and orientation (x, y, z, w, robosuite's order and skillbank's), and the gripper (its
+#: finger joints, as recorded: under the name the segmenter knows as discrete, a toggle is a cut),
+#: read under skillbank's names.
+STANDARD_STREAMS = (("position", "robot0_eef_pos", 3), ("orientation", "robot0_eef_quat", 4),
+                    ("gripper", "robot0_gripper_qpos", None))
 
 
 def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration:
@@ -159,7 +164,7 @@ def _demo(p, group, name, number, obs_keys, hz, common, budget) -> Demonstration
     for stream, key, width in STANDARD_STREAMS:
         # robosuite's tool pose is the pose a library learns: under the name skillbank uses, once (a
         # copy under both names would count twice as evidence for a cut)
-        if stream not in raw and key in raw and raw[key].ndim == 2 and raw[key].shape[1] == width:
+        if stream not in raw and key in raw and raw[key].ndim == 2 and width in (None, raw[key].shape[1]):
             raw[stream] = raw.pop(key)
             metadata.setdefault("renamed", {})[key] = stream
     if skipped:

@@ -57,8 +57,8 @@ def test_demos_read_back(tmp_path):
     assert [d.n_steps for d in demos] == [6, 5, 4]
     demo = demos[1]
     # the tool pose under skillbank's name, once, so a library takes the file as it is
-    assert demo.stream_names == ["robot0_gripper_qpos", "actions", "position"]
-    assert demo.metadata["renamed"] == {"robot0_eef_pos": "position"}
+    assert demo.stream_names == ["actions", "position", "gripper"]
+    assert demo.metadata["renamed"] == {"robot0_eef_pos": "position", "robot0_gripper_qpos": "gripper"}
     np.testing.assert_array_equal(demo["position"][:, 0], 10 + np.arange(5))
     np.testing.assert_array_equal(demo["actions"], np.column_stack([np.arange(5), np.arange(5) + 1]))
     np.testing.assert_allclose(demo.t, np.arange(5) / 25)
@@ -152,7 +152,7 @@ def test_three_button_reads_as_the_hdf5_file_of_the_same_samples(uniform_three_b
     h5 = read_robot_h5(u["h5"])
     np.testing.assert_allclose(demo.t, h5.t, atol=1e-9)
     keys = {"joints": "robot0_joint_pos", "position": "position", "orientation": "orientation",
-            "force": "ft_force", "torque": "ft_torque", "gripper": "robot0_gripper_qpos"}
+            "force": "ft_force", "torque": "ft_torque", "gripper": "gripper"}
     as_h5 = Demonstration(demo.t, {name: demo[key] for name, key in keys.items()})
     for name in h5.stream_names:
         np.testing.assert_allclose(as_h5[name], h5[name], atol=1e-9, err_msg=name)

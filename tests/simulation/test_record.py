@@ -66,7 +66,8 @@ def test_the_recording_reads_back_into_a_library_with_the_tool_pose(lift, tmp_pa
     demos = read_robomimic(out)
     assert [d.metadata["label"] for d in demos] == ["Lift", "Lift"]
     d = demos[0]
-    assert d.metadata["renamed"] == {"robot0_eef_pos": "position", "robot0_eef_quat": "orientation"}
+    assert d.metadata["renamed"] == {"robot0_eef_pos": "position", "robot0_eef_quat": "orientation",
+                                     "robot0_gripper_qpos": "gripper"}
     with h5py.File(out, "r") as h5:
         np.testing.assert_array_equal(d["position"], h5["data"]["demo_0"]["obs"]["robot0_eef_pos"][()])
         np.testing.assert_array_equal(d["orientation"], h5["data"]["demo_0"]["obs"]["robot0_eef_quat"][()])
