@@ -46,6 +46,11 @@ class Relation:
         The tool's end pose in the object's frame *at the primitive's start*: for a carried object
         (``moves_with``), where the primitive takes it, relative to where it was (a lift's height, a
         carry's displacement); the same as ``position`` and ``orientation`` for an object that stays.
+    target : str or None
+        For a carried object, the other object the tool ends nearest (within ``near``): where it is
+        put (on a cube, into a bin that is an object); None when it ends near no other.
+    target_position, target_orientation : ndarray or None
+        The tool's end pose in the target's frame at the end.
     """
 
     object: str
@@ -55,6 +60,9 @@ class Relation:
     orientation: np.ndarray | None
     start_position: np.ndarray | None = None
     start_orientation: np.ndarray | None = None
+    target: str | None = None
+    target_position: np.ndarray | None = None
+    target_orientation: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         return {"object": self.object, "moves_with": self.moves_with, "distance": float(self.distance),
@@ -62,7 +70,10 @@ class Relation:
                 "orientation": None if self.orientation is None else self.orientation.tolist(),
                 "start_position": None if self.start_position is None else self.start_position.tolist(),
                 "start_orientation": None if self.start_orientation is None else
-                self.start_orientation.tolist()}
+                self.start_orientation.tolist(), "target": self.target,
+                "target_position": None if self.target_position is None else self.target_position.tolist(),
+                "target_orientation": None if self.target_orientation is None else
+                self.target_orientation.tolist()}
 
 
 def object_streams(demo: Demonstration) -> list:
@@ -143,22 +154,29 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     q_tool = None
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         q_tool = check_quaternions(demo["orientation"][-1], name="orientation")
-    poses = []
-    for k in (-1, 0):  # the tool's end pose in the object's frame at the end, and at the start
-        q_obj = check_quaternions(demo[f"{name}_quat"][k], name=f"{name}_quat")
-        position = quaternion_to_matrix(q_obj).T @ (P[-1] - demo[f"{name}_pos"][k])
-        poses.append((position, None if q_tool is None else
-                      quaternion_multiply(quaternion_conjugate(q_obj), q_tool)))
-    (position, orientation), (start_position, start_orientation) = poses
+
+    def end_pose(obj, k):  # the tool's end pose in object obj's frame at sample k
+        q_obj = check_quaternions(demo[f"{obj}_quat"][k], name=f"{obj}_quat")
+        position = quaternion_to_matrix(q_obj).T @ (P[-1] - demo[f"{obj}_pos"][k])
+        return position, None if q_tool is None else quaternion_multiply(quaternion_conjugate(q_obj), q_tool)
+
+    (position, orientation), (start_position, start_orientation) = end_pose(name, -1), end_pose(name, 0)
+    target, target_pose = None, (None, None)
+    if carried:  # where it is put: the other object the tool ends nearest
+        others = [(gap, other) for gap, other in ends if other != name and gap <= near]
+        if others:
+            target = min(others)[1]
+            target_pose = end_pose(target, -1)
     return Relation(name, bool(carried), float(np.linalg.norm(P[-1] - demo[f"{name}_pos"][-1])), position,
-                    orientation, start_position, start_orientation)
+                    orientation, start_position, start_orientation, target, *target_pose)
 
 
 def compose(relation: Relation, position, orientation, *, at: str = "end") -> tuple:
     """The tool pose ``(position (3,), orientation (4,) or None)`` of ``relation`` on an object's pose.
 
     ``at="end"``: the object's pose is where it is when the primitive ends (a reach: where it stands);
-    ``at="start"``: where it is when the primitive starts (a carry: from where it is picked up).
+    ``at="start"``: where it is when the primitive starts (a carry: from where it is picked up);
+    ``at="target"``: the pose of the relation's ``target`` (a carry: where it is put).
 
     Examples
     --------
@@ -167,11 +185,16 @@ def compose(relation: Relation, position, orientation, *, at: str = "end") -> tu
     >>> p.round(3).tolist(), q
     ([0.5, 0.2, 0.1], None)
     """
-    if at not in ("end", "start"):
-        raise ValueError(f"at: expected 'end' or 'start', got {at!r}")
-    end = at == "end" or relation.start_position is None
-    rel_p, rel_q = ((relation.position, relation.orientation) if end
-                    else (relation.start_position, relation.start_orientation))
+    if at not in ("end", "start", "target"):
+        raise ValueError(f"at: expected 'end', 'start' or 'target', got {at!r}")
+    if at == "target" and relation.target is None:
+        raise ValueError(f"at: the relation to {relation.object!r} has no target (it is put near no other "
+                         "object); use at='start'")
+    rel_p, rel_q = {"end": (relation.position, relation.orientation),
+                    "start": (relation.start_position, relation.start_orientation),
+                    "target": (relation.target_position, relation.target_orientation)}[at]
+    if rel_p is None:  # a relation made by hand with its end pose only
+        rel_p, rel_q = relation.position, relation.orientation
     q_obj = check_quaternions(orientation, name="orientation")
     p_obj = np.asarray(position, dtype=float)
     if p_obj.shape != (3,) or not np.isfinite(p_obj).all():

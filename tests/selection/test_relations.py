@@ -53,8 +53,25 @@ def test_an_object_carried_with_the_tool_wins_over_one_nearer_at_the_end():
     np.testing.assert_allclose(r.start_position, [0.2, 0.0, -0.07], atol=1e-12)
     p, _ = compose(r, [1.0, 1.0, 0.37], [0.0, 0.0, 0.0, 1.0], at="start")  # the same carry elsewhere
     np.testing.assert_allclose(p, [1.2, 1.0, 0.3], atol=1e-12)
-    with pytest.raises(ValueError, match=r"at: expected 'end' or 'start', got 'middle'"):
+    with pytest.raises(ValueError, match=r"at: expected 'end', 'start' or 'target', got 'middle'"):
         compose(r, [1.0, 1.0, 0.37], [0.0, 0.0, 0.0, 1.0], at="middle")
+
+
+def test_a_carry_knows_where_it_puts_the_object():
+    """Carried onto another object: the target is that object, and the tool's end pose on it composes
+    back on a new pose of the target (a stack built elsewhere); with no other object near, no target."""
+    tool = _reach([0.5, -0.1, 0.1])
+    carried = tool - [0.0, 0.0, 0.03]
+    base = np.tile([0.5, -0.1, 0.025], (41, 1))  # the carried object ends on it
+    r = acted_on(_demo(tool, a=(carried, UP), b=(base, UP)))
+    assert r.object == "a" and r.moves_with and r.target == "b"
+    np.testing.assert_allclose(r.target_position, [0.0, 0.0, 0.075], atol=1e-12)
+    p, _ = compose(r, [0.1, 0.4, 0.025], [0.0, 0.0, 0.0, 1.0], at="target")
+    np.testing.assert_allclose(p, [0.1, 0.4, 0.1], atol=1e-12)
+    lone = acted_on(_demo(tool, a=(carried, UP)))
+    assert lone.moves_with and lone.target is None
+    with pytest.raises(ValueError, match=r"at: the relation to 'a' has no target .* use at='start'"):
+        compose(lone, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], at="target")
 
 
 def test_a_move_in_free_space_acts_on_nothing():

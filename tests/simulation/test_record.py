@@ -107,6 +107,15 @@ def test_a_stack_episode_puts_cube_a_on_cube_b(tmp_path):
         obs = h5["data"]["demo_0"]["obs"]
         a, b = obs["cubeA_pos"][-1], obs["cubeB_pos"][-1]
     assert np.linalg.norm((a - b)[:2]) < 0.02 and 0.03 < a[2] - b[2] < 0.06
+    # the primitive that carries cube A knows it puts it on cube B, and where the tool ends on B
+    with Library(tmp_path / "lib.db") as lib:
+        lib.add_files([out])
+        relations = [(p, acted_on(p.demo)) for p in lib.primitives()]
+    puts = [(p, r) for p, r in relations if r is not None and r.moves_with and r.object == "cubeA"]
+    assert puts and all(r.target == "cubeB" for _, r in puts), relations
+    p, r = puts[-1]
+    position, _ = compose(r, p.demo["cubeB_pos"][-1], p.demo["cubeB_quat"][-1], at="target")
+    assert np.linalg.norm(position - p.demo["position"][-1]) < 1e-9
 
 
 def test_a_can_goes_into_its_own_bin(tmp_path):
