@@ -27,7 +27,7 @@ from ..core import (
 )
 from ..core._validation import check_positive, summarise
 from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model
-from ..selection import reuse
+from ..selection import reuse, shift_near
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
 __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE", "arm_clearance"]
@@ -489,52 +489,33 @@ def check_step(world, streams, segments, where, model=None, *, scene=None, names
         reach = 0.0 if shape is None else max(float(shape.signed_distance(P[i][None])[0]), 0.0)
         raise _ArmContact(f"{where}: the robot's {body} comes {depth} {what} at t = {t[i]:.4g} s (clearance "
                           f"margin {margin * 1000:g} mm; --clearance sets it)", other=other,
-                          lack=reach + margin - d + 0.5 * margin, body=body, segments=segments,
-                          samples=_contact_run(res, i, margin, streams["joints"], P))
+                          lack=reach + margin - d + 0.5 * margin, body=body, segments=segments, index=i,
+                          q=streams["joints"][i], point=P[i], body_lack=3 * margin - d)
     return res.summary()
-
-
-def _moved_with(via, added) -> list:
-    """Earlier repair via points ``[(ViaPoint, what)]`` near a new one ``(phase, point, move)`` moved by its
-    move (the nearest one's), those at a new one's phase dropped: a contact that reappears a few samples
-    away moves the region together, instead of the earlier point springing back and undoing its repair."""
-    out = []
-    for v, what in via:
-        gaps = [(abs(v.phase - phase), k) for k, (phase, _, _) in enumerate(added)]
-        gap, k = min(gaps)
-        if gap == 0.0:
-            continue
-        if gap <= _SAME_PLACE:
-            v = ViaPoint(v.position + added[k][2], phase=v.phase)
-        out.append((v, what))
-    return out
-
-
-def _contact_run(res, i, margin, J, P) -> list:
-    """``[(index, joints, tool point, lack)]`` where a via-point repair moves the body: the first sample
-    too near. (Via points at the start, the deepest sample and the end of the run of such samples too
-    were tried: on the wall-and-post benchmark they repaired fewer plans, 2 of 8 against 3.)"""
-    # what the body lacks, and twice the margin again: the first-order move falls short where the arm
-    # bends, and the contact's neighbours move less than the via point does
-    return [(i, J[i], P[i], 3 * margin - float(res.distance[i]))]
 
 
 class _ArmContact(ValueError):
     """A body of the robot too near ``other`` at the step's sample ``index``.
 
     ``lack``: metres the tool path must keep further from ``other`` to clear it, with some to spare;
-    ``samples``: where a via-point repair would move the body, and by how much (:func:`_contact_run`).
+    ``q``, ``point``: the joints and the tool point there; ``body_lack``: metres the body itself lacks
+    for a via-point repair, and twice the margin again (the first-order move falls short where the arm
+    bends, and the contact's neighbours move less than the via point does). Via points at the start,
+    the deepest sample and the end of the run of too-near samples were tried too: on the wall-and-post
+    benchmark they repaired fewer plans (2 of 8 against 3).
     """
 
-    def __init__(self, message, *, other, lack, body=None, segments=(), samples=()):
+    def __init__(self, message, *, other, lack, body=None, segments=(), index=None, q=None, point=None,
+                 body_lack=None):
         super().__init__(message)
-        self.other, self.lack, self.body, self.segments, self.samples = other, lack, body, segments, samples
+        self.other, self.lack, self.body, self.segments = other, lack, body, segments
+        self.index, self.q, self.point, self.body_lack = index, q, point, body_lack
 
-    def phase(self, index):
-        """Where step sample ``index`` is in the step's primitive piece (a phase strictly inside), or None."""
+    def primitive_phase(self):
+        """Where the contact is in the step's primitive piece (a phase strictly inside), or None."""
         for kind, a, b in self.segments:
-            if kind == "primitive" and a < index < b - 1:
-                return (index - a) / (b - 1 - a)
+            if kind == "primitive" and a < self.index < b - 1:
+                return (self.index - a) / (b - 1 - a)
         return None
 
 
@@ -799,29 +780,26 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 if strategy == "via" and contact.other not in grow:
                     # a via point in the primitive that moves the body away (skillbank.robots.clearing_move,
                     # through the robot's kinematics, so links far from the tool are repaired too)
-                    shape = _shape(scene, contact.other)
-                    added, why = [], "moving the tool cannot clear it"
-                    for index, q, point, lack in contact.samples:
-                        phase = contact.phase(index)
-                        if phase is None:
-                            why = "it is not in the primitive"
-                            continue
-                        if shape is None or attempt == MAX_VIA_POINTS:
-                            why = "its body is itself" if shape is None else f"after {len(via)} via point(s)"
-                            break
-                        move = clearing_move(model, q, contact.body, shape, lack)
-                        if move is not None:
-                            added.append((phase, point, move))
                     if not via and attempt == MAX_VIA_POINTS:
                         raise failed from None  # no via point could be tried: the growth's reason
-                    if not added or shape is None or attempt == MAX_VIA_POINTS:
+                    shape, phase, move = _shape(scene, contact.other), contact.primitive_phase(), None
+                    if phase is None:
+                        why = "it is not in the primitive"
+                    elif shape is None:
+                        why = "its body is itself"
+                    elif attempt == MAX_VIA_POINTS:
+                        why = f"after {len(via)} via point(s)"
+                    else:
+                        why = "moving the tool cannot clear it"
+                        move = clearing_move(model, contact.q, contact.body, shape, contact.body_lack)
+                    if move is None:
                         what = str(contact).split(": ", 1)[-1].split(" (clearance margin")[0]
                         raise ValueError(f"{failed}; via points in the primitive did not clear it either: "
                                          f"{what} ({why})") from None
-                    via = _moved_with(via, added) + [
-                        (ViaPoint(point + move, phase=phase), f"{contact.body} off {contact.other} (tool "
-                                                               f"moved {np.linalg.norm(move) * 1000:.3g} mm)")
-                        for phase, point, move in added]
+                    mm = np.linalg.norm(move) * 1000
+                    via = shift_near(via, phase, move, _SAME_PLACE) + [
+                        (ViaPoint(contact.point + move, phase=phase),
+                         f"{contact.body} off {contact.other} (tool moved {mm:.3g} mm)")]
                     repaired.append(contact.other)
                     continue
                 # the tool path keeps further from what the body came near, by what it lacked
