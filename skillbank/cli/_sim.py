@@ -47,12 +47,8 @@ def _record(args) -> int:
     from tqdm import tqdm  # core dependency; the bar only when asked
 
     from ..simulation import record  # robosuite (the sim extra) is imported when the environment is made
-    from ..simulation._robosuite import parse_env  # with the recorder, not when the CLI starts
 
-    parse_env(args.env)  # a bad task fails before robosuite starts
-    check_folder(args.out, "out")
-    if args.out.exists():
-        raise ValueError(f"out: {str(args.out)!r} exists; give a new file")
+    check_folder(args.out, "out")  # record checks the task, the counts and the file before robosuite starts
     with tqdm(total=args.episodes, desc="recording", unit="episode", file=sys.stderr,
               disable=not show_progress(args)) as bar:
         def tick(kept, tried):

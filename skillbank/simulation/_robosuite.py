@@ -119,9 +119,10 @@ def _min_jerk(n: int) -> np.ndarray:
 class _Driver:
     """Steps the environment towards tool targets with OSC deltas, and keeps what robomimic records."""
 
-    def __init__(self, env, objects):
-        self.env, self.objects = env, objects
-        self.obs = env.reset()
+    def __init__(self, env, obs):
+        """``obs``: the observations of the episode's reset."""
+        self.env, self.objects = env, _objects(obs)
+        self.obs = obs
         self.quat = np.array(self.obs["robot0_eef_quat"], float)  # held all episode
         arm = env.robots[0].part_controllers["right"]
         self.scale = np.abs(np.asarray(arm.output_max, float))  # metres and radians per unit input
@@ -227,8 +228,7 @@ def _objects(obs) -> list:
 
 def _episode(env, task: Task, rng) -> tuple:
     """One scripted episode; ``(rows, success)``."""
-    obs = env.reset()
-    driver = _Driver(env, _objects(obs))
+    driver = _Driver(env, env.reset())
     speed = rng.uniform(0.7, 1.4)  # the person's pace, this episode
 
     def steps(seconds):
