@@ -1,7 +1,8 @@
-"""``skillbank sim record``: scripted demonstrations in robosuite, written in robomimic's HDF5 layout.
+"""``skillbank sim``: robosuite tasks. ``record`` writes scripted demonstrations in robomimic's HDF5
+layout; ``evaluate`` runs a library's skills in new scenes and counts the environment's successes.
 
-Exit status: 0 when the file was written, 2 on bad input or when too few episodes succeeded (nothing is
-written then).
+Exit status: ``record`` 0 when the file was written, 2 on bad input or when too few episodes succeeded
+(nothing is written then); ``evaluate`` 0 when it ran (whatever the success rate), 2 on bad input.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+from ._library_location import _DB_READ, _location, _target
 from ._options import check_folder, show_progress
 
 __all__ = ["add_parser"]
@@ -40,7 +42,58 @@ def add_parser(sub):
     r.add_argument("--json", action="store_true",
                    help="print env, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
+    e = inner.add_parser("evaluate", help="run a library's skills in new scenes of a robosuite task, closed "
+                                          "loop, and count the environment's own successes")
+    e.add_argument("db", type=_location, help=_DB_READ)
+    e.add_argument("--env", required=True, metavar="robosuite:TASK", help="the task, e.g. robosuite:Lift")
+    e.add_argument("--episodes", type=int, default=10, help="scenes to run (default 10)")
+    e.add_argument("--seed", type=int, default=0,
+                   help="episode k is reset from seed SEED + k (robosuite's sampler places the objects)")
+    e.add_argument("--placement", type=float, default=None, metavar="HALF_WIDTH",
+                   help="widen every object's x and y placement range to +-HALF_WIDTH metres about its "
+                        "default centre")
+    e.add_argument("--method", default="lte",
+                   help="how a primitive is adapted: lte (default), ja, promp, elmap or dmp; or a baseline, "
+                        "rigid (the recorded segment moved rigidly into the object's new frame) or replay "
+                        "(the source's actions, open loop)")
+    e.add_argument("--horizon", type=int, default=1000, help="control steps per episode (default 1000, 50 s)")
+    e.add_argument("--json", action="store_true",
+                   help="print env, episodes, successes, success_rate, interval and per_episode as JSON")
+    e.set_defaults(func=_evaluate)
     return p
+
+
+def _evaluate(args) -> int:
+    from tqdm import tqdm  # core dependency; the bar only when asked
+
+    from ..simulation import evaluate  # robosuite (the sim extra) is imported when the environment is made
+
+    with tqdm(total=args.episodes, desc="evaluating", unit="episode", file=sys.stderr,
+              disable=not show_progress(args)) as bar:
+        def tick(done, successes):
+            bar.update(done - bar.n)
+            bar.set_postfix_str(f"{successes} succeeded")
+
+        report = evaluate(_target(args.db), args.env, episodes=args.episodes, seed=args.seed,
+                          placement=args.placement, method=args.method, horizon=args.horizon, progress=tick)
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    low, high = report["interval"]
+    print(f"{args.db}: {report['successes']} of {report['episodes']} episodes of {report['env']} succeeded "
+          f"({100 * report['success_rate']:.0f} %, 95 % interval {100 * low:.0f}-{100 * high:.0f} %), "
+          f"method {report['method']}, seeds {report['seed']}-{report['seed'] + report['episodes'] - 1}"
+          + ("" if report["placement"] is None else f", placement +-{report['placement']} m"))
+    for row in report["per_episode"]:
+        if not row["success"]:
+            f = row["failure"]
+            print(f"  seed {row['seed']}: failed in segment {f['segment']} (primitive {f['primitive']}): "
+                  f"{f['reason']}, {f['detail']}")
+    timing = report["timing"]
+    if timing["segments"]:
+        print(f"  adapting took {1e3 * timing['adapt_seconds'] / timing['segments']:.1f} ms a segment, for "
+              f"{timing['driven_seconds'] / timing['segments']:.2f} s of simulated motion")
+    return 0
 
 
 def _record(args) -> int:

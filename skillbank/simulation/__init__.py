@@ -8,6 +8,7 @@ the world, the rules and the JSON contract. MuJoCo is imported when a world
 is compiled, not when this package is imported.
 """
 
+from ._evaluate import BASELINES, REASONS, binomial_interval, evaluate
 from ._mujoco import MISSING, import_mujoco
 from ._robosuite import TASKS, record
 from ._run import GRIPPER_RANGE, SimulationResult, simulate
@@ -15,4 +16,5 @@ from ._servo import SERVO_GAINS
 from ._world import GRIP_FORCE, LINK_MASSES, PRESS_FORCE, World, build_world
 
 __all__ = ["simulate", "SimulationResult", "GRIPPER_RANGE", "build_world", "World", "LINK_MASSES",
-           "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco", "record", "TASKS"]
+           "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco", "record", "TASKS",
+           "evaluate", "REASONS", "BASELINES", "binomial_interval"]

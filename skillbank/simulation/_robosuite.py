@@ -119,9 +119,9 @@ def _min_jerk(n: int) -> np.ndarray:
 class _Driver:
     """Steps the environment towards tool targets with OSC deltas, and keeps what robomimic records."""
 
-    def __init__(self, env, obs):
-        """``obs``: the observations of the episode's reset."""
-        self.env, self.objects = env, _objects(obs)
+    def __init__(self, env, obs, *, keep=True):
+        """``obs``: the observations of the episode's reset; ``keep``: keep the rows robomimic records."""
+        self.env, self.objects, self.keep = env, _objects(obs), keep
         self.obs = obs
         self.quat = np.array(self.obs["robot0_eef_quat"], float)  # held all episode
         arm = env.robots[0].part_controllers["right"]
@@ -135,9 +135,12 @@ class _Driver:
         rot_err = log_map(quaternion_multiply(self.quat, quaternion_conjugate(obs["robot0_eef_quat"])))
         action = np.concatenate([np.clip(pos_err / self.scale[:3], -1, 1),
                                  np.clip(rot_err / self.scale[3:], -1, 1), [self.grip]])
-        self.rows["states"].append(np.array(self.env.sim.get_state().flatten()))
-        self.rows["obs"].append({k: np.array(obs[k], float) for k in self._keys()})
+        if self.keep:
+            self.rows["states"].append(np.array(self.env.sim.get_state().flatten()))
+            self.rows["obs"].append({k: np.array(obs[k], float) for k in self._keys()})
         self.obs, reward, done, _ = self.env.step(action)
+        if not self.keep:
+            return
         self.rows["actions"].append(action)
         self.rows["rewards"].append(float(reward))
         self.rows["dones"].append(int(done))

@@ -1,0 +1,580 @@
+"""Skills of a library executed in robosuite scenes they were not shown: ``skillbank sim evaluate``.
+
+For every episode the environment is reset from its own seed (robosuite's
+sampler draws the object placement), the library's demonstration whose
+objects started nearest the new placement is the source, and its primitives
+are executed one after the other, in closed loop: each is adapted from where
+the robot is now to a goal that the scene gives.
+
+Where a primitive's goal stands comes from the data, not from the task's
+name. :func:`~skillbank.selection.acted_on` tells what the primitive acts on
+(the object it carries, the one it ends at, where it puts a carried one); the
+*frame* its goal is kept in is then chosen among the candidates (the object
+where it ends, the carried object where it was picked up, the carried object's
+target, the world) as the one in which the primitive's skill (its cluster's
+members acting on the same things) ends most consistently, the
+task-parameterised view of a demonstration: a lift ends at a height above
+where the cube was, a placement in a fixed bin at a place in the world, a
+stacking on the other cube. The goal in the new scene is that frame's new pose
+composed with the primitive's end pose in it.
+
+Methods: the names of :data:`skillbank.selection.METHODS` adapt the
+primitive (``lte``, the default, warps its shape to the new start and goal);
+``rigid`` moves the recorded segment rigidly into the new frame
+(``T_new · T_source⁻¹ · T_tool(t)``, after a short interpolation from the
+current pose, as MimicGen's paper describes); ``replay`` replays the source's
+actions open loop. Success is the environment's own ``_check_success()``,
+checked every step (an episode ends when it holds); a failure names its
+segment and reason (:data:`REASONS`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import Constraints, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
+from ..core._rotations import quaternion_conjugate, quaternion_multiply
+from ..core._validation import check_positive
+from ..selection import METHODS, acted_on, compose, object_streams, reuse
+from ..store import open_store
+from ._robosuite import CONTROL_FREQ, _Driver, import_robosuite
+
+__all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
+
+#: Why an episode failed, judged at the end of the segment that failed.
+REASONS = {
+    "missed grasp": "a segment that carries an object ended without it: it never left its place",
+    "dropped": "a segment that carries an object lost it on the way",
+    "collision": "an arm link (not the gripper) touched the table or an object",
+    "unreachable": "the segment's goal could not be adapted to, or the tool ended more than 2 cm from it",
+    "timeout": "the episode used up its horizon",
+    "misplaced": "every segment did what it was for, yet the environment's check fails at the end",
+}
+#: Methods that do not adapt: the baselines.
+BASELINES = ("rigid", "replay")
+ARRIVED = 0.02  # m: farther than this from a segment's goal after settling is a failure to reach it
+SETTLE = CONTROL_FREQ  # steps allowed, after a segment's path, to come within 5 mm of its goal
+RIGID_BLEND = 5  # steps of the rigid baseline's interpolation to the transformed segment (MimicGen: a few)
+LEVER = 0.1  # m per radian: how far a turn of the wrist moves its fingertips (a gripper's length)
+CARRIED = 0.02  # m: how much a carried object's distance to the tool may change before it is lost
+
+
+def binomial_interval(successes: int, n: int) -> tuple:
+    """Wilson's 95 % interval of a success rate, ``(low, high)``.
+
+    Examples
+    --------
+    >>> [round(v, 3) for v in binomial_interval(9, 10)]
+    [0.596, 0.982]
+    """
+    if n <= 0:
+        return (0.0, 1.0)
+    z = 1.959963984540054
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+@dataclass
+class _Segment:
+    primitive: object  # store.Primitive
+    relation: object  # Relation or None
+    frame: tuple  # ("world",) or (object, "start" | "end" | "target")
+
+
+@dataclass
+class _Source:
+    id: int
+    start: dict  # object -> its position at the demonstration's start
+    actions: np.ndarray | None
+    segments: list = field(default_factory=list)
+
+
+def _pose(demo, obj, k):
+    return np.asarray(demo[f"{obj}_pos"][k], float), np.asarray(demo[f"{obj}_quat"][k], float)
+
+
+def _moved(p, q, frame_from, frame_to):
+    """The pose ``(p, q)`` moved rigidly with a frame from ``frame_from`` to ``frame_to`` (each ``(p, q)``):
+    ``T_to · T_from⁻¹ · T``. ``p`` may be (n, 3) with ``q`` (n, 4)."""
+    turn = quaternion_multiply(frame_to[1], quaternion_conjugate(frame_from[1]))
+    p = frame_to[0] + (np.asarray(p, float) - frame_from[0]) @ quaternion_to_matrix(turn).T
+    return p, quaternion_multiply(np.broadcast_to(turn, np.shape(q)), q)
+
+
+def _in_frame(demo, relation, frame):
+    """Where the tool ends in ``frame`` (of the primitive's own samples), or None if it lacks the object."""
+    end = np.asarray(demo["position"][-1], float)
+    if frame == ("world",):
+        return end
+    obj, at = frame
+    name = relation.target if at == "target" else obj
+    if name is None or f"{name}_pos" not in demo.streams:
+        return None
+    p, q = _pose(demo, name, 0 if at == "start" else -1)
+    return quaternion_to_matrix(q).T @ (end - p)
+
+
+def _candidate_frames(relation):
+    if relation is None:
+        return [("world",)]
+    if not relation.moves_with:
+        return [(relation.object, "end"), ("world",)]
+    frames = [(relation.object, "start"), ("world",)]
+    if relation.target is not None:
+        frames.insert(0, (relation.object, "target"))
+    return frames
+
+
+def _signature(relation):
+    return None if relation is None else (relation.object, relation.moves_with, relation.target)
+
+
+def _choose_frames(sources):
+    """Each segment's frame: where its skill's members end most consistently (smallest spread)."""
+    groups = {}
+    for src in sources:
+        for seg in src.segments:
+            key = (seg.primitive.cluster, _signature(seg.relation))
+            groups.setdefault(key, []).append(seg)
+    for members in groups.values():
+        frames = _candidate_frames(members[0].relation)
+        spread = []
+        for frame in frames:
+            ends = [_in_frame(m.primitive.demo, m.relation, frame) for m in members]
+            ends = np.array([e for e in ends if e is not None])
+            # one member says nothing about consistency: keep the relation's own frame (the first)
+            spread.append(float(np.sqrt(((ends - ends.mean(0)) ** 2).sum(1).mean())) if len(ends) > 1
+                          else math.inf)
+        best = frames[int(np.argmin(spread))] if np.isfinite(spread).any() else frames[0]
+        for m in members:
+            m.frame = best
+
+
+def _sources(store):
+    prims = store.primitives()
+    if not prims:
+        raise ValueError(f"{store.location}: the library holds no primitives; add demonstrations first")
+    by_demo = {}
+    for p in prims:
+        by_demo.setdefault(p.demonstration_id, []).append(p)
+    demos = store.demonstrations(sorted(by_demo))
+    sources = []
+    for demo_id, ps in sorted(by_demo.items()):
+        demo = demos[demo_id]
+        objects = object_streams(demo)
+        missing = [s for s in ("position", "orientation", "actions") if s not in demo.streams]
+        if not objects or missing:
+            raise ValueError(f"{store.location}: demonstration {demo_id} records "
+                             f"{'no object poses' if not objects else 'no ' + ', '.join(missing)}; "
+                             "sim evaluate needs demonstrations with the tool pose, the actions and the "
+                             "objects' poses (record them with 'skillbank sim record')")
+        if demo["actions"].shape[1] != 7:
+            raise ValueError(f"{store.location}: demonstration {demo_id}'s actions have "
+                             f"{demo['actions'].shape[1]} columns; expected robosuite's 7 (OSC pose deltas "
+                             "and the gripper) of a one-arm robot")
+        src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
+                      np.asarray(demo["actions"], float))
+        for p in sorted(ps, key=lambda p: p.start):
+            relation = acted_on(p.demo)
+            src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
+        sources.append(src)
+    _choose_frames(sources)
+    return sources
+
+
+def _nearest(sources, obs):
+    """The source whose segments' goals move least in this scene: the smallest adaptation.
+
+    A goal's change counts its distance plus :data:`LEVER` metres per radian of its turn (a wrist
+    that turns much as it closes in sweeps its fingers through what it reaches for).
+    """
+    def cost(src):
+        total = 0.0
+        for seg in src.segments:
+            p, q = _goal(seg, obs)
+            demo = seg.primitive.demo
+            total += float(np.linalg.norm(p - demo["position"][-1]))
+            if q is not None:
+                total += LEVER * float(quaternion_angle(q, demo["orientation"][-1]))
+        return total
+
+    missing = sorted({o for src in sources for o in src.start if f"{o}_pos" not in obs})
+    if missing:
+        raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; evaluate "
+                         "the library in the task it was recorded in")
+    return min(sources, key=cost)
+
+
+def _samplers(sampler):
+    """Every leaf placement sampler under ``sampler`` (robosuite's composite samplers hold others)."""
+    inner = getattr(sampler, "samplers", None)
+    if inner is None:
+        return [sampler]
+    return [leaf for s in inner.values() for leaf in _samplers(s)]
+
+
+def _reseed(env, seed):
+    # robosuite 1.5 draws the placement and the robot's initial noise from env.rng, which the samplers
+    # made at the first load hold a reference to: every holder gets the episode's generator
+    env.rng = np.random.default_rng(seed)
+    for s in _samplers(env.placement_initializer):
+        s.rng = env.rng
+    if hasattr(env.placement_initializer, "rng"):
+        env.placement_initializer.rng = env.rng
+
+
+def _widen(env, half_width):
+    for s in _samplers(env.placement_initializer):
+        if getattr(s, "name", "") == "HideSampler" or not hasattr(s, "x_range"):
+            continue
+        for axis in ("x_range", "y_range"):
+            lo, hi = (float(v) for v in getattr(s, axis))
+            c = (lo + hi) / 2
+            setattr(s, axis, [c - half_width, c + half_width])
+
+
+class _Contacts:
+    """Which arm links (not the gripper) touch anything that is not the robot, read from MuJoCo."""
+
+    def __init__(self, env):
+        model = env.sim.model
+        names = [model.geom_id2name(i) or "" for i in range(model.ngeom)]
+        self.arm = np.array([n.startswith("robot0_") for n in names])
+        self.robot = np.array([n.startswith(("robot0_", "gripper0_", "mount0_", "fixed_mount0_"))
+                               for n in names])
+        self.names, self.data = names, env.sim.data._data
+
+    def touching(self):
+        n = self.data.ncon
+        if n == 0:
+            return None
+        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        hit = (self.arm[g1] & ~self.robot[g2]) | (self.arm[g2] & ~self.robot[g1])
+        if not hit.any():
+            return None
+        k = int(np.argmax(hit))
+        return f"{self.names[g1[k]]} touched {self.names[g2[k]]}"
+
+
+class _Episode:
+    def __init__(self, env, obs, horizon):
+        self.env, self.horizon = env, horizon
+        self.driver = _Driver(env, obs, keep=False)
+        self.steps, self.success, self.contact = 0, False, None
+        self.contacts = _Contacts(env)
+
+    @property
+    def obs(self):
+        return self.driver.obs
+
+    def step(self, target, quat=None, grip=None):
+        if quat is not None:
+            self.driver.quat = np.asarray(quat, float)
+        if grip is not None:
+            self.driver.grip = grip
+        self.driver.step(target)
+        self._after()
+
+    def act(self, action):
+        self.driver.obs = self.env.step(np.asarray(action, float))[0]
+        self._after()
+
+    def _after(self):
+        self.steps += 1
+        if self.contact is None:
+            self.contact = self.contacts.touching()
+        self.success = self.success or bool(self.env._check_success())
+
+    @property
+    def over(self):
+        return self.success or self.steps >= self.horizon
+
+    def rest(self, objects, *, most=2 * CONTROL_FREQ, still=0.5e-3):
+        """Hold still until no object moves more than ``still`` metres in a step (at most ``most`` steps).
+
+        robosuite places objects above their resting height (a nut falls 6 cm after a reset): the scene
+        is read once it is at rest, as a person looks before reaching.
+        """
+        where = np.array([self.obs[f"{o}_pos"] for o in objects])
+        for _ in range(most):
+            self.act(np.r_[np.zeros(6), self.driver.grip])
+            now = np.array([self.obs[f"{o}_pos"] for o in objects])
+            if np.abs(now - where).max() < still:
+                break
+            where = now
+
+    def settle(self, goal, quat):
+        for _ in range(SETTLE):
+            if self.over or np.linalg.norm(goal - self.obs["robot0_eef_pos"]) < 0.005:
+                break
+            self.step(goal, quat)
+
+
+def _grip(commands):
+    return np.where(np.asarray(commands, float) > 0, 1.0, -1.0)
+
+
+def _frame_pose(obs, relation, frame):
+    obj, at = frame
+    name = relation.target if at == "target" else obj
+    return np.asarray(obs[f"{name}_pos"], float), np.asarray(obs[f"{name}_quat"], float)
+
+
+def _source_frame(demo, relation, frame):
+    """The frame's pose in the source primitive: the target at its end, the carried object at its start."""
+    obj, at = frame
+    if at == "target":
+        return _pose(demo, relation.target, -1)
+    return _pose(demo, obj, 0 if at == "start" else -1)
+
+
+def _goal(seg, obs):
+    """The tool's goal pose in the scene ``obs`` shows."""
+    demo, relation = seg.primitive.demo, seg.relation
+    if seg.frame == ("world",):
+        return np.asarray(demo["position"][-1], float), np.asarray(demo["orientation"][-1], float)
+    p, q = _frame_pose(obs, relation, seg.frame)
+    return compose(relation, p, q, at=seg.frame[1])
+
+
+def _path_rigid(seg, obs):
+    """The recorded segment moved rigidly into its frame's new pose (MimicGen's transform)."""
+    demo = seg.primitive.demo
+    P, Q = np.asarray(demo["position"], float), np.asarray(demo["orientation"], float)
+    if seg.frame != ("world",):  # the frame's pose at the segment's start in the source, as MimicGen
+        obj, at = seg.frame
+        P, Q = _moved(P, Q, _pose(demo, seg.relation.target if at == "target" else obj, 0),
+                      _frame_pose(obs, seg.relation, seg.frame))
+    here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
+    s = np.linspace(0.0, 1.0, RIGID_BLEND + 1)[1:, None]
+    blend_p = here_p + s * (P[0] - here_p)
+    blend_q = slerp([0.0, 1.0], np.stack([here_q, Q[0]]), s[:, 0])
+    grip = _grip(demo["actions"][:, 6])
+    return (np.vstack([blend_p, P]), np.vstack([blend_q, Q]),
+            np.concatenate([np.full(RIGID_BLEND, grip[0]), grip]))
+
+
+def _path_adapted(seg, obs, method, random_state):
+    """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate."""
+    demo = seg.primitive.demo
+    goal_p, goal_q = _goal(seg, obs)
+    constraints = Constraints(start=np.asarray(obs["robot0_eef_pos"], float), goal=goal_p,
+                              start_orientation=np.asarray(obs["robot0_eef_quat"], float),
+                              goal_orientation=goal_q)
+    result = reuse([demo], constraints, method=method, random_state=random_state)
+    traj = result.trajectory
+    t = np.asarray(traj.t, float)
+    n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
+    ts = np.linspace(t[0], t[-1], n)
+    P = np.column_stack([np.interp(ts, t, traj["position"][:, j]) for j in range(3)])
+    Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12))
+    commands = traj["actions"][:, 6] if "actions" in traj.streams else demo["actions"][:, 6]
+    src_t = np.linspace(t[0], t[-1], len(commands))
+    grip = _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
+    return P, Q, grip
+
+
+def _oriented(seg, obs, u):
+    """The tool's orientation at phases ``u``: the source's rotation profile turned with the goal's frame,
+    the robot's start orientation blended into it over the first half (minimum jerk).
+
+    The wrist turns to the new frame while it travels, and closes in on the goal the way the
+    demonstration did: a correction spread over the whole path would still be turning the fingers
+    as they reach what they grasp.
+    """
+    demo = seg.primitive.demo
+    src = slerp(demo.t, demo["orientation"], demo.t[0] + u * (demo.t[-1] - demo.t[0]))
+    if seg.frame != ("world",):
+        q_from = _source_frame(demo, seg.relation, seg.frame)[1]
+        q_to = _frame_pose(obs, seg.relation, seg.frame)[1]
+        _, src = _moved(np.zeros((len(u), 3)), src, (np.zeros(3), q_from), (np.zeros(3), q_to))
+    here = np.asarray(obs["robot0_eef_quat"], float)
+    offset = quaternion_multiply(here, quaternion_conjugate(src[0]))
+    w = 1.0 - _min_jerk_at(np.clip(2.0 * u, 0.0, 1.0))
+    turns = exp_map(w[:, None] * log_map(offset)[None, :])
+    return quaternion_multiply(turns, src)
+
+
+def _min_jerk_at(s):
+    return 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+
+
+def _check(seg, before, episode):
+    """The failure reason of a segment that just ran, or None."""
+    obs = episode.obs
+    relation = seg.relation
+    if episode.contact is not None:
+        return "collision", episode.contact
+    if relation is not None and relation.moves_with:
+        obj = relation.object
+        gap0 = np.linalg.norm(before[f"{obj}_pos"] - before["robot0_eef_pos"])
+        gap1 = np.linalg.norm(obs[f"{obj}_pos"] - obs["robot0_eef_pos"])
+        travel = np.linalg.norm(obs[f"{obj}_pos"] - before[f"{obj}_pos"])
+        if abs(gap1 - gap0) > CARRIED + ARRIVED:
+            if travel < 0.01:
+                return "missed grasp", f"{obj} stayed where it was ({gap1:.3f} m from the tool)"
+            return "dropped", f"{obj} is {gap1:.3f} m from the tool, {gap0:.3f} m when the segment began"
+    return None
+
+
+def _run_segments(episode, source, method, random_state, timings):
+    """Run ``source``'s segments; ``(index, reason, detail)`` of the first failure, or None."""
+    for i, seg in enumerate(source.segments):
+        if episode.over:
+            break
+        before = {k: np.array(v, float) for k, v in episode.obs.items() if isinstance(v, np.ndarray)}
+        if method == "replay":  # the source's own actions over the segment's samples, open loop
+            steps0 = episode.steps
+            for action in source.actions[seg.primitive.start:seg.primitive.stop]:
+                if episode.over:
+                    break
+                episode.act(action)
+            timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ
+            if episode.success:
+                return None
+            if episode.steps >= episode.horizon:
+                return i, "timeout", f"the horizon of {episode.horizon} steps ran out in this segment"
+            reason = _check(seg, before, episode)
+            if reason is not None:
+                return (i, *reason)
+            continue
+        tic = time.perf_counter()
+        try:
+            if method == "rigid":
+                P, Q, G = _path_rigid(seg, episode.obs)
+            else:
+                P, Q, G = _path_adapted(seg, episode.obs, method, random_state)
+        except ValueError as error:
+            return i, "unreachable", str(error).splitlines()[0]
+        timings["adapt"] += time.perf_counter() - tic
+        steps0 = episode.steps
+        for p, q, g in zip(P, Q, G, strict=True):
+            if episode.over:
+                break
+            episode.step(p, q, g)
+        episode.settle(P[-1], Q[-1])
+        timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ
+        if episode.success:
+            return None
+        if episode.steps >= episode.horizon:
+            return i, "timeout", f"the horizon of {episode.horizon} steps ran out in this segment"
+        reason = _check(seg, before, episode)
+        if reason is not None:
+            return (i, *reason)
+        far = float(np.linalg.norm(P[-1] - episode.obs["robot0_eef_pos"]))
+        if far > ARRIVED:
+            return i, "unreachable", f"the tool stopped {far:.3f} m from the segment's goal"
+    return None
+
+
+def _make(suite, task, seed, horizon):
+    if task not in suite.ALL_ENVIRONMENTS:
+        raise ValueError(f"env: robosuite has no task {task!r}; its tasks are "
+                         f"{sorted(suite.ALL_ENVIRONMENTS)}")
+    # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
+    # widened ranges and the episode's generator stay where they were put
+    return suite.make(task, robots=["UR5e"], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+                      has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
+                      ignore_done=True, reward_shaping=False, hard_reset=False)
+
+
+def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
+             horizon: int = 1000, random_state=None, progress=None) -> dict:
+    """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
+
+    Parameters
+    ----------
+    library : str, path-like or Store
+        The library (its demonstrations record the tool pose, the actions and the objects' poses, as
+        ``skillbank sim record`` writes them).
+    env : str
+        ``robosuite:TASK``, any robosuite task with one arm.
+    episodes : int, default=10
+        Scenes to run; episode ``k`` is reset from seed ``seed + k``.
+    seed : int, default=0
+        The first episode's seed.
+    placement : float, optional
+        Widens every object's x and y placement range to plus or minus this many metres around its
+        default centre.
+    method : str, default="lte"
+        A name of :data:`skillbank.selection.METHODS`, or a baseline of :data:`BASELINES`.
+    horizon : int, default=1000
+        Control steps an episode may take (20 per second).
+    random_state : int or None
+        Seeds the representation where it samples (ProMP).
+    progress : callable, optional
+        ``progress(done, successes)`` after each episode.
+
+    Returns
+    -------
+    dict
+        ``{"env", "method", "seed", "placement", "episodes", "successes", "success_rate", "interval",
+        "timing", "per_episode"}``; each episode's entry has its ``seed``, ``success``, ``steps``,
+        ``source`` (the demonstration it followed), ``objects`` (each object's position at rest
+        before the first segment) and, for a failure, ``failure`` with the ``segment``
+        (from 0), its ``primitive`` id, the ``reason`` (a key of :data:`REASONS`) and a ``detail``.
+    """
+    if not isinstance(env, str) or not env.startswith("robosuite:") or not env.split(":", 1)[1]:
+        raise ValueError(f"env: expected robosuite:TASK, got {env!r}")
+    task = env.split(":", 1)[1]
+    episodes = check_positive(episodes, name="episodes", integer=True)
+    horizon = check_positive(horizon, name="horizon", integer=True)
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    if placement is not None:
+        placement = check_positive(placement, name="placement")
+    if method not in METHODS and method not in BASELINES:
+        raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
+    store = open_store(library, create=False)
+    try:
+        sources = _sources(store)
+    finally:
+        if store is not library:
+            store.close()
+    suite = import_robosuite()
+    environment = _make(suite, task, seed, horizon)
+    if placement is not None:
+        _widen(environment, placement)
+    rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0}
+    try:
+        for k in range(episodes):
+            _reseed(environment, int(seed) + k)
+            episode = _Episode(environment, environment.reset(), horizon)
+            episode.rest(sorted({o for src in sources for o in src.start if f"{o}_pos" in episode.obs}))
+            source = _nearest(sources, episode.obs)
+            scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in sorted(source.start)}
+            failure = None
+            failure = _run_segments(episode, source, method, random_state, timings)
+            timings["segments"] += len(source.segments)
+            for _ in range(SETTLE):  # a last second for the objects to come to rest
+                if episode.over:
+                    break
+                episode.act(np.r_[np.zeros(6), episode.driver.grip])
+            row = {"seed": int(seed) + k, "success": episode.success, "steps": episode.steps,
+                   "source": source.id, "objects": scene}
+            if not episode.success:
+                if failure is None:
+                    last = len(source.segments) - 1
+                    failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
+                               (last, "misplaced", "the environment's success check fails"))
+                i, reason, detail = failure
+                row["failure"] = {"segment": i, "primitive": source.segments[i].primitive.id,
+                                  "reason": reason, "detail": detail}
+            rows.append(row)
+            if progress is not None:
+                progress(k + 1, sum(r["success"] for r in rows))
+    finally:
+        environment.close()
+    successes = sum(r["success"] for r in rows)
+    return {"env": env, "method": method, "seed": int(seed), "placement": placement, "episodes": episodes,
+            "successes": successes, "success_rate": successes / episodes,
+            "interval": list(binomial_interval(successes, episodes)),
+            "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],
+                       "segments": timings["segments"]},
+            "per_episode": rows}

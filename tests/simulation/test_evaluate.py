@@ -1,0 +1,141 @@
+"""``skillbank sim evaluate``: a library's skills run closed loop in robosuite scenes they were not shown.
+
+Real robosuite episodes (short ones): three recorded Lift demonstrations, then new placements drawn by
+robosuite's own sampler, success by the environment's own ``_check_success()``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+from scipy.stats import binomtest
+
+pytest.importorskip("robosuite")  # the extra skillbank[sim]
+
+from skillbank.cli import main  # noqa: E402
+from skillbank.pipeline import Library  # noqa: E402
+from skillbank.simulation import REASONS, binomial_interval, evaluate, record  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def lift(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("lift_eval")
+    out = folder / "lift.hdf5"
+    record("robosuite:Lift", episodes=3, out=out, seed=11)
+    db = folder / "lift.db"
+    with Library(db) as lib:
+        lib.add_files([out])
+        lib.cluster()
+        starts = [lib.demonstration(i)["cube_pos"][0, :2] for i in lib.demonstration_ids()]
+    return db, np.array(starts)
+
+
+def test_a_lift_at_a_placement_no_demonstration_had_succeeds(lift):
+    db, starts = lift
+    report = evaluate(db, "robosuite:Lift", episodes=2, seed=500, placement=0.12)
+    assert report["episodes"] == 2 and [r["seed"] for r in report["per_episode"]] == [500, 501]
+    assert report["successes"] == 2 and report["success_rate"] == 1.0, report["per_episode"]
+    assert report["interval"] == pytest.approx(list(binomial_interval(2, 2)))
+    for row in report["per_episode"]:
+        assert row["success"] and "failure" not in row and 0 < row["steps"] < 1000
+        assert row["source"] in (1, 2, 3)
+        # where no demonstration had its cube: farther from each than robosuite's default range allows
+        assert np.linalg.norm(starts - row["objects"]["cube"][:2], axis=1).min() > 0.03, (starts, row)
+    assert report["timing"]["segments"] >= 4 and report["timing"]["adapt_seconds"] > 0
+
+
+def test_the_placement_is_drawn_from_the_seed_and_widened(lift):
+    """The same seed gives the same scene and the same run (the same steps to the sample); another seed,
+    another scene."""
+    db, starts = lift
+    a = evaluate(db, "robosuite:Lift", episodes=1, seed=42, placement=0.15)
+    b = evaluate(db, "robosuite:Lift", episodes=1, seed=42, placement=0.15)
+    assert a["per_episode"] == b["per_episode"]
+    c = evaluate(db, "robosuite:Lift", episodes=1, seed=43, placement=0.15)
+    assert c["per_episode"][0]["objects"] != a["per_episode"][0]["objects"]
+
+
+def test_open_loop_replay_misses_a_cube_that_moved_and_says_where(lift):
+    """The baseline that replays the source's actions reaches where the source's cube was: the segment
+    that should carry the cube ends without it, and the failure names that segment and why."""
+    db, _ = lift
+    report = evaluate(db, "robosuite:Lift", episodes=3, seed=700, placement=0.15, method="replay")
+    failed = [r for r in report["per_episode"] if not r["success"]]
+    assert failed, report["per_episode"]
+    for row in failed:
+        f = row["failure"]
+        assert f["reason"] in ("missed grasp", "misplaced") and f["reason"] in REASONS
+        assert isinstance(f["segment"], int) and isinstance(f["primitive"], int) and f["detail"]
+    assert any(r["failure"]["reason"] == "missed grasp"
+               and "cube stayed where it was" in r["failure"]["detail"] for r in failed)
+
+
+def test_an_episode_out_of_steps_is_a_timeout(lift):
+    db, _ = lift
+    report = evaluate(db, "robosuite:Lift", episodes=1, seed=3, horizon=40)
+    row = report["per_episode"][0]
+    assert not row["success"] and row["failure"]["reason"] == "timeout" and row["steps"] == 40
+
+
+def test_the_baselines_run_the_same_episodes(lift):
+    """Same seeds, same scenes: what differs between methods is only how the segments are adapted."""
+    db, _ = lift
+    scenes = {}
+    for method in ("lte", "rigid", "replay"):
+        report = evaluate(db, "robosuite:Lift", episodes=2, seed=500, placement=0.12, method=method)
+        assert report["method"] == method
+        scenes[method] = [(r["seed"], r["objects"], r["source"]) for r in report["per_episode"]]
+    assert scenes["lte"] == scenes["rigid"] == scenes["replay"]
+
+
+def test_the_wilson_interval_is_scipys():
+    for k, n in [(0, 10), (3, 10), (10, 10), (47, 50)]:
+        ci = binomtest(k, n).proportion_ci(method="wilson")
+        assert binomial_interval(k, n) == pytest.approx((ci.low, ci.high), abs=1e-12)
+
+
+def test_the_command_prints_json_with_every_episode(lift, capsys):
+    db, _ = lift
+    assert main(["sim", "evaluate", str(db), "--env", "robosuite:Lift", "--episodes", "1", "--seed", "9",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert {"env", "episodes", "successes", "success_rate", "per_episode"} <= set(doc)
+    assert doc["env"] == "robosuite:Lift" and len(doc["per_episode"]) == 1
+
+
+def test_the_command_says_what_failed_in_words(lift, capsys):
+    db, _ = lift
+    assert main(["sim", "evaluate", str(db), "--env", "robosuite:Lift", "--episodes", "1", "--seed", "3",
+                 "--horizon", "40"]) == 0
+    out = capsys.readouterr().out
+    assert "0 of 1 episodes of robosuite:Lift succeeded" in out and "timeout" in out
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--env", "Lift"], r"env: expected robosuite:TASK, got 'Lift'"),
+    (["--env", "robosuite:Nope"], r"env: robosuite has no task 'Nope'"),
+    (["--env", "robosuite:Lift", "--method", "magic"], r"method: expected one of"),
+    (["--env", "robosuite:Lift", "--placement", "-0.1"], r"placement"),
+    (["--env", "robosuite:Lift", "--episodes", "0"], r"episodes"),
+])
+def test_bad_input_is_one_line(lift, capsys, argv, match):
+    db, _ = lift
+    assert main(["sim", "evaluate", str(db), *argv]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and re.search(match, err), err
+
+
+def test_a_library_without_object_poses_is_refused(tmp_path, capsys):
+    db = tmp_path / "plain.db"
+    t = np.linspace(0.0, 2.0, 200)
+    demo = np.column_stack([t, np.sin(t), 0 * t])
+    path = tmp_path / "d.csv"
+    np.savetxt(path, np.column_stack([t, demo]), delimiter=",", header="t,x,y,z", comments="")
+    with Library(db) as lib:
+        lib.add_files([path])
+    assert main(["sim", "evaluate", str(db), "--env", "robosuite:Lift"]) == 2
+    err = capsys.readouterr().err
+    assert "records no object poses" in err and "sim record" in err and len(err.strip().splitlines()) == 1
