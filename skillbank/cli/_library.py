@@ -305,8 +305,12 @@ def _list(args) -> int:
     print("primitives:")
     for p in doc["primitives"]:
         cluster = "-" if p["cluster"] is None else p["cluster"]
+        acts = p.get("acts_on")
+        on = "" if acts is None else (
+            f", carries {acts['object']}" + (f" to {acts['target']}" if acts["target"] else "")
+            if acts["moves_with"] else f", ends at {acts['object']} ({acts['distance']:.3f} m)")
         print(f"  {p['id']}: demonstration {p['demonstration']}, cluster {cluster}, "
-              f"label {p['label'] or '-'}, {p['n_steps']} samples")
+              f"label {p['label'] or '-'}, {p['n_steps']} samples{on}")
     return 0
 
 

@@ -326,11 +326,15 @@ class Library(Adding):
             ``{"n_demonstrations": int, "version": int or None,
             "skills": [{"cluster", "label", "count"}],
             "unassigned": {"count": int, "ids": [primitive ids]},
-            "primitives": [{"id", "demonstration", "cluster", "label", "n_steps"}]}``;
+            "primitives": [{"id", "demonstration", "cluster", "label", "n_steps", "acts_on"}]}``;
             skills are the clusters (0..k-1) of the current clustering
             ``version``; ``unassigned`` the primitives in none of them (an
             add with ``assign="none"``, a primitive that could not join, or
             a recluster that was interrupted): :meth:`cluster` assigns them.
+            ``acts_on`` is what the primitive acts on, found when it was added
+            (:class:`~skillbank.selection.Relation` as a dict: the object, whether it was carried,
+            its target, the tool's end pose in their frames), or None (no object poses recorded, or
+            a move in free space).
         """
         version = self.store.current_version()
         skills = []
@@ -341,10 +345,19 @@ class Library(Adding):
             skills = [{"cluster": k, "label": labels.get(k), "count": int(counts[k])} for k in range(n)]
         prims = self.store.primitives(load=False)
         unassigned = [p.id for p in prims if p.cluster is None]
-        return {"n_demonstrations": len(self.store.demonstration_ids()), "version": version, "skills": skills,
+        ids = self.store.demonstration_ids()
+        # what each primitive acts on, recorded at add time (demonstrations with object poses only)
+        acts = {d: self.store.provenance(d).get("relations") for d in ids}
+        rank, relation = {}, {}
+        for p in sorted(prims, key=lambda p: (p.demonstration_id, p.start)):
+            k = rank[p.demonstration_id] = rank.get(p.demonstration_id, -1) + 1
+            known = acts.get(p.demonstration_id)
+            relation[p.id] = known[k] if isinstance(known, list) and k < len(known) else None
+        return {"n_demonstrations": len(ids), "version": version, "skills": skills,
                 "unassigned": {"count": len(unassigned), "ids": unassigned},
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
-                                "label": p.label, "n_steps": p.n_steps} for p in prims]}
+                                "label": p.label, "n_steps": p.n_steps, "acts_on": relation[p.id]}
+                               for p in prims]}
 
     def check(self) -> str:
         """The store's integrity check ("ok" for a sound library)."""

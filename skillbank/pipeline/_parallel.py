@@ -49,6 +49,7 @@ from ..core import Demonstration, __version__
 from ..core._validation import check_positive
 from ..io import FormatError, load, load_all
 from ..segmentation import MultimodalSegmenter
+from ..selection import acted_on, object_streams
 from ._cluster_address import check_workers, connect_timeout, probe_scheduler
 
 __all__ = ["INSTALL", "check_demo", "file_reason", "read_file", "bounds", "assignment", "prepare",
@@ -158,6 +159,28 @@ def set_aside(written, prepared) -> dict:
             if "set_aside" in item["provenance"]}
 
 
+def relations(demo, cuts) -> list:
+    """What each primitive acts on (:func:`~skillbank.selection.acted_on`), as JSON, one per cut.
+
+    Kept in the demonstration's provenance, so the library, its exports and its imports carry it with the
+    primitives; values are rounded to the nanometre (and 1e-9 of a quaternion) so that the same samples
+    give the same record on any worker.
+    """
+    out = []
+    for a, b in cuts:
+        r = acted_on(demo.slice(a, b))
+        out.append(None if r is None else _rounded(r.to_dict()))
+    return out
+
+
+def _rounded(doc):
+    if isinstance(doc, dict):
+        return {k: _rounded(v) for k, v in doc.items()}
+    if isinstance(doc, list):
+        return [_rounded(v) for v in doc]
+    return round(doc, 9) if isinstance(doc, float) else doc
+
+
 def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> tuple:
     """``(store item, why it stays unclustered or None)``: everything but the write."""
     cuts, provenance = bounds(demo, segment, segmentation)
@@ -166,6 +189,8 @@ def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> 
     if label is None and isinstance(task, str) and task.strip():
         # The recording says what it shows (a LeRobot episode's task): its primitives' own label, as if given.
         label, provenance["label_from"] = task.strip(), "metadata['task']"
+    if object_streams(demo):
+        provenance["relations"] = relations(demo, cuts)
     members, why = None, None
     if assign == "incremental":
         members, why = assignment([demo.slice(a, b) for a, b in cuts], snapshot)

@@ -263,8 +263,9 @@ class _Contacts:
 
 
 class _Episode:
-    def __init__(self, env, obs, horizon):
+    def __init__(self, env, obs, horizon, trace=False):
         self.env, self.horizon = env, horizon
+        self.path = [] if trace else None
         self.driver = _Driver(env, obs, keep=False)
         self.steps, self.success, self.contact = 0, False, None
         self.contacts = _Contacts(env)
@@ -287,6 +288,8 @@ class _Episode:
 
     def _after(self):
         self.steps += 1
+        if self.path is not None:
+            self.path.append(np.array(self.obs["robot0_eef_pos"], float))
         if self.contact is None:
             self.contact = self.contacts.touching()
         self.success = self.success or bool(self.env._check_success())
@@ -485,7 +488,7 @@ def _make(suite, task, seed, horizon):
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
-             horizon: int = 1000, random_state=None, progress=None) -> dict:
+             horizon: int = 1000, random_state=None, paths: bool = False, progress=None) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -508,6 +511,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         Control steps an episode may take (20 per second).
     random_state : int or None
         Seeds the representation where it samples (ProMP).
+    paths : bool, default=False
+        Add each episode's tool positions, one per control step (``path``, m), for a figure.
     progress : callable, optional
         ``progress(done, successes)`` after each episode.
 
@@ -545,7 +550,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     try:
         for k in range(episodes):
             _reseed(environment, int(seed) + k)
-            episode = _Episode(environment, environment.reset(), horizon)
+            episode = _Episode(environment, environment.reset(), horizon, trace=paths)
             episode.rest(sorted({o for src in sources for o in src.start if f"{o}_pos" in episode.obs}))
             source = _nearest(sources, episode.obs)
             scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in sorted(source.start)}
@@ -558,6 +563,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
                 episode.act(np.r_[np.zeros(6), episode.driver.grip])
             row = {"seed": int(seed) + k, "success": episode.success, "steps": episode.steps,
                    "source": source.id, "objects": scene}
+            if paths:
+                row["path"] = np.round(np.array(episode.path), 6).tolist()
             if not episode.success:
                 if failure is None:
                     last = len(source.segments) - 1

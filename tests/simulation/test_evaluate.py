@@ -139,3 +139,23 @@ def test_a_library_without_object_poses_is_refused(tmp_path, capsys):
     assert main(["sim", "evaluate", str(db), "--env", "robosuite:Lift"]) == 2
     err = capsys.readouterr().err
     assert "records no object poses" in err and "sim record" in err and len(err.strip().splitlines()) == 1
+
+
+def test_what_each_primitive_acts_on_is_listed_and_travels_with_the_library(lift, tmp_path, capsys):
+    """Found when the demonstrations were added, kept with them: ``library list`` shows it, and a library
+    exported and imported elsewhere lists the same."""
+    db, _ = lift
+    assert main(["library", "list", str(db), "--json"]) == 0
+    prims = json.loads(capsys.readouterr().out)["primitives"]
+    acts = [p["acts_on"] for p in prims]
+    assert all(a is None or a["object"] == "cube" for a in acts)
+    assert any(a is not None and a["moves_with"] for a in acts)  # the lift carries the cube
+    assert any(a is not None and not a["moves_with"] and a["distance"] < 0.03 for a in acts)  # the grasp
+    assert main(["library", "list", str(db)]) == 0
+    text = capsys.readouterr().out
+    assert "carries cube" in text and "ends at cube" in text
+    assert main(["library", "export", str(db), str(tmp_path / "out")]) == 0
+    assert main(["library", "import", str(tmp_path / "copy.db"), str(tmp_path / "out")]) == 0
+    capsys.readouterr()
+    assert main(["library", "list", str(tmp_path / "copy.db"), "--json"]) == 0
+    assert [p["acts_on"] for p in json.loads(capsys.readouterr().out)["primitives"]] == acts
