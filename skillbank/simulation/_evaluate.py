@@ -36,12 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Constraints, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
+from ..core import Constraints, ViaPoint, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
-from ._robosuite import CONTROL_FREQ, _Driver, import_robosuite
+from ._robosuite import CONTROL_FREQ, _Driver, _objects, import_robosuite
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
 
@@ -49,7 +49,8 @@ __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
 REASONS = {
     "missed grasp": "a segment that carries an object ended without it: it never left its place",
     "dropped": "a segment that carries an object lost it on the way",
-    "collision": "an arm link (not the gripper) touched the table or an object",
+    "collision": "an arm link (not the gripper) touched the table, a fixture or an object in or before the "
+                 "segment that failed (a touch in an episode that succeeds is reported as arm_contact)",
     "unreachable": "the segment's goal could not be adapted to, or the tool ended more than 2 cm from it",
     "timeout": "the episode used up its horizon",
     "misplaced": "every segment did what it was for, yet the environment's check fails at the end",
@@ -57,9 +58,16 @@ REASONS = {
 #: Methods that do not adapt: the baselines.
 BASELINES = ("rigid", "replay")
 ARRIVED = 0.02  # m: farther than this from a segment's goal after settling is a failure to reach it
-SETTLE = CONTROL_FREQ  # steps allowed, after a segment's path, to come within 5 mm of its goal
+SETTLE = CONTROL_FREQ  # steps allowed, after a segment's path, to come within ARRIVE of its goal
+ARRIVE = 0.002  # m: a segment's end is held until the tool is this near its goal (a nut on its peg: 2 mm)
 RIGID_BLEND = 5  # steps of the rigid baseline's interpolation to the transformed segment (MimicGen: a few)
 LEVER = 0.1  # m per radian: how far a turn of the wrist moves its fingertips (a gripper's length)
+#: Phases of a segment pinned to its source's path moved onto the goal: the second half closes in as the
+#: demonstration did (an approach from above stays one), the first is adapted from where the robot is.
+CLOSE_IN = (0.5, 0.625, 0.75, 0.875)
+SYMMETRIES = (1, 2, 4)  # whole, half and quarter turns about the vertical: a goal's heading may repeat
+NEIGHBOUR = 0.06  # m: a fingertip nearer another object's centre than this may touch it (a 4-10 cm object)
+HELD = 0.01  # m: how far a held object may shift in the tool's frame and still be where the tool holds it
 CARRIED = 0.02  # m: how much a carried object's distance to the tool may change before it is lost
 
 
@@ -84,7 +92,9 @@ def binomial_interval(successes: int, n: int) -> tuple:
 class _Segment:
     primitive: object  # store.Primitive
     relation: object  # Relation or None
-    frame: tuple  # ("world",) or (object, "start" | "end" | "target")
+    frame: tuple  # where the goal position is kept: ("world",) or (object, "start" | "end" | "target")
+    turn: object = "held"  # where the goal orientation is kept: "held" (the tool's at the start) or a frame
+    symmetry: int = 1  # quarter turns (4), half turns (2) or only whole turns (1) give the same goal
 
 
 @dataclass
@@ -108,8 +118,13 @@ def _moved(p, q, frame_from, frame_to):
 
 
 def _in_frame(demo, relation, frame):
-    """Where the tool ends in ``frame`` (of the primitive's own samples), or None if it lacks the object."""
-    end = np.asarray(demo["position"][-1], float)
+    """Where the primitive ends in ``frame`` (of its own samples), or None if it lacks the frame's object.
+
+    For a carried object, where the *object* ends: the tool's place on it depends on how it was grasped.
+    """
+    carried = relation is not None and relation.moves_with
+    end = np.asarray(demo[f"{relation.object}_pos"][_held_until(demo, relation.object)] if carried else
+                     demo["position"][-1], float)
     if frame == ("world",):
         return end
     obj, at = frame
@@ -118,6 +133,37 @@ def _in_frame(demo, relation, frame):
         return None
     p, q = _pose(demo, name, 0 if at == "start" else -1)
     return quaternion_to_matrix(q).T @ (end - p)
+
+
+def _held_until(demo, obj) -> int:
+    """The last sample at which the carried ``obj`` is still where the tool holds it (a segment that ends
+    with a release lets it fall after that)."""
+    # where it sits in the tool's frame: constant while held, whatever the wrist does
+    R = quaternion_to_matrix(np.asarray(demo["orientation"], float))
+    offset = np.einsum("nji,nj->ni", R, np.asarray(demo[f"{obj}_pos"], float) - demo["position"])
+    held = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) <= HELD)
+    return int(held[-1]) if len(held) else len(offset) - 1
+
+
+def _heading(q) -> float:
+    """The direction about the vertical of the frame's x axis (rad): a tool pointing down, an object
+    standing on the table."""
+    R = quaternion_to_matrix(np.asarray(q, float))
+    return math.atan2(R[1, 0], R[0, 0])
+
+
+def _turn_reference(demo, relation, turn):
+    """The source orientation the tool's end orientation is kept relative to (None: the world)."""
+    if turn == "held":
+        return np.asarray(demo["orientation"][0], float)
+    if turn == ("world",):
+        return None
+    return _source_frame(demo, relation, turn)[1]
+
+
+def _end_heading(demo, relation, turn):
+    ref = _turn_reference(demo, relation, turn)
+    return _heading(demo["orientation"][-1]) - (0.0 if ref is None else _heading(ref))
 
 
 def _candidate_frames(relation):
@@ -136,7 +182,15 @@ def _signature(relation):
 
 
 def _choose_frames(sources):
-    """Each segment's frame: where its skill's members end most consistently (smallest spread)."""
+    """Each segment's frames, where its skill's members end most consistently.
+
+    The goal position's frame: the candidate in which the members' end positions spread least. The
+    goal orientation's: the candidate (the tool's own start orientation, the position's frame, the
+    world) and the symmetry (quarter, half or whole turns about the vertical) in which the members' end
+    headings agree best: the circular concentration ``|mean(exp(i k theta))|``, the smaller ``k`` on a
+    tie. A grasp of a cube is kept to a quarter turn of its faces, a carry holds the wrist as it was, a
+    square nut ends square to its peg.
+    """
     groups = {}
     for src in sources:
         for seg in src.segments:
@@ -152,8 +206,17 @@ def _choose_frames(sources):
             spread.append(float(np.sqrt(((ends - ends.mean(0)) ** 2).sum(1).mean())) if len(ends) > 1
                           else math.inf)
         best = frames[int(np.argmin(spread))] if np.isfinite(spread).any() else frames[0]
+        turns = ["held"] + ([best] if best != ("world",) else []) + [("world",)]
+        choice, score = ("held", 1), -1.0
+        if len(members) > 1:
+            for turn in turns:
+                theta = np.array([_end_heading(m.primitive.demo, m.relation, turn) for m in members])
+                for k in SYMMETRIES:
+                    concentration = round(float(abs(np.exp(1j * k * theta).mean())), 2)
+                    if concentration > score:
+                        choice, score = (turn, k), concentration
         for m in members:
-            m.frame = best
+            m.frame, (m.turn, m.symmetry) = best, choice
 
 
 def _sources(store):
@@ -188,7 +251,20 @@ def _sources(store):
     return sources
 
 
-def _nearest(sources, obs):
+def _fingers(env, obs):
+    """``(closing axis in the tool's frame, half the opening (m))`` of the gripper, from its finger pads."""
+    gripper = env.robots[0].gripper
+    gripper = gripper["right"] if isinstance(gripper, dict) else gripper
+    pads = [np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
+                     for n in gripper.important_geoms[f"{side}_fingerpad"]], axis=0)
+            for side in ("left", "right")]
+    across = pads[0] - pads[1]
+    width = float(np.linalg.norm(across))
+    axis = quaternion_to_matrix(np.asarray(obs["robot0_eef_quat"], float)).T @ (across / max(width, 1e-9))
+    return axis, width / 2
+
+
+def _nearest(sources, obs, fingers=None):
     """The source whose segments' goals move least in this scene: the smallest adaptation.
 
     A goal's change counts its distance plus :data:`LEVER` metres per radian of its turn (a wrist
@@ -197,7 +273,7 @@ def _nearest(sources, obs):
     def cost(src):
         total = 0.0
         for seg in src.segments:
-            p, q = _goal(seg, obs)
+            p, q = _goal(seg, obs, fingers)
             demo = seg.primitive.demo
             total += float(np.linalg.norm(p - demo["position"][-1]))
             if q is not None:
@@ -244,7 +320,9 @@ class _Contacts:
 
     def __init__(self, env):
         model = env.sim.model
-        names = [model.geom_id2name(i) or "" for i in range(model.ngeom)]
+        # a geom without a name (robosuite's bins) goes by its body's
+        names = [model.geom_id2name(i) or model.body_id2name(model.geom_bodyid[i]) or f"geom {i}"
+                 for i in range(model.ngeom)]
         self.arm = np.array([n.startswith("robot0_") for n in names])
         self.robot = np.array([n.startswith(("robot0_", "gripper0_", "mount0_", "fixed_mount0_"))
                                for n in names])
@@ -267,7 +345,7 @@ class _Episode:
         self.env, self.horizon = env, horizon
         self.path = [] if trace else None
         self.driver = _Driver(env, obs, keep=False)
-        self.steps, self.success, self.contact = 0, False, None
+        self.steps, self.success, self.contact, self.segment = 0, False, None, 0
         self.contacts = _Contacts(env)
 
     @property
@@ -291,7 +369,9 @@ class _Episode:
         if self.path is not None:
             self.path.append(np.array(self.obs["robot0_eef_pos"], float))
         if self.contact is None:
-            self.contact = self.contacts.touching()
+            touch = self.contacts.touching()
+            if touch is not None:
+                self.contact = (self.segment, touch)
         self.success = self.success or bool(self.env._check_success())
 
     @property
@@ -314,7 +394,7 @@ class _Episode:
 
     def settle(self, goal, quat):
         for _ in range(SETTLE):
-            if self.over or np.linalg.norm(goal - self.obs["robot0_eef_pos"]) < 0.005:
+            if self.over or np.linalg.norm(goal - self.obs["robot0_eef_pos"]) < ARRIVE:
                 break
             self.step(goal, quat)
 
@@ -337,13 +417,70 @@ def _source_frame(demo, relation, frame):
     return _pose(demo, obj, 0 if at == "start" else -1)
 
 
-def _goal(seg, obs):
-    """The tool's goal pose in the scene ``obs`` shows."""
+def _about_vertical(angle):
+    return np.array([0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)])
+
+
+def _goal_orientations(seg, obs):
+    """The tool's goal orientations: the source's end orientation kept relative to the segment's turn frame,
+    and its symmetric turns, nearest to the tool's orientation now first."""
     demo, relation = seg.primitive.demo, seg.relation
+    here = np.asarray(obs["robot0_eef_quat"], float)
+    q = np.asarray(demo["orientation"][-1], float)
+    ref = _turn_reference(demo, relation, seg.turn)
+    if ref is not None:
+        now = here if seg.turn == "held" else _frame_pose(obs, relation, seg.turn)[1]
+        q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
+    options = [quaternion_multiply(_about_vertical(2 * math.pi * m / seg.symmetry), q)
+               for m in range(seg.symmetry)]
+    return sorted(options, key=lambda o: float(quaternion_angle(o, here)))
+
+
+def _goal_position(seg, obs, q):
+    """The tool's goal position in the scene ``obs`` shows, with the tool at orientation ``q``."""
+    demo, relation = seg.primitive.demo, seg.relation
+    if relation is not None and relation.moves_with:
+        # the carried object goes where it went in the source, relative to the frame; the tool holds it
+        # as it holds it now (a grasp a few millimetres off moves the tool, not the object)
+        k = _held_until(demo, relation.object)
+        end = _pose(demo, relation.object, k)[0]
+        if seg.frame != ("world",):
+            end = _moved(end, np.array([0.0, 0.0, 0.0, 1.0]), _source_frame(demo, relation, seg.frame),
+                         _frame_pose(obs, relation, seg.frame))[0]
+        here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
+        held = quaternion_to_matrix(here_q).T @ (np.asarray(obs[f"{relation.object}_pos"], float) - here_p)
+        # and then moves as the source's tool did after letting go (nothing, when it let go at the end)
+        return end - quaternion_to_matrix(q) @ held + (demo["position"][-1] - demo["position"][k])
     if seg.frame == ("world",):
-        return np.asarray(demo["position"][-1], float), np.asarray(demo["orientation"][-1], float)
-    p, q = _frame_pose(obs, relation, seg.frame)
-    return compose(relation, p, q, at=seg.frame[1])
+        return np.asarray(demo["position"][-1], float)
+    p_obj, q_obj = _frame_pose(obs, relation, seg.frame)
+    return compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
+
+
+def _goal(seg, obs, fingers=None):
+    """The tool's goal pose in the scene ``obs`` shows.
+
+    Of the symmetric orientations, the nearest turn whose fingers (``fingers``: the closing axis in the
+    tool's frame and half the opening, m) stay :data:`NEIGHBOUR` metres from every object the segment
+    does not act on; else the one that keeps them farthest.
+    """
+    options = [(q, _goal_position(seg, obs, q)) for q in _goal_orientations(seg, obs)]
+    if fingers is None or len(options) == 1:
+        return options[0][1], options[0][0]
+    mine = set() if seg.relation is None else {seg.relation.object, seg.relation.target}
+    others = [np.asarray(obs[f"{o}_pos"], float) for o in _objects(obs) if o not in mine]
+    if not others:
+        return options[0][1], options[0][0]
+    axis, half = fingers
+
+    def room(option):
+        q, p = option
+        tips = p + np.outer([-half, half], quaternion_to_matrix(q) @ axis)
+        return min(float(np.linalg.norm(tip - o)) for tip in tips for o in others)
+
+    clear = [o for o in options if room(o) >= NEIGHBOUR]
+    q, p = clear[0] if clear else max(options, key=room)
+    return p, q
 
 
 def _path_rigid(seg, obs):
@@ -363,11 +500,18 @@ def _path_rigid(seg, obs):
             np.concatenate([np.full(RIGID_BLEND, grip[0]), grip]))
 
 
-def _path_adapted(seg, obs, method, random_state):
+def _path_adapted(seg, obs, method, random_state, fingers=None):
     """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate."""
     demo = seg.primitive.demo
-    goal_p, goal_q = _goal(seg, obs)
-    constraints = Constraints(start=np.asarray(obs["robot0_eef_pos"], float), goal=goal_p,
+    goal_p, goal_q = _goal(seg, obs, fingers)
+    # the second half closes in as the source did: its path moved rigidly so that its end is the goal,
+    # pinned by via points; the first half is the representation's to adapt from where the robot is
+    P_src = np.asarray(demo["position"], float)
+    turn = quaternion_to_matrix(quaternion_multiply(goal_q, quaternion_conjugate(demo["orientation"][-1])))
+    u_src = (demo.t - demo.t[0]) / max(demo.t[-1] - demo.t[0], 1e-12)
+    at = [np.array([np.interp(u, u_src, P_src[:, j]) for j in range(3)]) for u in CLOSE_IN]
+    via = [ViaPoint(goal_p + turn @ (a - P_src[-1]), phase=u) for a, u in zip(at, CLOSE_IN, strict=True)]
+    constraints = Constraints(start=np.asarray(obs["robot0_eef_pos"], float), goal=goal_p, via=via,
                               start_orientation=np.asarray(obs["robot0_eef_quat"], float),
                               goal_orientation=goal_q)
     result = reuse([demo], constraints, method=method, random_state=random_state)
@@ -376,15 +520,15 @@ def _path_adapted(seg, obs, method, random_state):
     n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
     ts = np.linspace(t[0], t[-1], n)
     P = np.column_stack([np.interp(ts, t, traj["position"][:, j]) for j in range(3)])
-    Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12))
+    Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12), goal_q)
     commands = traj["actions"][:, 6] if "actions" in traj.streams else demo["actions"][:, 6]
     src_t = np.linspace(t[0], t[-1], len(commands))
     grip = _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
     return P, Q, grip
 
 
-def _oriented(seg, obs, u):
-    """The tool's orientation at phases ``u``: the source's rotation profile turned with the goal's frame,
+def _oriented(seg, obs, u, goal):
+    """The tool's orientation at phases ``u``: the source's rotation profile turned to end at ``goal``,
     the robot's start orientation blended into it over the first half (minimum jerk).
 
     The wrist turns to the new frame while it travels, and closes in on the goal the way the
@@ -393,10 +537,8 @@ def _oriented(seg, obs, u):
     """
     demo = seg.primitive.demo
     src = slerp(demo.t, demo["orientation"], demo.t[0] + u * (demo.t[-1] - demo.t[0]))
-    if seg.frame != ("world",):
-        q_from = _source_frame(demo, seg.relation, seg.frame)[1]
-        q_to = _frame_pose(obs, seg.relation, seg.frame)[1]
-        _, src = _moved(np.zeros((len(u), 3)), src, (np.zeros(3), q_from), (np.zeros(3), q_to))
+    turn = quaternion_multiply(goal, quaternion_conjugate(src[-1]))
+    src = quaternion_multiply(np.broadcast_to(turn, src.shape), src)
     here = np.asarray(obs["robot0_eef_quat"], float)
     offset = quaternion_multiply(here, quaternion_conjugate(src[0]))
     w = 1.0 - _min_jerk_at(np.clip(2.0 * u, 0.0, 1.0))
@@ -412,8 +554,6 @@ def _check(seg, before, episode):
     """The failure reason of a segment that just ran, or None."""
     obs = episode.obs
     relation = seg.relation
-    if episode.contact is not None:
-        return "collision", episode.contact
     if relation is not None and relation.moves_with:
         obj = relation.object
         gap0 = np.linalg.norm(before[f"{obj}_pos"] - before["robot0_eef_pos"])
@@ -431,6 +571,7 @@ def _run_segments(episode, source, method, random_state, timings):
     for i, seg in enumerate(source.segments):
         if episode.over:
             break
+        episode.segment = i
         before = {k: np.array(v, float) for k, v in episode.obs.items() if isinstance(v, np.ndarray)}
         if method == "replay":  # the source's own actions over the segment's samples, open loop
             steps0 = episode.steps
@@ -452,7 +593,7 @@ def _run_segments(episode, source, method, random_state, timings):
             if method == "rigid":
                 P, Q, G = _path_rigid(seg, episode.obs)
             else:
-                P, Q, G = _path_adapted(seg, episode.obs, method, random_state)
+                P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers)
         except ValueError as error:
             return i, "unreachable", str(error).splitlines()[0]
         timings["adapt"] += time.perf_counter() - tic
@@ -552,7 +693,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
             _reseed(environment, int(seed) + k)
             episode = _Episode(environment, environment.reset(), horizon, trace=paths)
             episode.rest(sorted({o for src in sources for o in src.start if f"{o}_pos" in episode.obs}))
-            source = _nearest(sources, episode.obs)
+            episode.fingers = _fingers(environment, episode.obs)
+            source = _nearest(sources, episode.obs, episode.fingers)
             scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in sorted(source.start)}
             failure = None
             failure = _run_segments(episode, source, method, random_state, timings)
@@ -563,6 +705,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
                 episode.act(np.r_[np.zeros(6), episode.driver.grip])
             row = {"seed": int(seed) + k, "success": episode.success, "steps": episode.steps,
                    "source": source.id, "objects": scene}
+            row["arm_contact"] = None if episode.contact is None else \
+                {"segment": episode.contact[0], "detail": episode.contact[1]}
             if paths:
                 row["path"] = np.round(np.array(episode.path), 6).tolist()
             if not episode.success:
@@ -571,6 +715,10 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
                     failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
                                (last, "misplaced", "the environment's success check fails"))
                 i, reason, detail = failure
+                if episode.contact is not None and episode.contact[0] <= i and reason != "timeout":
+                    # an arm link hit something on the way to this failure: that is what went wrong first
+                    reason, detail = "collision", (f"{episode.contact[1]} in segment {episode.contact[0]}; "
+                                                   f"then {reason}: {detail}")
                 row["failure"] = {"segment": i, "primitive": source.segments[i].primitive.id,
                                   "reason": reason, "detail": detail}
             rows.append(row)
