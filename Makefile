@@ -47,6 +47,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_scale.py store
 	$(PY) benchmarks/bench_scale.py ingest
 	$(PY) benchmarks/bench_scale.py cluster
+	$(PY) benchmarks/bench_robosuite.py --episodes 20 --seed 5000
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache

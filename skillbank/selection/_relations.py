@@ -64,6 +64,28 @@ class Relation:
     target_position: np.ndarray | None = None
     target_orientation: np.ndarray | None = None
 
+    @classmethod
+    def from_dict(cls, doc: dict) -> Relation:
+        """The relation of :meth:`to_dict` (as ``library list --json`` shows it under ``acts_on``).
+
+        Examples
+        --------
+        >>> r = Relation("cube", False, 0.08, np.array([0.0, 0.0, 0.08]), None)
+        >>> Relation.from_dict(r.to_dict()).position.tolist()
+        [0.0, 0.0, 0.08]
+        """
+        if not isinstance(doc, dict) or not {"object", "moves_with", "distance", "position"} <= set(doc):
+            raise ValueError("relation: expected a dict with object, moves_with, distance and position, as "
+                             "Relation.to_dict writes it")
+
+        def array(key):
+            value = doc.get(key)
+            return None if value is None else np.asarray(value, dtype=float)
+
+        return cls(str(doc["object"]), bool(doc["moves_with"]), float(doc["distance"]), array("position"),
+                   array("orientation"), array("start_position"), array("start_orientation"),
+                   doc.get("target"), array("target_position"), array("target_orientation"))
+
     def to_dict(self) -> dict:
         return {"object": self.object, "moves_with": self.moves_with, "distance": float(self.distance),
                 "position": self.position.tolist(),

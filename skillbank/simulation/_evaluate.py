@@ -280,10 +280,6 @@ def _nearest(sources, obs, fingers=None):
                 total += LEVER * float(quaternion_angle(q, demo["orientation"][-1]))
         return total
 
-    missing = sorted({o for src in sources for o in src.start if f"{o}_pos" not in obs})
-    if missing:
-        raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; evaluate "
-                         "the library in the task it was recorded in")
     return min(sources, key=cost)
 
 
@@ -692,7 +688,12 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         for k in range(episodes):
             _reseed(environment, int(seed) + k)
             episode = _Episode(environment, environment.reset(), horizon, trace=paths)
-            episode.rest(sorted({o for src in sources for o in src.start if f"{o}_pos" in episode.obs}))
+            objects = sorted({o for src in sources for o in src.start})
+            missing = [o for o in objects if f"{o}_pos" not in episode.obs]
+            if missing:
+                raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
+                                 "evaluate the library in the task it was recorded in")
+            episode.rest(objects)
             episode.fingers = _fingers(environment, episode.obs)
             source = _nearest(sources, episode.obs, episode.fingers)
             scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in sorted(source.start)}

@@ -17,6 +17,7 @@ pytest.importorskip("robosuite")  # the extra skillbank[sim]
 
 from skillbank.cli import main  # noqa: E402
 from skillbank.pipeline import Library  # noqa: E402
+from skillbank.selection import Relation, compose  # noqa: E402
 from skillbank.simulation import REASONS, binomial_interval, evaluate, record  # noqa: E402
 
 
@@ -120,6 +121,8 @@ def test_the_command_says_what_failed_in_words(lift, capsys):
     (["--env", "robosuite:Lift", "--method", "magic"], r"method: expected one of"),
     (["--env", "robosuite:Lift", "--placement", "-0.1"], r"placement"),
     (["--env", "robosuite:Lift", "--episodes", "0"], r"episodes"),
+    (["--env", "robosuite:Stack"], r"the environment shows no pose of the library's object\(s\) \['cube'\]; "
+                                   r"evaluate the library in the task it was recorded in"),
 ])
 def test_bad_input_is_one_line(lift, capsys, argv, match):
     db, _ = lift
@@ -151,6 +154,15 @@ def test_what_each_primitive_acts_on_is_listed_and_travels_with_the_library(lift
     assert all(a is None or a["object"] == "cube" for a in acts)
     assert any(a is not None and a["moves_with"] for a in acts)  # the lift carries the cube
     assert any(a is not None and not a["moves_with"] and a["distance"] < 0.03 for a in acts)  # the grasp
+    # the stored relative pose of the grasp, put on the cube where it was, is the recorded grasp pose
+    with Library(db) as lib:
+        for p, a in zip(lib.primitives(), acts, strict=True):
+            if a is None:
+                continue
+            relation = Relation.from_dict(a)
+            position, orientation = compose(relation, p.demo["cube_pos"][-1], p.demo["cube_quat"][-1])
+            assert np.linalg.norm(position - p.demo["position"][-1]) < 1e-3
+            assert abs(abs(float(orientation @ p.demo["orientation"][-1])) - 1.0) < 1e-6
     assert main(["library", "list", str(db)]) == 0
     text = capsys.readouterr().out
     assert "carries cube" in text and "ends at cube" in text
