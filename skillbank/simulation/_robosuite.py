@@ -79,6 +79,10 @@ TASKS = {
     "Lift": Task(pick="cube", lift=0.15),
     "Stack": Task(pick="cubeA", onto="cubeB", onto_height=0.045),  # robosuite's 2 cm and 2.5 cm half-cubes
     "PickPlaceCan": Task(pick="Can", into=("target_bin_placements", "object_to_id", "can"), drop=0.08),
+    "PickPlaceMilk": Task(pick="Milk", into=("target_bin_placements", "object_to_id", "milk"), drop=0.08),
+    "PickPlaceBread": Task(pick="Bread", into=("target_bin_placements", "object_to_id", "bread"), drop=0.08),
+    "PickPlaceCereal": Task(pick="Cereal", into=("target_bin_placements", "object_to_id", "cereal"),
+                            drop=0.08),
     # the square nut by its handle (3.2 cm across its y axis), 1 cm out along it, clear of the ring, onto
     # the square peg (its top 0.1 m above the peg's centre)
     "NutAssemblySquare": Task(pick="SquareNut", site="SquareNut_handle_site", site_out=0.01, across=1,

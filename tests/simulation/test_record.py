@@ -147,10 +147,11 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'NutAssemblySquare', 'PickPlaceCan', "
-               r"'Stack'\]\), got 'Lift'"),
+    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'NutAssemblySquare', 'PickPlaceBread', "
+               r"'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', 'Stack'\]\), got 'Lift'"),
     (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'NutAssemblySquare', "
-                         r"'PickPlaceCan', 'Stack'\], got 'Door'"),
+                         r"'PickPlaceBread', 'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', 'Stack'\], "
+                         r"got 'Door'"),
     (["robosuite:Lift", "--episodes", "0"], r"episodes"),
     (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
      r"out: expected a file in an existing folder"),
