@@ -483,9 +483,10 @@ def _path_rigid(seg, obs):
     """The recorded segment moved rigidly into its frame's new pose (MimicGen's transform)."""
     demo = seg.primitive.demo
     P, Q = np.asarray(demo["position"], float), np.asarray(demo["orientation"], float)
-    if seg.frame != ("world",):  # the frame's pose at the segment's start in the source, as MimicGen
-        obj, at = seg.frame
-        P, Q = _moved(P, Q, _pose(demo, seg.relation.target if at == "target" else obj, 0),
+    if seg.frame != ("world",):
+        # the same frame poses the adapted goals use (for an object the tool reaches, where it lies at the
+        # segment's end: robosuite drops objects into place while the first segment starts)
+        P, Q = _moved(P, Q, _source_frame(demo, seg.relation, seg.frame),
                       _frame_pose(obs, seg.relation, seg.frame))
     here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
     s = np.linspace(0.0, 1.0, RIGID_BLEND + 1)[1:, None]
