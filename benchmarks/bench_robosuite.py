@@ -76,14 +76,14 @@ def figure(db: Path, task: str, seed: int, placement: float, out: Path) -> None:
         demos = store.demonstrations(store.demonstration_ids())
     # the first episode from ``seed`` in which the two methods differ (else the first): the figure shows
     # what the rates count
-    for k in range(seed, seed + 10):
-        runs = {m: run(db, f"robosuite:{task}", episodes=1, seed=k, placement=placement, method=m,
+    for shown in range(seed, seed + 10):
+        runs = {m: run(db, f"robosuite:{task}", episodes=1, seed=shown, placement=placement, method=m,
                        paths=True)["per_episode"][0] for m in ("lte", "rigid")}
         if runs["lte"]["success"] != runs["rigid"]["success"]:
             break
     else:
-        k = seed
-        runs = {m: run(db, f"robosuite:{task}", episodes=1, seed=k, placement=placement, method=m,
+        shown = seed
+        runs = {m: run(db, f"robosuite:{task}", episodes=1, seed=shown, placement=placement, method=m,
                        paths=True)["per_episode"][0] for m in ("lte", "rigid")}
     fig = Figure(figsize=(11, 4.6), layout="constrained")
     views = [(0, 1, "x (m)", "y (m)", "seen from above"), (0, 2, "x (m)", "z (m)", "seen from the side")]
@@ -113,7 +113,7 @@ def figure(db: Path, task: str, seed: int, placement: float, out: Path) -> None:
         if i == 0 and j == 1:
             ax.set_aspect("equal", adjustable="datalim")
     fig.axes[0].legend(fontsize=7, loc="best")
-    fig.suptitle(f"robosuite {task}, UR5e: episode seed {k}, placement ±{placement} m")
+    fig.suptitle(f"robosuite {task}, UR5e: episode seed {shown}, placement ±{placement} m")
     fig.savefig(out, dpi=110)
 
 
