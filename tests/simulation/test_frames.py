@@ -1,0 +1,73 @@
+"""Where a skill's goal is kept, chosen from its demonstrations alone (no robosuite needed).
+
+Synthetic skills with a known answer: a lift ends at a height above where the cube was, a placement
+in a fixed bin at one place in the world, a grasp of a cube at its faces (a quarter-turn symmetry),
+and a carry holds the wrist as it was.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+from skillbank.core import Demonstration
+from skillbank.selection import acted_on
+from skillbank.simulation._evaluate import _choose_frames, _Segment, _Source
+
+DOWN = np.array([1.0, 0.0, 0.0, 0.0])  # the tool pointing down (x, y, z, w)
+
+
+def _yawed(q, angle):
+    turn = np.array([0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)])
+    x1, y1, z1, w1 = turn
+    x2, y2, z2, w2 = q
+    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
+
+
+def _primitive(tool, cube, tool_yaw, cube_yaw, cluster, from_yaw=None):
+    """``from_yaw``: the wrist turns from this heading to ``tool_yaw`` in the first third (a reach)."""
+    n = len(tool)
+    t = np.linspace(0.0, 2.0, n)
+    yaw = np.full(n, tool_yaw) if from_yaw is None else \
+        from_yaw + np.clip(np.linspace(0.0, 3.0, n), 0, 1) * (tool_yaw - from_yaw)
+    demo = Demonstration(t, {"position": tool, "orientation": np.array([_yawed(DOWN, a) for a in yaw]),
+                             "cube_pos": cube, "cube_quat": np.tile(_yawed([0, 0, 0, 1.0], cube_yaw), (n, 1)),
+                             "actions": np.zeros((n, 7))})
+    return SimpleNamespace(demo=demo, cluster=cluster, id=cluster, start=0, stop=n)
+
+
+def _sources(rng, carry_to):
+    sources = []
+    for k in range(8):
+        cube = np.r_[rng.uniform(-0.1, 0.1, 2), 0.82]
+        cube_yaw = rng.uniform(-math.pi, math.pi)
+        grasp_yaw = cube_yaw + rng.integers(0, 4) * math.pi / 2 + rng.normal(0, 0.01)  # at a face
+        s = np.linspace(0.0, 1.0, 30)[:, None]
+        start = np.array([-0.2, 0.0, 1.0])
+        reach = start + s * (cube + [0, 0, 0.005] - start)
+        end = cube + [0, 0, 0.15] if carry_to is None else np.asarray(carry_to)
+        tool = cube + [0, 0, 0.005] + s * (end - cube)
+        src = _Source(k, {"cube": cube}, None)
+        for prim in (_primitive(reach, np.tile(cube, (30, 1)), grasp_yaw, cube_yaw, 0, from_yaw=0.0),
+                     _primitive(tool, tool - [0, 0, 0.005], grasp_yaw, cube_yaw, 1)):
+            relation = acted_on(prim.demo)
+            src.segments.append(_Segment(prim, relation, ("world",)))
+        sources.append(src)
+    _choose_frames(sources)
+    return sources
+
+
+def test_a_lift_is_kept_above_where_the_cube_was_and_a_grasp_at_its_faces():
+    reach, lift = _sources(np.random.default_rng(0), None)[0].segments
+    assert reach.relation.object == "cube" and not reach.relation.moves_with
+    assert reach.frame == ("cube", "end") and reach.turn == ("cube", "end") and reach.symmetry == 4
+    assert lift.relation.moves_with and lift.frame == ("cube", "start")
+    assert lift.turn == "held" and lift.symmetry == 1  # the wrist stays as it grasped
+
+
+def test_a_placement_at_a_fixed_place_is_kept_in_the_world():
+    _, carry = _sources(np.random.default_rng(1), [0.1, 0.3, 0.95])[0].segments
+    assert carry.relation.moves_with and carry.frame == ("world",)
