@@ -57,6 +57,10 @@ def add_parser(sub):
                         "rigid (the recorded segment moved rigidly into the object's new frame) or replay "
                         "(the source's actions, open loop)")
     e.add_argument("--horizon", type=int, default=1000, help="control steps per episode (default 1000, 50 s)")
+    e.add_argument("--order", type=lambda text: [o.strip() for o in text.split(",")], default=None,
+                   metavar="OBJ,OBJ,...",
+                   help="when the library's demonstrations each move other objects (one per object), the "
+                        "order in which their parts run, by object name (default: by name)")
     e.add_argument("--json", action="store_true",
                    help="print env, episodes, successes, success_rate, interval and per_episode as JSON")
     e.set_defaults(func=_evaluate)
@@ -75,7 +79,8 @@ def _evaluate(args) -> int:
             bar.set_postfix_str(f"{successes} succeeded")
 
         report = evaluate(_target(args.db), args.env, episodes=args.episodes, seed=args.seed,
-                          placement=args.placement, method=args.method, horizon=args.horizon, progress=tick)
+                          placement=args.placement, method=args.method, horizon=args.horizon,
+                          order=args.order, progress=tick)
     if args.json:
         print(json.dumps(report))
         return 0

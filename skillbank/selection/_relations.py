@@ -5,7 +5,7 @@ A demonstration that records object poses (robosuite's and robomimic's
 which object each primitive acts on, from the data alone: the object that
 moves *with* the tool during the primitive (it is carried: it moves by more
 than ``moved`` metres while its distance to the tool stays within
-``rigid`` metres of its first value), else the object the tool *ends*
+``rigid`` metres of its first value, up to where the tool lets it go), else the object the tool *ends*
 nearest (within ``near`` metres; a reach to a grasp). Nothing is named by
 hand. The tool's end pose in that object's frame (:class:`Relation`) is
 what a new scene needs: :func:`compose` puts it on the object's new pose,
@@ -162,8 +162,11 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     for name in object_streams(demo):
         where = demo[f"{name}_pos"]
         gap = np.linalg.norm(where - P, axis=1)
-        travel = float(np.linalg.norm(where - where[0], axis=1).max())
-        if travel > moved and float(np.abs(gap - gap[0]).max()) <= rigid:
+        # carried until it is let go: a primitive that ends with a release lets the object fall after it
+        off = np.flatnonzero(np.abs(gap - gap[0]) > rigid)
+        held = len(gap) if off.size == 0 else int(off[0])
+        travel = float(np.linalg.norm(where[:held] - where[0], axis=1).max()) if held else 0.0
+        if travel > moved:
             carried.append((travel, name))
         ends.append((float(gap[-1]), name))
     if carried:

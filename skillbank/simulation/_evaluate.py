@@ -614,6 +614,25 @@ def _run_segments(episode, source, method, random_state, timings):
     return None
 
 
+def _order(groups, order):
+    """The parts of the task (keys of ``groups``) in the order ``order`` names their objects."""
+    if order is None:
+        return sorted(groups)
+    if isinstance(order, str) or not all(isinstance(o, str) for o in order):
+        raise ValueError(f"order: expected a list of object names, got {order!r}")
+    part_of = {o: part for part in groups for o in part}
+    unknown = [o for o in order if o not in part_of]
+    if unknown:
+        raise ValueError(f"order: the library's demonstrations move no object {unknown}; they move "
+                         f"{sorted(part_of)}")
+    parts = list(dict.fromkeys(part_of[o] for o in order))
+    left = [p for p in groups if p not in parts]
+    if left:
+        raise ValueError(f"order: it leaves out {sorted(o for p in left for o in p)}; name every object "
+                         "the library's demonstrations move")
+    return parts
+
+
 def _make(suite, task, seed, horizon):
     if task not in suite.ALL_ENVIRONMENTS:
         raise ValueError(f"env: robosuite has no task {task!r}; its tasks are "
@@ -626,7 +645,8 @@ def _make(suite, task, seed, horizon):
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
-             horizon: int = 1000, random_state=None, paths: bool = False, progress=None) -> dict:
+             horizon: int = 1000, order=None, random_state=None, paths: bool = False,
+             progress=None) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -647,6 +667,11 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         A name of :data:`skillbank.selection.METHODS`, or a baseline of :data:`BASELINES`.
     horizon : int, default=1000
         Control steps an episode may take (20 per second).
+    order : sequence of str, optional
+        When the library's demonstrations each act on other objects (one per object, say), the task is
+        done part after part: each part is the demonstrations of one set of objects, run from the
+        nearest of them in the state the last part left. ``order`` names the objects in the order
+        their parts run (default: sorted by name). With one part, it is not needed.
     random_state : int or None
         Seeds the representation where it samples (ProMP).
     paths : bool, default=False
@@ -659,9 +684,10 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     dict
         ``{"env", "method", "seed", "placement", "episodes", "successes", "success_rate", "interval",
         "timing", "per_episode"}``; each episode's entry has its ``seed``, ``success``, ``steps``,
-        ``source`` (the demonstration it followed), ``objects`` (each object's position at rest
-        before the first segment) and, for a failure, ``failure`` with the ``segment``
-        (from 0), its ``primitive`` id, the ``reason`` (a key of :data:`REASONS`) and a ``detail``.
+        ``source`` (the demonstration it followed; ``sources``, one per part), ``objects`` (each
+        object's position at rest before the first segment), ``arm_contact`` and, for a failure,
+        ``failure`` with the ``segment`` (from 0, counted along every part), its ``primitive`` and
+        ``source`` ids, the ``reason`` (a key of :data:`REASONS`) and a ``detail``.
     """
     if not isinstance(env, str) or not env.startswith("robosuite:") or not env.split(":", 1)[1]:
         raise ValueError(f"env: expected robosuite:TASK, got {env!r}")
@@ -680,6 +706,10 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         if store is not library:
             store.close()
+    groups = {}
+    for src in sources:  # the parts of a task: the sources that act on the same objects
+        groups.setdefault(tuple(sorted(src.start)), []).append(src)
+    order = _order(groups, order)
     suite = import_robosuite()
     environment = _make(suite, task, seed, horizon)
     if placement is not None:
@@ -696,24 +726,33 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
                                  "evaluate the library in the task it was recorded in")
             episode.rest(objects)
             episode.fingers = _fingers(environment, episode.obs)
-            source = _nearest(sources, episode.obs, episode.fingers)
-            scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in sorted(source.start)}
-            failure = None
-            failure = _run_segments(episode, source, method, random_state, timings)
-            timings["segments"] += len(source.segments)
+            scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in objects}
+            # one part of the task after the other (one, unless the library's demonstrations each
+            # move other objects), each from the nearest of its sources in the state the last one left
+            chain, failure = [], None
+            for part in order:
+                source = _nearest(groups[part], episode.obs, episode.fingers)
+                failure = _run_segments(episode, source, method, random_state, timings)
+                timings["segments"] += len(source.segments)
+                if failure is not None:
+                    failure = (len(chain) + failure[0], *failure[1:])
+                chain.extend((source, seg) for seg in source.segments)
+                if failure is not None or episode.over:
+                    break
             for _ in range(SETTLE):  # a last second for the objects to come to rest
                 if episode.over:
                     break
                 episode.act(np.r_[np.zeros(6), episode.driver.grip])
+            used = list(dict.fromkeys(src.id for src, _ in chain))
             row = {"seed": int(seed) + k, "success": episode.success, "steps": episode.steps,
-                   "source": source.id, "objects": scene}
+                   "source": used[0], "sources": used, "objects": scene}
             row["arm_contact"] = None if episode.contact is None else \
                 {"segment": episode.contact[0], "detail": episode.contact[1]}
             if paths:
                 row["path"] = np.round(np.array(episode.path), 6).tolist()
             if not episode.success:
                 if failure is None:
-                    last = len(source.segments) - 1
+                    last = len(chain) - 1
                     failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
                                (last, "misplaced", "the environment's success check fails"))
                 i, reason, detail = failure
@@ -721,8 +760,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
                     # an arm link hit something on the way to this failure: that is what went wrong first
                     reason, detail = "collision", (f"{episode.contact[1]} in segment {episode.contact[0]}; "
                                                    f"then {reason}: {detail}")
-                row["failure"] = {"segment": i, "primitive": source.segments[i].primitive.id,
-                                  "reason": reason, "detail": detail}
+                row["failure"] = {"segment": i, "primitive": chain[i][1].primitive.id,
+                                  "source": chain[i][0].id, "reason": reason, "detail": detail}
             rows.append(row)
             if progress is not None:
                 progress(k + 1, sum(r["success"] for r in rows))

@@ -11,6 +11,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from skillbank.core import Demonstration
 from skillbank.selection import acted_on
@@ -71,3 +72,17 @@ def test_a_lift_is_kept_above_where_the_cube_was_and_a_grasp_at_its_faces():
 def test_a_placement_at_a_fixed_place_is_kept_in_the_world():
     _, carry = _sources(np.random.default_rng(1), [0.1, 0.3, 0.95])[0].segments
     assert carry.relation.moves_with and carry.frame == ("world",)
+
+
+def test_the_parts_of_a_task_run_in_the_order_named():
+    from skillbank.simulation._evaluate import _order
+
+    groups = {("Can",): [], ("Milk",): [], ("Bread",): []}
+    assert _order(groups, None) == [("Bread",), ("Can",), ("Milk",)]  # by name when none is given
+    assert _order(groups, ["Milk", "Can", "Bread"]) == [("Milk",), ("Can",), ("Bread",)]
+    with pytest.raises(ValueError, match=r"order: the library's demonstrations move no object \['Cereal'\]"):
+        _order(groups, ["Milk", "Cereal"])
+    with pytest.raises(ValueError, match=r"order: it leaves out \['Bread'\]; name every object"):
+        _order(groups, ["Milk", "Can"])
+    with pytest.raises(ValueError, match=r"order: expected a list of object names"):
+        _order(groups, "Milk")
