@@ -4,8 +4,8 @@ A demonstration that records object poses (robosuite's and robomimic's
 ``<name>_pos`` (n, 3) and ``<name>_quat`` (n, 4, x, y, z, w) streams) says
 which object each primitive acts on, from the data alone: the object that
 moves *with* the tool during the primitive (it is carried: it moves by more
-than ``moved`` metres while its distance to the tool stays within
-``rigid`` metres of its first value, up to where the tool lets it go), else the object the tool *ends*
+than ``moved`` metres while its displacement stays within ``rigid`` metres
+of the tool's, up to where the tool lets it go), else the object the tool *ends*
 nearest (within ``near`` metres; a reach to a grasp). Nothing is named by
 hand. The tool's end pose in that object's frame (:class:`Relation`) is
 what a new scene needs: :func:`compose` puts it on the object's new pose,
@@ -132,7 +132,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     moved : float, default=0.01
         How far an object must move during the primitive to count as carried (m).
     rigid : float, default=0.02
-        How much its distance to the tool may change meanwhile (m).
+        How far its displacement may differ from the tool's meanwhile (m).
 
     Returns
     -------
@@ -162,11 +162,13 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     for name in object_streams(demo):
         where = demo[f"{name}_pos"]
         gap = np.linalg.norm(where - P, axis=1)
-        # carried until it is let go: a primitive that ends with a release lets the object fall after it
-        off = np.flatnonzero(np.abs(gap - gap[0]) > rigid)
+        # carried while it moves as the tool moves, until it is let go (a primitive that ends with a
+        # release lets it fall after that); an object that falls into place while the tool stays is not
+        off = np.flatnonzero(np.linalg.norm((where - where[0]) - (P - P[0]), axis=1) > rigid)
         held = len(gap) if off.size == 0 else int(off[0])
         travel = float(np.linalg.norm(where[:held] - where[0], axis=1).max()) if held else 0.0
-        if travel > moved:
+        carrier = float(np.linalg.norm(P[:held] - P[0], axis=1).max()) if held else 0.0
+        if travel > moved and carrier > moved:  # both moved, together
             carried.append((travel, name))
         ends.append((float(gap[-1]), name))
     if carried:
