@@ -34,7 +34,7 @@ def add_parser(sub):
     ArgumentParser(...)
     """
     p = sub.add_parser("plan", help="plan a task over labelled skills (PDDL) and reproduce it as one "
-                                    "trajectory (needs skillbank[plan])")
+                                    "trajectory (--search optimal needs skillbank[plan])")
     p.add_argument("db", type=_location, help=_DB_READ)
     p.add_argument("--scene", type=Path, required=True,
                    help="scene file (JSON): objects with type/position/orientation, obstacles, init, goal, "
@@ -49,6 +49,10 @@ def add_parser(sub):
                         "searches (default 100000, checked before it starts)")
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="seconds the planner may search before it gives up (default 600)")
+    p.add_argument("--search", choices=["satisficing", "optimal"], default="satisficing",
+                   help="the planner's search: 'satisficing' (default), skillbank's greedy best-first search "
+                        "with the FF heuristic, which scales to hundreds of objects; 'optimal', A* with "
+                        "LM-cut (jupyddl), the fewest steps, for small tasks")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
@@ -106,7 +110,7 @@ def _plan(args) -> int:
         if args.clearance is not None:
             bound["clearance"] = clearance_margin(args)
         result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
-                           random_state=args.seed, progress=tick, **bound)
+                           random_state=args.seed, progress=tick, search=args.search, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
     if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
@@ -127,6 +131,7 @@ def _plan(args) -> int:
     status = 0 if sim is None or sim.confirmed else 1
     if args.json:
         doc = result.to_dict()
+        doc["planner"] = _planner(args)
         doc["written"] = [str(p) for p in written]
         if sim is not None:
             doc["simulation"] = sim.to_dict()
@@ -149,6 +154,13 @@ def _plan(args) -> int:
     if sim is not None:
         print_simulation(sim, planned=True)
     return status
+
+
+def _planner(args) -> dict:
+    """The ``planner`` entry of the JSON output: the search asked for and the planner that ran it."""
+    from ..planning import SEARCHES  # the planner's layer, when a plan runs
+
+    return {"search": args.search, "name": SEARCHES[args.search]}
 
 
 def _stem(plot: Path) -> Path:
@@ -187,7 +199,7 @@ def _empty(args, result, scene) -> int:
         notes.append("--simulate: nothing simulated (a plan of no steps moves nothing)")
     if args.json:
         doc = result.to_dict()
-        doc.update(notes=notes, written=[])
+        doc.update(notes=notes, written=[], planner=_planner(args))
         print(json.dumps(doc, allow_nan=False))
         return 0
     print(f"{args.db}: plan of 0 step(s) for {len(scene.goal)} goal fact(s)")

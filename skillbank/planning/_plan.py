@@ -129,13 +129,15 @@ def _scene(scene) -> Scene:
 
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
               max_expansions: int = MAX_EXPANSIONS, max_groundings: int = MAX_GROUNDINGS,
-              time_limit: float = TIME_LIMIT, progress=None, clearance=None) -> PlanResult:
+              time_limit: float = TIME_LIMIT, progress=None, clearance=None,
+              search: str = "satisficing") -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
 
     1. The domain: ``domain`` (a :class:`Domain`, PDDL text or a file; used as
        it is), else the scene's ``domain`` file, else the skills' stored
        descriptions; the problem from the scene's objects, ``init`` and ``goal``.
-    2. The shortest plan, by :func:`~skillbank.planning.solve`.
+    2. A plan, by :func:`~skillbank.planning.solve` (``search``: satisficing
+       by default, the shortest with ``"optimal"``).
     3. Each step reproduced by its skill (the label named like the action)
        and chained (:func:`~skillbank.planning.reproduce_plan`).
 
@@ -163,6 +165,9 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     clearance : float, optional
         With a robot: metres every body of the robot keeps from the obstacles, the table, the workspace
         bounds and itself (default :data:`~skillbank.planning.CLEARANCE`, 5 mm beyond its capsules).
+    search : {"satisficing", "optimal"}
+        The planner's search (see :data:`~skillbank.planning.SEARCHES`): greedy best-first with h_ff,
+        which scales to hundreds of objects, or A* with LM-cut (jupyddl), the fewest steps.
 
     Returns
     -------
@@ -183,7 +188,7 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
     check_groundings(dom, objects, max_groundings=max_groundings)
     try:
-        steps = solve(dom.text, problem, max_expansions=max_expansions, time_limit=time_limit)
+        steps = solve(dom.text, problem, search=search, max_expansions=max_expansions, time_limit=time_limit)
     except ValueError as exc:
         unused = unused_types(dom, objects)  # a scene of switches planned with a 'press ?b - button' action
         if not unused or not str(exc).startswith(("goal:", "planner:")):

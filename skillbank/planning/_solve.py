@@ -1,24 +1,35 @@
-"""Solving a PDDL problem in-process with jupyddl (the ``plan`` extra), and saying why when none exists.
+"""Solving a PDDL problem in-process, and saying why when no plan exists.
 
-The search is A* with the LM-cut heuristic, which is admissible: the plan
-found has the fewest actions. Before searching, a relaxed reachability
-analysis (deletes ignored) names the goal facts that no sequence of actions
-can make true; a problem whose facts are each reachable but not together is
-reported as such.
+Two searches (:data:`SEARCHES`):
+
+- ``"satisficing"`` (the default): skillbank's own grounding by relaxed
+  reachability and greedy best-first search with the FF heuristic
+  (:mod:`skillbank.planning._search`, pure Python and numpy). It scales to
+  hundreds of objects; its plans are short but not guaranteed shortest.
+- ``"optimal"``: A* with the LM-cut heuristic in jupyddl (the ``plan``
+  extra), which is admissible: the plan found has the fewest actions. Its
+  grounding (about 0.2 ms per ground action) and the states it expands
+  (2^N - 1 on a task of reaching N places in any order) limit it to small tasks.
+
+Before searching, a relaxed reachability analysis (deletes ignored) names the
+goal facts that no sequence of actions can make true; a problem whose facts
+are each reachable but not together is reported as such.
 """
 
 from __future__ import annotations
 
 import re
 import tempfile
+import time
 from collections import Counter
 from pathlib import Path
 
 from ..core._validation import check_positive, summarise
+from . import _search
 from ._pddl import Domain, _typed_list, parse_sexpr
 
-__all__ = ["solve", "planner", "MAX_EXPANSIONS", "MAX_GROUNDINGS", "TIME_LIMIT", "INSTALL",
-           "check_groundings", "unused_types"]
+__all__ = ["solve", "solve_with_info", "SEARCHES", "planner", "MAX_EXPANSIONS", "MAX_GROUNDINGS",
+           "TIME_LIMIT", "INSTALL", "check_groundings", "unused_types"]
 
 #: States the search expands before it gives up (a 10-step button task expands under a hundred).
 MAX_EXPANSIONS = 200_000
@@ -32,6 +43,8 @@ MAX_GROUNDINGS = 100_000
 TIME_LIMIT = 600.0
 _CAP = 10 ** 18
 INSTALL = "pip install 'skillbank[plan]'"
+#: The searches :func:`solve` offers, by name, and the planner that runs each.
+SEARCHES = {"satisficing": "GBFS with h_ff (skillbank)", "optimal": "A* with LM-cut (jupyddl)"}
 _STEP = re.compile(r"^\s*([^\s(]+)\s*\((.*)\)\s*$")
 
 
@@ -168,9 +181,24 @@ def _step(name: str) -> tuple:
     return m.group(1).lower(), args
 
 
-def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
+def solve(domain: str, problem: str, *, search: str = "satisficing", max_expansions: int = MAX_EXPANSIONS,
           time_limit: float = TIME_LIMIT) -> list:
-    """The shortest plan ``[(action, (args...))]`` of a domain and problem (PDDL text).
+    """A plan ``[(action, (args...))]`` of a domain and problem (PDDL text); the shortest with ``"optimal"``.
+
+    Parameters
+    ----------
+    domain, problem : str
+        PDDL text (STRIPS with typing and negative preconditions).
+    search : {"satisficing", "optimal"}
+        ``"satisficing"``: skillbank's greedy best-first search with the FF
+        heuristic, which scales to hundreds of objects (no extra needed);
+        ``"optimal"``: A* with LM-cut in jupyddl, the fewest actions (needs
+        the ``plan`` extra). See :data:`SEARCHES`.
+    max_expansions : int
+        States the search may expand before it gives up.
+    time_limit : float
+        Seconds the planner may run before it gives up (the satisficing
+        search counts its grounding too).
 
     Raises
     ------
@@ -180,7 +208,7 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
         that the search gave up after ``max_expansions`` states or
         ``time_limit`` seconds.
     ImportError
-        Without the planner, naming ``pip install 'skillbank[plan]'``.
+        With ``search="optimal"`` and without the planner, naming ``pip install 'skillbank[plan]'``.
 
     Examples
     --------
@@ -191,8 +219,80 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
     >>> solve(d, p)
     [('press', ('b2',))]
     """
+    return solve_with_info(domain, problem, search=search, max_expansions=max_expansions,
+                           time_limit=time_limit)[0]
+
+
+def solve_with_info(domain: str, problem: str, *, search: str = "satisficing",
+                    max_expansions: int = MAX_EXPANSIONS, time_limit: float = TIME_LIMIT) -> tuple:
+    """``(steps, info)``: :func:`solve`'s plan and how it was found.
+
+    ``info`` holds ``search`` (the name asked for), ``planner`` (its entry
+    in :data:`SEARCHES`), ``expanded`` (states the search expanded) and
+    ``seconds`` (grounding and search).
+
+    Examples
+    --------
+    >>> d = ("(define (domain d) (:requirements :strips :typing) (:types button) "
+    ...      "(:action press :parameters (?b - button) :effect (pressed ?b)))")
+    >>> p = "(define (problem p) (:domain d) (:objects b1 b2 - button) (:init) (:goal (and (pressed b2))))"
+    >>> steps, info = solve_with_info(d, p)
+    >>> steps, info["planner"], info["expanded"]
+    ([('press', ('b2',))], 'GBFS with h_ff (skillbank)', 1)
+    """
+    if search not in SEARCHES:
+        raise ValueError(f"search: expected one of {', '.join(map(repr, SEARCHES))}, got {search!r}")
     max_expansions = check_positive(max_expansions, name="max_expansions", integer=True)
     time_limit = check_positive(time_limit, name="time_limit")
+    start = time.perf_counter()
+    if search == "optimal":
+        steps, expanded = _optimal(domain, problem, max_expansions=max_expansions, time_limit=time_limit)
+    else:
+        steps, expanded = _satisficing(domain, problem, max_expansions=max_expansions, time_limit=time_limit)
+    info = {"search": search, "planner": SEARCHES[search], "expanded": expanded,
+            "seconds": time.perf_counter() - start}
+    return steps, info
+
+
+def _unreachable_error(missing) -> ValueError:
+    return ValueError(f"goal: no plan reaches {summarise(missing)}: no sequence of the skills' actions "
+                      f"makes {'it' if len(missing) == 1 else 'them'} true from the initial facts")
+
+
+def _gave_up(reason: str, expanded: int, *, max_expansions: int, time_limit: float) -> ValueError:
+    if reason == "expansions":
+        return ValueError(f"goal: the planner gave up after {max_expansions} states without a plan "
+                          "(max_expansions)")
+    return ValueError(f"goal: the planner gave up after {time_limit:g} s without a plan ({expanded} "
+                      "states); raise the bound if the task is meant (--time-limit, plan(time_limit=...))")
+
+
+def _together_error(goals) -> ValueError:
+    return ValueError(f"goal: no plan reaches {summarise(goals)} together: each fact is reachable, but no "
+                      "sequence of the skills' actions makes them true at once")
+
+
+def _satisficing(domain: str, problem: str, *, max_expansions: int, time_limit: float) -> tuple:
+    """skillbank's grounding and GBFS with h_ff, then action elimination: ``(steps, states expanded)``."""
+    deadline = time.perf_counter() + time_limit
+    try:
+        task = _search.ground(domain, problem, deadline=deadline)
+        if task.unreachable:
+            raise _unreachable_error(task.unreachable)
+        plan, expanded = _search.search(task, max_expansions=max_expansions, deadline=deadline)
+    except _search.SearchFailed as failed:
+        if failed.reason == "exhausted":
+            raise _together_error(sorted(task.facts[g] for g in task.goal)) from None
+        raise _gave_up(failed.reason, failed.expanded, max_expansions=max_expansions,
+                       time_limit=time_limit) from None
+    # the greedy search can wander; dropping the actions the goal does not need is cheap (quadratic in
+    # the plan's length, no search)
+    plan = _search.eliminate(task, plan)
+    return [task.names[op] for op in plan], expanded
+
+
+def _optimal(domain: str, problem: str, *, max_expansions: int, time_limit: float) -> tuple:
+    """jupyddl's grounding and A* with LM-cut: ``(steps, states expanded)``."""
     jp = planner()
     with tempfile.TemporaryDirectory(prefix="skillbank-plan-") as tmp:
         # jupyddl reads files: the same text the user can inspect beside the plot
@@ -206,8 +306,7 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
             raise ValueError(f"planner: the PDDL was refused: {detail}") from None
     missing = _unreachable(task)
     if missing:
-        raise ValueError(f"goal: no plan reaches {summarise(missing)}: no sequence of the skills' actions "
-                         f"makes {'it' if len(missing) == 1 else 'them'} true from the initial facts")
+        raise _unreachable_error(missing)
     try:
         result = jp.solve_task(task, "astar", "lmcut", max_expansions=max_expansions, time_limit=time_limit)
     except (ValueError, IndexError, KeyError, TypeError, RecursionError) as exc:  # the planner's, not ours
@@ -216,13 +315,10 @@ def solve(domain: str, problem: str, *, max_expansions: int = MAX_EXPANSIONS,
             from None
     if not result.solved:
         if result.stats.truncated and result.stats.expanded >= max_expansions:
-            raise ValueError(f"goal: the planner gave up after {max_expansions} states without a plan "
-                             "(max_expansions)")
+            raise _gave_up("expansions", result.stats.expanded, max_expansions=max_expansions,
+                           time_limit=time_limit)
         if result.stats.truncated:
-            raise ValueError(f"goal: the planner gave up after {time_limit:g} s without a plan "
-                             f"({result.stats.expanded} states); raise the bound if the task is meant "
-                             "(--time-limit, plan(time_limit=...))")
-        goals = sorted(task.fact_name(f) for f in task.goals)
-        raise ValueError(f"goal: no plan reaches {summarise(goals)} together: each fact is reachable, but no "
-                         "sequence of the skills' actions makes them true at once")
-    return [_step(op.name) for op in result.plan]
+            raise _gave_up("time", result.stats.expanded, max_expansions=max_expansions,
+                           time_limit=time_limit)
+        raise _together_error(sorted(task.fact_name(f) for f in task.goals))
+    return [_step(op.name) for op in result.plan], result.stats.expanded
