@@ -438,7 +438,8 @@ class Library(Adding):
         return self.store.descriptions(history=history)
 
     def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False,
-             max_groundings: int = MAX_GROUNDINGS, time_limit: float = TIME_LIMIT, search: str = "satisficing"):
+             max_groundings: int = MAX_GROUNDINGS, time_limit: float = TIME_LIMIT,
+             search: str = "satisficing"):
         """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
 
         See :func:`skillbank.planning.plan_task`: ``scene`` is a scene file, a dict of the same content
