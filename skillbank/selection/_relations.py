@@ -4,8 +4,9 @@ A demonstration that records object poses (robosuite's and robomimic's
 ``<name>_pos`` (n, 3) and ``<name>_quat`` (n, 4, x, y, z, w) streams) says
 which object each primitive acts on, from the data alone: the object that
 moves *with* the tool during the primitive (it is carried: it moves by more
-than ``moved`` metres while its displacement stays within ``rigid`` metres
-of the tool's, up to where the tool lets it go), else the object the tool *ends*
+than ``moved`` metres while it stays within ``rigid`` metres of where it is in
+the tool's frame, for at least the first half of the primitive, up to where the
+tool lets it go), else the object the tool *ends*
 nearest (within ``near`` metres; a reach to a grasp). Nothing is named by
 hand. The tool's end pose in that object's frame (:class:`Relation`) is
 what a new scene needs: :func:`compose` puts it on the object's new pose,
@@ -132,7 +133,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     moved : float, default=0.01
         How far an object must move during the primitive to count as carried (m).
     rigid : float, default=0.02
-        How far its displacement may differ from the tool's meanwhile (m).
+        How far it may shift in the tool's frame meanwhile (m).
 
     Returns
     -------
@@ -158,17 +159,26 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     P = demo["position"]
     if P.shape[1] != 3:
         raise ValueError(f"demo.position: expected 3-D tool positions, got {P.shape[1]}-D")
+    frames = None
+    if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
+        frames = quaternion_to_matrix(check_quaternions(demo["orientation"], name="orientation"))
     carried, ends = [], []
     for name in object_streams(demo):
         where = demo[f"{name}_pos"]
         gap = np.linalg.norm(where - P, axis=1)
-        # carried while it moves as the tool moves, until it is let go (a primitive that ends with a
-        # release lets it fall after that); an object that falls into place while the tool stays is not
-        off = np.flatnonzero(np.linalg.norm((where - where[0]) - (P - P[0]), axis=1) > rigid)
+        # carried while it stays where it is in the tool's frame (the wrist may turn it), until it is let
+        # go (a primitive that ends with a release lets it fall after that); without the tool's
+        # orientation, while it moves as the tool moves
+        offset = where - P
+        if frames is not None:
+            offset = np.einsum("nji,nj->ni", frames, offset)
+        off = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) > rigid)
         held = len(gap) if off.size == 0 else int(off[0])
         travel = float(np.linalg.norm(where[:held] - where[0], axis=1).max()) if held else 0.0
         carrier = float(np.linalg.norm(P[:held] - P[0], axis=1).max()) if held else 0.0
-        if travel > moved and carrier > moved:  # both moved, together
+        # both moved, together, for most of the primitive (an object that settles as the tool sets off
+        # moves with it for a sample or two)
+        if travel > moved and carrier > moved and held >= len(gap) / 2:
             carried.append((travel, name))
         ends.append((float(gap[-1]), name))
     if carried:
