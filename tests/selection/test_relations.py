@@ -97,3 +97,34 @@ def test_bad_input_is_one_clear_error():
     r = Relation("cube", False, 0.0, np.zeros(3), None)
     with pytest.raises(ValueError, match=r"position: expected 3 finite numbers"):
         compose(r, [0.0, np.nan, 0.0], [0.0, 0.0, 0.0, 1.0])
+
+
+def test_an_object_let_go_at_the_end_was_carried_and_one_settling_at_the_start_was_not():
+    """A carry that ends with a release (the object falls 8 cm after it) is a carry; a cube that settles
+    1.2 cm as the tool sets off towards it, and a nut turned with the wrist, are judged by where they sit
+    in the tool's frame."""
+    s = (T / T[-1])[:, None]
+    tool = np.asarray([0.5, 0.0, 0.1]) + s * [0.0, 0.3, 0.1]
+    box = tool - [0.0, 0.0, 0.03]
+    box[-5:, 2] -= np.linspace(0.02, 0.08, 5)  # let go: it falls into the bin
+    r = acted_on(_demo(tool, box=(box, UP)))
+    assert r.object == "box" and r.moves_with
+    reach = _reach([0.5, 0.1, 0.05])
+    cube = np.tile([0.5, 0.1, 0.02], (41, 1))
+    cube[:3, 2] += [0.012, 0.006, 0.0]  # dropped into place by the simulator's reset
+    r = acted_on(_demo(reach, cube=(cube, UP)))
+    assert r.object == "cube" and not r.moves_with
+
+
+def test_an_object_turned_with_the_wrist_is_carried():
+    from skillbank.core import quaternion_to_matrix
+    from skillbank.core._rotations import quaternion_multiply
+
+    s = (T / T[-1])
+    down = exp_map([0.0, np.pi, 0.0])
+    q = np.array([quaternion_multiply([0.0, 0.0, np.sin(a / 2), np.cos(a / 2)], down) for a in s * np.pi / 4])
+    tool = np.asarray([0.4, 0.0, 0.2]) + s[:, None] * [0.0, 0.2, 0.05]
+    nut = tool + np.einsum("nij,j->ni", quaternion_to_matrix(q), [0.067, 0.0, 0.0])  # held by its handle
+    d = Demonstration(T, {"position": tool, "orientation": q, "nut_pos": nut, "nut_quat": UP})
+    r = acted_on(d)
+    assert r.object == "nut" and r.moves_with
