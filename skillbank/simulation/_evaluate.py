@@ -41,7 +41,7 @@ from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
-from ._robosuite import CONTROL_FREQ, _Driver, _objects, import_robosuite
+from ._robosuite import CONTROL_FREQ, _Driver, _min_jerk_at, _objects, _pads, _turn, _yaw, import_robosuite
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
 
@@ -81,11 +81,10 @@ def binomial_interval(successes: int, n: int) -> tuple:
     """
     if n <= 0:
         return (0.0, 1.0)
-    z = 1.959963984540054
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    from scipy.stats import binomtest  # core dependency; only when a rate is reported
+
+    ci = binomtest(int(successes), int(n)).proportion_ci(method="wilson")
+    return (float(ci.low), float(ci.high))
 
 
 @dataclass
@@ -145,13 +144,6 @@ def _held_until(demo, obj) -> int:
     return int(held[-1]) if len(held) else len(offset) - 1
 
 
-def _heading(q) -> float:
-    """The direction about the vertical of the frame's x axis (rad): a tool pointing down, an object
-    standing on the table."""
-    R = quaternion_to_matrix(np.asarray(q, float))
-    return math.atan2(R[1, 0], R[0, 0])
-
-
 def _turn_reference(demo, relation, turn):
     """The source orientation the tool's end orientation is kept relative to (None: the world)."""
     if turn == "held":
@@ -163,7 +155,8 @@ def _turn_reference(demo, relation, turn):
 
 def _end_heading(demo, relation, turn):
     ref = _turn_reference(demo, relation, turn)
-    return _heading(demo["orientation"][-1]) - (0.0 if ref is None else _heading(ref))
+    # the heading of the x axis about the vertical: a tool pointing down, an object standing on the table
+    return _yaw(demo["orientation"][-1]) - (0.0 if ref is None else _yaw(ref))
 
 
 def _candidate_frames(relation):
@@ -253,12 +246,7 @@ def _sources(store):
 
 def _fingers(env, obs):
     """``(closing axis in the tool's frame, half the opening (m))`` of the gripper, from its finger pads."""
-    gripper = env.robots[0].gripper
-    gripper = gripper["right"] if isinstance(gripper, dict) else gripper
-    pads = [np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
-                     for n in gripper.important_geoms[f"{side}_fingerpad"]], axis=0)
-            for side in ("left", "right")]
-    across = pads[0] - pads[1]
+    across = _pads(env)
     width = float(np.linalg.norm(across))
     axis = quaternion_to_matrix(np.asarray(obs["robot0_eef_quat"], float)).T @ (across / max(width, 1e-9))
     return axis, width / 2
@@ -413,10 +401,6 @@ def _source_frame(demo, relation, frame):
     return _pose(demo, obj, 0 if at == "start" else -1)
 
 
-def _about_vertical(angle):
-    return np.array([0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)])
-
-
 def _goal_orientations(seg, obs):
     """The tool's goal orientations: the source's end orientation kept relative to the segment's turn frame,
     and its symmetric turns, nearest to the tool's orientation now first."""
@@ -427,8 +411,7 @@ def _goal_orientations(seg, obs):
     if ref is not None:
         now = here if seg.turn == "held" else _frame_pose(obs, relation, seg.turn)[1]
         q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
-    options = [quaternion_multiply(_about_vertical(2 * math.pi * m / seg.symmetry), q)
-               for m in range(seg.symmetry)]
+    options = [_turn(q, 2 * math.pi * m / seg.symmetry) for m in range(seg.symmetry)]
     return sorted(options, key=lambda o: float(quaternion_angle(o, here)))
 
 
@@ -543,10 +526,6 @@ def _oriented(seg, obs, u, goal):
     return quaternion_multiply(turns, src)
 
 
-def _min_jerk_at(s):
-    return 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
-
-
 def _check(seg, before, episode):
     """The failure reason of a segment that just ran, or None."""
     obs = episode.obs
@@ -570,36 +549,30 @@ def _run_segments(episode, source, method, random_state, timings):
             break
         episode.segment = i
         before = {k: np.array(v, float) for k, v in episode.obs.items() if isinstance(v, np.ndarray)}
+        goal = None  # the tool's, where the segment was adapted (replay has none)
         if method == "replay":  # the source's own actions over the segment's samples, open loop
             steps0 = episode.steps
             for action in source.actions[seg.primitive.start:seg.primitive.stop]:
                 if episode.over:
                     break
                 episode.act(action)
-            timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ
-            if episode.success:
-                return None
-            if episode.steps >= episode.horizon:
-                return i, "timeout", f"the horizon of {episode.horizon} steps ran out in this segment"
-            reason = _check(seg, before, episode)
-            if reason is not None:
-                return (i, *reason)
-            continue
-        tic = time.perf_counter()
-        try:
-            if method == "rigid":
-                P, Q, G = _path_rigid(seg, episode.obs)
-            else:
-                P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers)
-        except ValueError as error:
-            return i, "unreachable", str(error).splitlines()[0]
-        timings["adapt"] += time.perf_counter() - tic
-        steps0 = episode.steps
-        for p, q, g in zip(P, Q, G, strict=True):
-            if episode.over:
-                break
-            episode.step(p, q, g)
-        episode.settle(P[-1], Q[-1])
+        else:
+            tic = time.perf_counter()
+            try:
+                if method == "rigid":
+                    P, Q, G = _path_rigid(seg, episode.obs)
+                else:
+                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers)
+            except ValueError as error:
+                return i, "unreachable", str(error).splitlines()[0]
+            timings["adapt"] += time.perf_counter() - tic
+            steps0 = episode.steps
+            for p, q, g in zip(P, Q, G, strict=True):
+                if episode.over:
+                    break
+                episode.step(p, q, g)
+            episode.settle(P[-1], Q[-1])
+            goal = P[-1]
         timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ
         if episode.success:
             return None
@@ -608,9 +581,10 @@ def _run_segments(episode, source, method, random_state, timings):
         reason = _check(seg, before, episode)
         if reason is not None:
             return (i, *reason)
-        far = float(np.linalg.norm(P[-1] - episode.obs["robot0_eef_pos"]))
-        if far > ARRIVED:
-            return i, "unreachable", f"the tool stopped {far:.3f} m from the segment's goal"
+        if goal is not None:
+            far = float(np.linalg.norm(goal - episode.obs["robot0_eef_pos"]))
+            if far > ARRIVED:
+                return i, "unreachable", f"the tool stopped {far:.3f} m from the segment's goal"
     return None
 
 

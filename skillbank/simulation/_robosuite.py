@@ -115,9 +115,13 @@ def parse_env(spec: str) -> str:
     return task
 
 
-def _min_jerk(n: int) -> np.ndarray:
-    s = np.linspace(0.0, 1.0, max(int(n), 2))
+def _min_jerk_at(s):
+    """The minimum-jerk profile at phases ``s`` in [0, 1]."""
     return 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+
+
+def _min_jerk(n: int) -> np.ndarray:
+    return _min_jerk_at(np.linspace(0.0, 1.0, max(int(n), 2)))
 
 
 class _Driver:
@@ -178,14 +182,19 @@ def _yaw(q) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-def _closing_axis(env) -> np.ndarray:
-    """The horizontal direction the gripper closes along, from its finger pads (robosuite's names)."""
+def _pads(env) -> np.ndarray:
+    """The left finger pad's centre less the right's (m, world frame), from robosuite's pad geoms."""
     gripper = env.robots[0].gripper
     gripper = gripper["right"] if isinstance(gripper, dict) else gripper
     geoms = gripper.important_geoms
     pad = {side: np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
                           for n in geoms[f"{side}_fingerpad"]], axis=0) for side in ("left", "right")}
-    axis = (pad["left"] - pad["right"]) * [1, 1, 0]
+    return pad["left"] - pad["right"]
+
+
+def _closing_axis(env) -> np.ndarray:
+    """The horizontal direction the gripper closes along, from its finger pads."""
+    axis = _pads(env) * [1, 1, 0]
     return axis / max(np.linalg.norm(axis), 1e-9)
 
 
