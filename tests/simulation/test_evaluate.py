@@ -121,6 +121,8 @@ def test_the_command_says_what_failed_in_words(lift, capsys):
     (["--env", "robosuite:Lift", "--method", "magic"], r"method: expected one of"),
     (["--env", "robosuite:Lift", "--placement", "-0.1"], r"placement"),
     (["--env", "robosuite:Lift", "--episodes", "0"], r"episodes"),
+    (["--env", "robosuite:Lift", "--order", "Milk"],
+     r"order: the library's demonstrations move no object \['Milk'\]; they move \['cube'\]"),
     (["--env", "robosuite:Stack"], r"the environment shows no pose of the library's object\(s\) \['cube'\]; "
                                    r"evaluate the library in the task it was recorded in"),
 ])
