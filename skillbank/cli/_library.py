@@ -296,7 +296,8 @@ def _list(args) -> int:
     print(f"{args.db}: {doc['n_demonstrations']} demonstration(s), {len(doc['primitives'])} primitive(s)")
     print("skills:" if doc["skills"] else "skills: none (run 'skillbank library cluster')")
     for s in doc["skills"]:
-        print(f"  cluster {s['cluster']}: {s['count']} primitive(s), label {s['label'] or '-'}")
+        how = f" ({s['label_source']})" if s["label"] and s.get("label_source") else ""
+        print(f"  cluster {s['cluster']}: {s['count']} primitive(s), label {s['label'] or '-'}{how}")
     unassigned = doc["unassigned"]
     if doc["version"] is not None and unassigned["count"]:
         shown = ", ".join(map(str, unassigned["ids"][:20])) + (", ..." if unassigned["count"] > 20 else "")
@@ -310,8 +311,13 @@ def _list(args) -> int:
             f", carries {acts['object']}" + (f" to {acts['target']}" if acts["target"] else "")
             if acts["moves_with"] else f", ends at {acts['object']} ({acts['distance']:.3f} m)")
         print(f"  {p['id']}: demonstration {p['demonstration']}, cluster {cluster}, "
-              f"label {p['label'] or '-'}, {p['n_steps']} samples{on}")
+              f"label {p['label'] or '-'}{_how(p)}, {p['n_steps']} samples{on}")
     return 0
+
+
+def _how(p) -> str:
+    """Who said a primitive's label: `` (given)`` to it, `` (cluster)`` to its cluster, `` (inferred)``."""
+    return f" ({p['label_source']})" if p["label"] and p.get("label_source") else ""
 
 
 def _skill(lib, name: str):

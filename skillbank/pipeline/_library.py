@@ -324,13 +324,17 @@ class Library(Adding):
         -------
         dict
             ``{"n_demonstrations": int, "version": int or None,
-            "skills": [{"cluster", "label", "count"}],
+            "skills": [{"cluster", "label", "label_source", "count"}],
             "unassigned": {"count": int, "ids": [primitive ids]},
-            "primitives": [{"id", "demonstration", "cluster", "label", "n_steps", "acts_on"}]}``;
+            "primitives": [{"id", "demonstration", "cluster", "label", "label_source", "n_steps",
+            "acts_on"}]}``;
             skills are the clusters (0..k-1) of the current clustering
             ``version``; ``unassigned`` the primitives in none of them (an
             add with ``assign="none"``, a primitive that could not join, or
             a recluster that was interrupted): :meth:`cluster` assigns them.
+            ``label_source`` says whether a label was given (``"given"``: to the cluster, or to the
+            primitive itself), taken from the cluster (``"cluster"``, a primitive's) or inferred from
+            the labelled primitives of the cluster (``"inferred"``), or None without a label.
             ``acts_on`` is what the primitive acts on, found when it was added
             (:class:`~skillbank.selection.Relation` as a dict: the object, whether it was carried,
             its target, the tool's end pose in their frames), or None (no object poses recorded, or
@@ -341,8 +345,10 @@ class Library(Adding):
         if version is not None:
             n = self.store.version(version)["n_clusters"]
             counts = np.bincount(list(self.store.members(version).values()), minlength=n)
-            labels = self.store.cluster_labels(version)
-            skills = [{"cluster": k, "label": labels.get(k), "count": int(counts[k])} for k in range(n)]
+            labels, inferred = self.store.cluster_labels(version), self.store.inferred_labels(version)
+            skills = [{"cluster": k, "label": labels.get(k, inferred.get(k)), "count": int(counts[k]),
+                       "label_source": "given" if k in labels else "inferred" if k in inferred else None}
+                      for k in range(n)]
         prims = self.store.primitives(load=False)
         unassigned = [p.id for p in prims if p.cluster is None]
         ids = self.store.demonstration_ids()
@@ -356,7 +362,8 @@ class Library(Adding):
         return {"n_demonstrations": len(ids), "version": version, "skills": skills,
                 "unassigned": {"count": len(unassigned), "ids": unassigned},
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
-                                "label": p.label, "n_steps": p.n_steps, "acts_on": relation[p.id]}
+                                "label": p.label, "label_source": p.label_source, "n_steps": p.n_steps,
+                                "acts_on": relation[p.id]}
                                for p in prims]}
 
     def check(self) -> str:

@@ -44,11 +44,15 @@ class Primitive:
     cluster : int or None
         Cluster in the current clustering version (None: not clustered yet).
     label : str or None
-        The primitive's own label, else its cluster's.
+        The primitive's own label, else its cluster's, else the one its cluster's labelled primitives
+        agree on (sparse labels).
     demo : Demonstration or None
         The primitive's samples, every stream of its demonstration.
     features : ndarray or None
         Its features in the current clustering version.
+    label_source : str or None
+        Where ``label`` comes from: ``"given"`` (the primitive's own), ``"cluster"`` (its cluster's) or
+        ``"inferred"`` (from the labelled primitives of its cluster).
     """
 
     id: int
@@ -59,6 +63,7 @@ class Primitive:
     label: str | None = None
     demo: Demonstration | None = field(default=None, repr=False)
     features: np.ndarray | None = field(default=None, repr=False)
+    label_source: str | None = None
 
     @property
     def n_steps(self) -> int:
@@ -294,6 +299,10 @@ class Store(ABC):
     @abstractmethod
     def cluster_labels(self, version: int) -> dict:
         """``{cluster: label}`` of a version."""
+
+    def inferred_labels(self, version: int) -> dict:
+        """``{cluster: label}`` inferred in a version: the one label its labelled primitives carry."""
+        return {}
 
     @abstractmethod
     def add_version(self, *, params: dict, centers, pca_mean, pca_components, members, labels=None) -> int:

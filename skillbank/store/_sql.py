@@ -77,6 +77,15 @@ def translate(sql: str, marker: str) -> str:
     return "'".join(part.replace("?", marker) if k % 2 == 0 else part for k, part in enumerate(parts))
 
 
+# Sparse labels (the paper's): a label a person gave one primitive is inferred for the primitives of its
+# cluster that have none, when the cluster's labelled members agree on it (members labelled differently
+# are an ambiguity, and none is inferred); a label given to the cluster itself comes first.
+_INFERRED = ("SELECT m2.cluster AS cluster, MIN(p2.label) AS label FROM cluster_members m2 "
+             "JOIN primitives p2 ON p2.id = m2.primitive_id WHERE m2.version = ? AND p2.label IS NOT NULL "
+             "GROUP BY m2.cluster HAVING COUNT(DISTINCT p2.label) = 1")
+_EFFECTIVE = "COALESCE(p.label, l.label, i.label)"
+
+
 class Session:
     """One transaction's (or statement's) driver cursor, taking the library's SQL as written.
 
@@ -237,21 +246,25 @@ class SQLStore(Store):
                    ("p.demonstration_id = ?",
                     None if demonstration is None else check_id(demonstration, name="demonstration")),
                    ("m.cluster = ?", None if cluster is None else check_id(cluster, name="cluster")),
-                   ("COALESCE(p.label, l.label) = ?", label)]
+                   (f"{_EFFECTIVE} = ?", label)]
         given = [(sql, value) for sql, value in filters if value is not None]
         where = " AND ".join(sql for sql, _ in given) or "1 = 1"
         with self._read() as db:
             version = self._current(db)
             # LEFT JOIN: a primitive whose demonstration is gone (a damaged library) is named, not hidden
             rows = db.execute(
-                "SELECT p.id, p.demonstration_id, p.start, p.stop, m.cluster, COALESCE(p.label, l.label), "
-                "m.features, d.id, d.n_steps FROM primitives p LEFT JOIN demonstrations d "
-                "ON d.id = p.demonstration_id "
+                f"SELECT p.id, p.demonstration_id, p.start, p.stop, m.cluster, {_EFFECTIVE}, "
+                "m.features, d.id, d.n_steps, "
+                "CASE WHEN p.label IS NOT NULL THEN 'given' WHEN l.label IS NOT NULL THEN 'cluster' "
+                "WHEN i.label IS NOT NULL THEN 'inferred' END "
+                "FROM primitives p LEFT JOIN demonstrations d ON d.id = p.demonstration_id "
                 "LEFT JOIN cluster_members m ON m.primitive_id = p.id AND m.version = ? "
                 "LEFT JOIN cluster_labels l ON l.version = m.version AND l.cluster = m.cluster "
+                f"LEFT JOIN ({_INFERRED}) i ON i.cluster = m.cluster "
                 f"WHERE {where} ORDER BY p.id",  # noqa: S608 - fixed clauses; every value is a parameter
-                [-1 if version is None else version, *(value for _, value in given)]).fetchall()
-            for pid, did, a, b, *_, found, n in rows:
+                [-1 if version is None else version, -1 if version is None else version,
+                 *(value for _, value in given)]).fetchall()
+            for pid, did, a, b, *_, found, n, _source in rows:
                 if found is None:
                     raise damaged(self.location, f"primitive {pid}",
                                   f"expected its demonstration {did}, got none (an orphan primitive)")
@@ -267,8 +280,12 @@ class SQLStore(Store):
                      stored_array(db, r[6], f"clustering version {version} member {r[0]} (its features)")
                      for r in rows}
         return [Primitive(pid, did, a, b, c, lab,
-                          primitive_demo(parents[did], pid, did, a, b) if load else None, feats[pid])
-                for pid, did, a, b, c, lab, *_ in rows]
+                          primitive_demo(parents[did], pid, did, a, b) if load else None, feats[pid], origin)
+                for pid, did, a, b, c, lab, _f, _d, _n, origin in rows]
+
+    def inferred_labels(self, version) -> dict:
+        with self._read() as db:
+            return dict(db.execute(_INFERRED, (check_id(version, name="version"),)).fetchall())
 
     # -- clustering versions and labels -----------------------------------------------------------
     @staticmethod

@@ -42,8 +42,10 @@ def test_end_to_end_on_rail(run, tmp_path, new_library, data_dir):
     doc = json.loads(out)
     assert set(doc) == {"n_demonstrations", "version", "skills", "primitives", "unassigned"}
     assert doc["n_demonstrations"] == 18
-    assert doc["skills"][0] == {"cluster": 0, "label": "first", "count": doc["skills"][0]["count"]}
-    assert set(doc["primitives"][0]) == {"id", "demonstration", "cluster", "label", "n_steps", "acts_on"}
+    assert doc["skills"][0] == {"cluster": 0, "label": "first", "count": doc["skills"][0]["count"],
+                                "label_source": "given"}
+    assert set(doc["primitives"][0]) == {"id", "demonstration", "cluster", "label", "label_source", "n_steps",
+                                         "acts_on"}
     assert doc["primitives"][0]["acts_on"] is None  # RAIL records no object poses
     assert [p["label"] for p in doc["primitives"][:12]] == ["reaching"] * 12
     assert doc["primitives"][0]["n_steps"] == 1000

@@ -234,3 +234,32 @@ def test_primitives_added_while_clustering_join_the_new_version(new_library, bac
         assert assigned[prims[-1].id] == "incremental" and list(assigned.values()).count("fit") == len(demos)
         # the late one, a bowed reach, joins the bowed reaches' cluster, not the straight ones'
         assert prims[-1].cluster == prims[-2].cluster != prims[0].cluster
+
+
+def test_sparse_labels_one_primitive_labels_its_cluster_and_reclustering_keeps_it(lib, reach, two_skills):
+    lib.add_many(two_skills(), segment=False)
+    lib.cluster()
+    clusters = [p["cluster"] for p in lib.summary()["primitives"]]
+    straight, bowed = clusters[0], clusters[6]
+    # the paper's sparse labels: a person names one primitive, its cluster carries the name
+    lib.label("reach", primitive=3)
+    found = lib.primitives(label="reach", load=False)
+    assert [p.id for p in found] == [1, 2, 3, 4, 5, 6]
+    assert {p.id: p.label_source for p in found} == {1: "inferred", 2: "inferred", 3: "given",
+                                                     4: "inferred", 5: "inferred", 6: "inferred"}
+    skills = {s["cluster"]: s for s in lib.summary()["skills"]}
+    assert skills[straight]["label"] == "reach" and skills[straight]["label_source"] == "inferred"
+    assert skills[bowed]["label"] is None and skills[bowed]["label_source"] is None
+    # a primitive's own label stays its own; a label given to the cluster wins over an inferred one
+    lib.label("curve", cluster=bowed)
+    lib.label("swerve", primitive=8)
+    assert [p.id for p in lib.primitives(label="curve", load=False)] == [7, 9, 10, 11, 12]
+    # members labelled differently are an ambiguity: nothing is inferred for the others
+    lib.label("dash", primitive=4)
+    assert [p.id for p in lib.primitives(label="reach", load=False)] == [3]
+    assert lib.primitives(demonstration=2, load=False)[0].label is None
+    lib.label(None, primitive=4)
+    # reclustering keeps what the person said: the primitive's label, inferred again in the new version
+    lib.cluster(stretch=0.5, random_state=3)
+    assert [p.id for p in lib.primitives(label="reach", load=False)] == [1, 2, 3, 4, 5, 6]
+    assert lib.primitives(demonstration=3, load=False)[0].label_source == "given"

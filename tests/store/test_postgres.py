@@ -306,7 +306,7 @@ def test_eight_processes_write_one_library_at_once(postgres_url):
             np.testing.assert_array_equal(demo["position"], rng.normal(size=(40, 3)))
             assert [(p.start, p.stop) for p in store.primitives(demonstration=did, load=False)] == \
                 [(0, 10), (10, 25), (25, 40)]
-        assert sorted(p.label for p in prims if p.label) == [f"p{k}" for k in range(8)]
+        assert sorted(p.label for p in prims if p.label_source == "given") == [f"p{k}" for k in range(8)]
         assert store.check() == "ok"
 
 

@@ -296,7 +296,7 @@ def test_labels_with_terminal_escapes_are_shown_escaped_and_json_stays_exact(cli
     code, out, err = cli("library", "list", db)
     assert code == 0, err
     assert "\x1b" not in out and "\x9b" not in out and "\x07" not in out
-    assert r"label \x1b[31mred\x1b[0m," in out and r"label clear\x9b2J\x07," in out
+    assert r"label \x1b[31mred\x1b[0m (given)," in out and r"label clear\x9b2J\x07 (given)," in out
     code, out, err = cli("library", "list", db, "--json")
     assert code == 0 and "\x1b" not in out and "\x9b" not in out
     assert [p["label"] for p in json.loads(out)["primitives"]] == [red, csi]
