@@ -36,9 +36,11 @@ def add_parser(sub):
     p = sub.add_parser("plan", help="plan a task over labelled skills (PDDL) and reproduce it as one "
                                     "trajectory (--search optimal needs skillbank[plan])")
     p.add_argument("db", type=_location, help=_DB_READ)
-    p.add_argument("--scene", type=Path, required=True,
+    p.add_argument("--scene", required=True,
                    help="scene file (JSON): objects with type/position/orientation, obstacles, init, goal, "
-                        "start (see docs/planning.md)")
+                        "start (see docs/planning.md); or robosuite:PickPlace / robosuite:Stack3, a "
+                        "robosuite "
+                        "scene the plan is carried out in (with --simulate; see docs/simulation.md)")
     p.add_argument("--domain", type=Path, default=None,
                    help="a PDDL domain to use as it is (default: built from the skills' descriptions, see "
                         "'library describe')")
@@ -69,11 +71,29 @@ def add_parser(sub):
                    help="replay the plan's joints in a MuJoCo simulation of the scene (needs --robot and "
                         "skillbank[sim]) and report the planned and the achieved goal facts side by side; "
                         "exit 1 when they disagree or the robot touches what no step targets")
+    g = p.add_argument_group("robosuite scenes (--scene robosuite:TASK --simulate)")
+    g.add_argument("--episodes", type=int, default=1, help="scenes to plan and run; episode k is placed from "
+                                                           "seed --seed + k (default 1, seed 0)")
+    g.add_argument("--goal", default=None, metavar="FACTS",
+                   help="the goal's facts, e.g. '(on cubeC cubeA) (on cubeA cubeB)' (default: the task's)")
+    g.add_argument("--method", default="lte",
+                   help="how each segment is adapted: lte (default), ja, promp, elmap, dmp; or replay (the "
+                        "phases' recorded actions, open loop, in the planned order) or rigid")
+    g.add_argument("--replan", action="store_true",
+                   help="when a step's effect is not what the simulation shows, or what the plan expects no "
+                        "longer holds, plan again from the observed facts (up to 3 times)")
+    g.add_argument("--placement", type=float, default=None, metavar="HALF_WIDTH",
+                   help="widen every object's x and y placement range to +-HALF_WIDTH metres")
+    g.add_argument("--disturb", default=None, metavar="K:OBJECT:X,Y,Z",
+                   help="after step K, put OBJECT at X,Y,Z (m): the world changing behind the plan's back")
     p.set_defaults(func=_plan)
     return p
 
 
 def _plan(args) -> int:
+    if args.scene.startswith("robosuite:"):
+        return _plan_physics(args)
+    args.scene = Path(args.scene)
     from .. import io  # the writers, only when a result is written
     from ..planning import load_scene, plan_task, write_pddl  # the planner's layers, when a plan runs
     from ..store import open_store  # the store, when a plan runs (not for --help)
@@ -206,3 +226,89 @@ def _empty(args, result, scene) -> int:
     for note in notes:
         print(f"  note: {note}")
     return 0
+
+
+def _disturbance(text):
+    parts = text.split(":")
+    try:
+        after, obj, xyz = int(parts[0]), parts[1], [float(v) for v in parts[2].split(",")]
+    except (ValueError, IndexError):
+        raise ValueError(f"disturb: expected K:OBJECT:X,Y,Z (a step number, an object, metres), got "
+                         f"{text!r}") from None
+    if len(parts) != 3 or len(xyz) != 3:
+        raise ValueError(f"disturb: expected K:OBJECT:X,Y,Z (a step number, an object, metres), got {text!r}")
+    return {"after": after, "object": obj, "position": xyz}
+
+
+def _plan_physics(args) -> int:
+    """``plan LIB --scene robosuite:TASK --simulate``: plan over the described skills and carry it out."""
+    import re
+
+    from ..simulation import execute_plan  # robosuite and the planner, when a plan runs
+
+    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance")
+             if getattr(args, n, None) is not None]
+    if given:
+        raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's UR5e in its own world and writes "
+                         "no trajectory; leave it out")
+    if not args.simulate:
+        raise ValueError(f"scene: {args.scene} is a robosuite task: its plan is carried out in the "
+                         "simulation; add --simulate")
+    if args.plot is not None:
+        from ..plotting import figure_path  # matplotlib only when a figure is asked for
+
+        figure_path(args.plot, name="plot")
+        check_folder(args.plot, "plot")
+    goal = None if args.goal is None else re.findall(r"\([^()]*\)", args.goal)
+    if args.goal is not None and (not goal or re.sub(r"\([^()]*\)", "", args.goal).strip()):
+        raise ValueError(f"goal: expected facts such as '(on cubeA cubeB) (on cubeB cubeC)', got "
+                         f"{args.goal!r}")
+    disturb = None if args.disturb is None else _disturbance(args.disturb)
+    progress = None
+    if show_progress(args):
+        from tqdm import tqdm  # a bar on a terminal only
+
+        bar = tqdm(total=args.episodes, desc="episodes", unit="episode")
+
+        def progress(done, successes):
+            bar.update(done - bar.n)
+            bar.set_postfix(successes=successes)
+    report = execute_plan(_target(args.db), args.scene, episodes=args.episodes,
+                          seed=0 if args.seed is None else args.seed, goal=goal, method=args.method,
+                          replan=args.replan, placement=args.placement, disturb=disturb, search=args.search,
+                          paths=args.plot is not None, progress=progress)
+    written = []
+    if args.plot is not None:
+        from ..plotting import plot_composed  # matplotlib only when a figure is asked for
+
+        written.append(str(plot_composed(report["per_episode"][0], args.plot, title=f"{args.scene}, seed "
+                                         f"{report['per_episode'][0]['seed']}, {report['method']}")))
+        for row in report["per_episode"]:
+            row.pop("path", None)
+    status = 0 if report["successes"] == report["episodes"] else 1
+    if args.json:
+        print(json.dumps({**report, "planner": _planner(args), "written": written}, allow_nan=False))
+        return status
+    for row in report["per_episode"]:
+        print(f"{args.scene} seed {row['seed']}: plan of {len(row['plan'])} step(s): {' '.join(row['plan'])}")
+        for st in row["steps"]:
+            seen = st.get("observed", {}).get("facts", [])
+            head = f"  {st['step']}. ({' '.join([st['action'], *st['args']])})"
+            if st["ok"]:
+                print(f"{head} by demonstration {st['source']}, primitives {st['primitives']}: planned "
+                      f"{' '.join(st['planned']['add'])}, seen {' '.join(seen)}")
+            else:
+                print(f"{head}: {st['reason']}: {st['detail']}")
+            if "replanned" in st:
+                print(f"     replanned: {' '.join(st['replanned']) or '(no steps)'}")
+        verdict = "success" if row["success"] else f"failure ({row['failure']['reason']})"
+        print(f"  {verdict} by the environment's check, {row['control_steps']} control steps")
+    lo, hi = report["interval"]
+    print(f"{args.scene}: {report['successes']}/{report['episodes']} = {100 * report['success_rate']:.0f} % "
+          f"[{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %), method {report['method']}")
+    if report["failures"]:
+        print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(report["failures"].items())))
+    for path in written:
+        print(f"  wrote {path}")
+    return status
+

@@ -32,6 +32,10 @@ with any of these keys (every one optional):
 ``transit``
     ``{"height": z}`` (m), or ``"none"``: overrides the scene's ``transit`` for
     this skill (see :func:`skillbank.planning.reproduce_plan`).
+``object``, ``target``
+    In a physics scene (``skillbank plan --scene robosuite:TASK``): the parameter bound to the object
+    the skill's primitives act on (reach or carry), and the one bound to where a carried object goes.
+    Default: the action's first and second parameters.
 """
 
 from __future__ import annotations
@@ -48,7 +52,7 @@ from ._json import check_depth, describe, number, numbers, short
 __all__ = ["Binding", "check_binding", "BINDING_KEYS", "DEFAULT_METHOD"]
 
 BINDING_KEYS = ("goal", "offset", "orientation", "obstacles", "gripper", "method", "k", "duration",
-                "velocity", "approach", "retreat", "transit")
+                "velocity", "approach", "retreat", "transit", "object", "target")
 #: The representation a plan step uses unless its binding names another: LTE edits the best
 #: candidate itself, so each step stays one recorded motion, met to round-off.
 DEFAULT_METHOD = "lte"
@@ -73,12 +77,16 @@ class Binding:
     retreat: object = None
     #: The transit height (m), "none" (no transit for this skill), or None (the scene's).
     transit: object = None
+    #: The parameters bound to what the primitives act on and to a carried object's target (None: default).
+    object: str | None = None
+    target: str | None = None
 
     def as_dict(self) -> dict:
         """The JSON-able binding, with only what differs from the defaults."""
         out = {}
-        if self.goal is not None:
-            out["goal"] = self.goal
+        for key in ("goal", "object", "target"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
         if self.offset is not None:
             out["offset"] = self.offset.tolist()
         if not isinstance(self.orientation, str):
@@ -146,13 +154,14 @@ def check_binding(doc, parameters=(), *, name: str = "binding") -> Binding:
         raise ValueError(f"{name}: unknown key {short(extra[0])}; expected keys among {list(BINDING_KEYS)}")
     out = Binding()
     names = [p for p, _ in parameters]
-    if doc.get("goal") is not None:
-        goal = doc["goal"]
-        goal = goal.lower() if isinstance(goal, str) else goal
-        if goal not in names:
-            got = short(doc["goal"]) if isinstance(doc["goal"], str) else describe(doc["goal"])
-            raise ValueError(f"{name}.goal: expected a parameter of the action ({names}), got {got}")
-        out.goal = goal
+    for key in ("goal", "object", "target"):
+        if doc.get(key) is None:
+            continue
+        value = doc[key].lower() if isinstance(doc[key], str) else doc[key]
+        if value not in names:
+            got = short(doc[key]) if isinstance(doc[key], str) else describe(doc[key])
+            raise ValueError(f"{name}.{key}: expected a parameter of the action ({names}), got {got}")
+        setattr(out, key, value)
     if doc.get("offset") is not None:
         out.offset = numbers(doc["offset"], f"{name}.offset", 3)
     orientation = doc.get("orientation", "object")

@@ -94,6 +94,12 @@ class _Segment:
     frame: tuple  # where the goal position is kept: ("world",) or (object, "start" | "end" | "target")
     turn: object = "held"  # where the goal orientation is kept: "held" (the tool's at the start) or a frame
     symmetry: int = 1  # quarter turns (4), half turns (2) or only whole turns (1) give the same goal
+    #: the scene's object for each of the source's (a skill bound to other objects); absent: the same name
+    names: dict = field(default_factory=dict)
+
+    def scene(self, name):
+        """The object of the scene that stands for the source's object ``name``."""
+        return self.names.get(name, name)
 
 
 @dataclass
@@ -252,23 +258,25 @@ def _fingers(env, obs):
     return axis, width / 2
 
 
-def _nearest(sources, obs, fingers=None):
-    """The source whose segments' goals move least in this scene: the smallest adaptation.
+def _cost(segments, obs, fingers=None) -> float:
+    """How far the segments' goals move in the scene ``obs`` shows: the size of the adaptation.
 
     A goal's change counts its distance plus :data:`LEVER` metres per radian of its turn (a wrist
     that turns much as it closes in sweeps its fingers through what it reaches for).
     """
-    def cost(src):
-        total = 0.0
-        for seg in src.segments:
-            p, q = _goal(seg, obs, fingers)
-            demo = seg.primitive.demo
-            total += float(np.linalg.norm(p - demo["position"][-1]))
-            if q is not None:
-                total += LEVER * float(quaternion_angle(q, demo["orientation"][-1]))
-        return total
+    total = 0.0
+    for seg in segments:
+        p, q = _goal(seg, obs, fingers)
+        demo = seg.primitive.demo
+        total += float(np.linalg.norm(p - demo["position"][-1]))
+        if q is not None:
+            total += LEVER * float(quaternion_angle(q, demo["orientation"][-1]))
+    return total
 
-    return min(sources, key=cost)
+
+def _nearest(sources, obs, fingers=None):
+    """The source whose segments' goals move least in this scene (:func:`_cost`)."""
+    return min(sources, key=lambda src: _cost(src.segments, obs, fingers))
 
 
 def _samplers(sampler):
@@ -387,9 +395,10 @@ def _grip(commands):
     return np.where(np.asarray(commands, float) > 0, 1.0, -1.0)
 
 
-def _frame_pose(obs, relation, frame):
+def _frame_pose(obs, seg, frame):
+    """The pose in the scene ``obs`` shows of the segment's frame ``frame`` (its object, bound)."""
     obj, at = frame
-    name = relation.target if at == "target" else obj
+    name = seg.scene(seg.relation.target if at == "target" else obj)
     return np.asarray(obs[f"{name}_pos"], float), np.asarray(obs[f"{name}_quat"], float)
 
 
@@ -409,7 +418,7 @@ def _goal_orientations(seg, obs):
     q = np.asarray(demo["orientation"][-1], float)
     ref = _turn_reference(demo, relation, seg.turn)
     if ref is not None:
-        now = here if seg.turn == "held" else _frame_pose(obs, relation, seg.turn)[1]
+        now = here if seg.turn == "held" else _frame_pose(obs, seg, seg.turn)[1]
         q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
     options = [_turn(q, 2 * math.pi * m / seg.symmetry) for m in range(seg.symmetry)]
     return sorted(options, key=lambda o: float(quaternion_angle(o, here)))
@@ -425,14 +434,15 @@ def _goal_position(seg, obs, q):
         end = _pose(demo, relation.object, k)[0]
         if seg.frame != ("world",):
             end = _moved(end, np.array([0.0, 0.0, 0.0, 1.0]), _source_frame(demo, relation, seg.frame),
-                         _frame_pose(obs, relation, seg.frame))[0]
+                         _frame_pose(obs, seg, seg.frame))[0]
         here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
-        held = quaternion_to_matrix(here_q).T @ (np.asarray(obs[f"{relation.object}_pos"], float) - here_p)
+        held = quaternion_to_matrix(here_q).T @ (np.asarray(obs[f"{seg.scene(relation.object)}_pos"], float)
+                                                 - here_p)
         # and then moves as the source's tool did after letting go (nothing, when it let go at the end)
         return end - quaternion_to_matrix(q) @ held + (demo["position"][-1] - demo["position"][k])
     if seg.frame == ("world",):
         return np.asarray(demo["position"][-1], float)
-    p_obj, q_obj = _frame_pose(obs, relation, seg.frame)
+    p_obj, q_obj = _frame_pose(obs, seg, seg.frame)
     return compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
 
 
@@ -446,7 +456,8 @@ def _goal(seg, obs, fingers=None):
     options = [(q, _goal_position(seg, obs, q)) for q in _goal_orientations(seg, obs)]
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
-    mine = set() if seg.relation is None else {seg.relation.object, seg.relation.target}
+    mine = set() if seg.relation is None else {seg.scene(seg.relation.object),
+                                               seg.scene(seg.relation.target)}
     others = [np.asarray(obs[f"{o}_pos"], float) for o in _objects(obs) if o not in mine]
     if not others:
         return options[0][1], options[0][0]
@@ -469,8 +480,7 @@ def _path_rigid(seg, obs):
     if seg.frame != ("world",):
         # the same frame poses the adapted goals use (for an object the tool reaches, where it lies at the
         # segment's end: robosuite drops objects into place while the first segment starts)
-        P, Q = _moved(P, Q, _source_frame(demo, seg.relation, seg.frame),
-                      _frame_pose(obs, seg.relation, seg.frame))
+        P, Q = _moved(P, Q, _source_frame(demo, seg.relation, seg.frame), _frame_pose(obs, seg, seg.frame))
     here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
     s = np.linspace(0.0, 1.0, RIGID_BLEND + 1)[1:, None]
     blend_p = here_p + s * (P[0] - here_p)
@@ -531,7 +541,7 @@ def _check(seg, before, episode):
     obs = episode.obs
     relation = seg.relation
     if relation is not None and relation.moves_with:
-        obj = relation.object
+        obj = seg.scene(relation.object)
         gap0 = np.linalg.norm(before[f"{obj}_pos"] - before["robot0_eef_pos"])
         gap1 = np.linalg.norm(obs[f"{obj}_pos"] - obs["robot0_eef_pos"])
         travel = np.linalg.norm(obs[f"{obj}_pos"] - before[f"{obj}_pos"])
@@ -542,9 +552,10 @@ def _check(seg, before, episode):
     return None
 
 
-def _run_segments(episode, source, method, random_state, timings):
-    """Run ``source``'s segments; ``(index, reason, detail)`` of the first failure, or None."""
-    for i, seg in enumerate(source.segments):
+def _run_segments(episode, segments, actions, method, random_state, timings):
+    """Run ``segments`` (of one source, whose recorded ``actions`` replay uses); ``(index, reason, detail)``
+    of the first failure, or None."""
+    for i, seg in enumerate(segments):
         if episode.over:
             break
         episode.segment = i
@@ -552,7 +563,7 @@ def _run_segments(episode, source, method, random_state, timings):
         goal = None  # the tool's, where the segment was adapted (replay has none)
         if method == "replay":  # the source's own actions over the segment's samples, open loop
             steps0 = episode.steps
-            for action in source.actions[seg.primitive.start:seg.primitive.stop]:
+            for action in actions[seg.primitive.start:seg.primitive.stop]:
                 if episode.over:
                     break
                 episode.act(action)
@@ -706,7 +717,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
             chain, failure = [], None
             for part in order:
                 source = _nearest(groups[part], episode.obs, episode.fingers)
-                failure = _run_segments(episode, source, method, random_state, timings)
+                failure = _run_segments(episode, source.segments, source.actions, method, random_state,
+                                        timings)
                 timings["segments"] += len(source.segments)
                 if failure is not None:
                     failure = (len(chain) + failure[0], *failure[1:])

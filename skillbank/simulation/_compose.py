@@ -1,0 +1,648 @@
+"""A plan over labelled skills, executed and checked in robosuite: ``skillbank plan LIB --scene robosuite:TASK
+--simulate``.
+
+The paper's future work: skills learned from single demonstrations, given
+sparse labels and a PDDL description each, composed by a planner into a task
+nobody demonstrated, and carried out in physics. Here
+
+1. the scene is read from the simulation at rest: its objects, and the facts
+   that hold (:func:`observe`: which object the gripper holds, which stands on
+   which or in which place, which are clear);
+2. the planner (:func:`skillbank.planning.solve`) finds the actions that make
+   the goal true, over the library's described skills;
+3. each action is carried out by a *phase* of a demonstration: the primitives
+   that reach for an object, or that carry it and let it go (cut where the
+   tool starts and stops carrying, from :func:`~skillbank.selection.acted_on`)
+   whose labels (given or inferred) name the action. The objects the phase
+   acted on are bound to the action's arguments (``object`` and ``target`` of
+   the skill's binding; by default its first and second parameters), and its
+   segments run closed loop from the state the last step left, adapted to the
+   bound objects' poses as ``sim evaluate`` adapts them (the same frames and
+   the same methods);
+4. after each step the world is looked at again: the step's planned effect
+   must be what the simulation shows, and before each step what the plan
+   expects must still hold. A difference stops the execution with its reason
+   or, with ``replan``, plans again from the observed facts.
+
+Success is the environment's own check for the whole task (robosuite's
+``_check_success()``).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..core import slerp
+from ..core._validation import check_positive
+from ..planning import parse_atom, problem_text, skill_domain, solve
+from ..planning._binding import check_binding
+from ..planning._pddl import atoms_of
+from ..selection import METHODS
+from ..store import open_store
+from ._evaluate import (
+    BASELINES,
+    REASONS,
+    SETTLE,
+    _cost,
+    _Episode,
+    _fingers,
+    _make,
+    _reseed,
+    _run_segments,
+    _sources,
+    _widen,
+    binomial_interval,
+)
+from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite
+from ._stack3 import CUBES, stack3_class
+
+__all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
+
+
+@dataclass(frozen=True)
+class Composed:
+    """A robosuite task for composed plans: what it is made of and what its goal asks, as data.
+
+    ``env``: the robosuite environment. ``places``: for a sorting task, the
+    environment's attribute that maps an object's name (lower case) to its
+    place and the environment's method that tells whether a position is
+    *outside* a place (robosuite's ``PickPlace``: ``object_to_id`` and
+    ``not_in_bin``); each object ``O`` then has a place ``O_place``.
+    ``goal``: ``"sorted"`` (every object in its place) or ``"tower"`` (the
+    objects stacked in the order the goal gives, from the top).
+    """
+
+    env: str
+    goal: str
+    places: tuple | None = None
+
+
+#: The tasks ``plan --scene robosuite:TASK`` knows.
+COMPOSED = {
+    "PickPlace": Composed(env="PickPlace", goal="sorted", places=("object_to_id", "not_in_bin")),
+    "Stack3": Composed(env="Stack3", goal="tower"),
+}
+#: Why a composed execution stopped (besides the segment reasons of ``sim evaluate``).
+STEP_REASONS = {
+    **REASONS,
+    "not held": "a step that picks an object ended without the gripper holding it",
+    "misplaced": "a step that puts an object somewhere ended with it elsewhere, or the environment's check "
+                 "fails at the end",
+    "world changed": "what the plan expects before a step (its facts so far) no longer holds in the scene",
+    "no skill": "no demonstration's phase is labelled like the step's action",
+    "no plan": "the planner found no plan from the facts observed",
+}
+MAX_REPLANS = 3
+TRANSIT_FROM = 0.05  # m: a reach starting farther than this from its demonstration's start goes there first
+TRANSIT_SPEED = 0.25  # m/s: the transit's peak speed
+ABOVE = 0.01  # m: an object stands on another when its centre is this much higher and they touch
+
+
+def _task(scene):
+    if not isinstance(scene, str) or not scene.startswith("robosuite:"):
+        raise ValueError(f"scene: expected robosuite:TASK (TASK one of {sorted(COMPOSED)}), got {scene!r}")
+    name = scene.split(":", 1)[1]
+    if name not in COMPOSED:
+        raise ValueError(f"scene: plans run in robosuite tasks {sorted(COMPOSED)}, got {name!r}")
+    return name, COMPOSED[name]
+
+
+class _World:
+    """The facts of a robosuite scene, read from the simulation."""
+
+    def __init__(self, env, spec, obs):
+        self.env, self.spec = env, spec
+        self.models = {m.name: m for m in env.model.mujoco_objects}
+        self.objects = sorted(o for o in self.models if f"{o}_pos" in obs)
+        self.places = {} if spec.places is None else {f"{o}_place": o for o in self.objects}
+
+    def inside(self, place, position) -> bool:
+        ids, outside = self.spec.places
+        key = getattr(self.env, ids)[self.places[place].lower()]
+        return not bool(getattr(self.env, outside)(np.asarray(position, float), key))
+
+    def holding(self, obj) -> bool:
+        return bool(self.env._check_grasp(gripper=self.env.robots[0].gripper, object_geoms=self.models[obj]))
+
+    def facts(self, obs) -> set:
+        held = {o for o in self.objects if self.holding(o)}
+        on = set()
+        for o in self.objects:
+            if o in held:
+                continue
+            p = np.asarray(obs[f"{o}_pos"], float)
+            for t in self.objects:
+                if t != o and p[2] > obs[f"{t}_pos"][2] + ABOVE and \
+                        self.env.check_contact(self.models[o], self.models[t]):
+                    on.add(("on", (o, t)))
+            for place in self.places:
+                if self.inside(place, p):
+                    on.add(("on", (o, place)))
+        below = {a[1] for _, a in on}
+        facts = on | {("holding", (o,)) for o in held}
+        resting = {a[0] for _, a in on}
+        facts |= {("loose", (o,)) for o in self.objects if o not in held and o not in resting}
+        facts |= {("clear", (x,)) for x in [*self.objects, *self.places] if x not in below}
+        if not held:
+            facts.add(("handempty", ()))
+        return facts
+
+    def pose(self, obs, obj) -> dict:
+        return {"position": [round(float(v), 4) for v in obs[f"{obj}_pos"]],
+                "quaternion": [round(float(v), 4) for v in obs[f"{obj}_quat"]], "held": self.holding(obj)}
+
+    def move(self, obj, position) -> None:
+        """Put ``obj`` at ``position`` (m), at rest: the world changing behind the plan's back."""
+        joint = self.models[obj].joints[0]
+        sim = self.env.sim
+        qpos = np.array(sim.data.get_joint_qpos(joint), float)
+        qpos[:3] = position
+        sim.data.set_joint_qpos(joint, qpos)
+        sim.data.set_joint_qvel(joint, np.zeros(6))
+        sim.forward()
+
+
+#: Facts the simulation shows (:meth:`_World.facts`); a domain's other predicates are the plan's alone.
+OBSERVED = ("on", "holding", "loose", "clear", "handempty")
+
+
+def observe(env, obs, scene="robosuite:PickPlace") -> list:
+    """The facts that hold in a robosuite scene, as PDDL atoms (sorted text).
+
+    ``(holding O)`` when robosuite's grasp check finds both finger pads on ``O``; ``(on O T)`` when
+    ``O`` touches ``T`` and stands higher (or lies in the place ``T``), and is not held; ``(loose O)``
+    when ``O`` is on nothing and not held; ``(clear X)`` when nothing is on ``X``; ``(handempty)``.
+    """
+    world = _World(env, _task(scene)[1], obs)
+    return sorted(_text(a) for a in world.facts(obs))
+
+
+def _text(atom) -> str:
+    pred, args = atom
+    return "(" + " ".join([pred, *args]) + ")"
+
+
+def _goal_atoms(spec, world, goal):
+    if goal is not None:
+        atoms = [parse_atom(g, f"goal[{k}]") for k, g in enumerate(goal)]
+        # PDDL's names are case-insensitive; the scene's keep their case
+        known = {o.lower(): o for o in [*world.objects, *world.places]}
+        for pred, args in atoms:
+            unknown = [a for a in args if a.lower() not in known]
+            if unknown:
+                raise ValueError(f"goal: ({pred} {' '.join(args)}) names {unknown[0]!r}, which the scene "
+                                 f"does not have; its objects are {sorted(known.values())}")
+        return [(pred, tuple(known[a.lower()] for a in args)) for pred, args in atoms]
+    if spec.goal == "sorted":
+        return [("on", (o, f"{o}_place")) for o in world.objects]
+    return [("on", (upper, lower)) for upper, lower in zip(CUBES[:-1], CUBES[1:], strict=True)]
+
+
+def _tower(atoms):
+    """The order, from the top, of a goal that stacks every cube in one tower; ValueError otherwise."""
+    below = {a[0]: a[1] for p, a in atoms if p == "on"}
+    tops = [c for c in below if c not in below.values()]
+    if len(tops) != 1 or len(below) != len(CUBES) - 1:
+        raise ValueError(f"goal: expected one tower of {list(CUBES)} as (on UPPER LOWER) facts, got "
+                         f"{[_text(a) for a in atoms]}")
+    order = [tops[0]]
+    while order[-1] in below:
+        order.append(below[order[-1]])
+    if sorted(order) != sorted(CUBES):
+        raise ValueError(f"goal: expected one tower of all of {list(CUBES)}, got {order}")
+    return tuple(order)
+
+
+@dataclass
+class _Phase:
+    """Consecutive segments of a demonstration that reach for one object, or carry it and let it go."""
+
+    source: object  # _Source
+    segments: list
+    kind: str  # "reach" or "carry"
+    object: str | None
+    target: str | None
+    label: str | None = None
+
+
+def _phases(source) -> list:
+    phases = []
+    for seg in source.segments:
+        r = seg.relation
+        obj = None if r is None else r.object
+        last = phases[-1] if phases else None
+        if r is not None and r.moves_with:
+            if last is not None and last.kind == "carry" and last.object == obj:
+                last.segments.append(seg)
+                last.target = last.target or r.target
+            else:
+                phases.append(_Phase(source, [seg], "carry", obj, r.target))
+        elif last is not None and (obj is None or obj == last.object):
+            last.segments.append(seg)  # a release, a retreat, a closer approach: the same phase
+        else:
+            phases.append(_Phase(source, [seg], "reach", obj, None))
+    for phase in phases:
+        labels = {seg.primitive.label for seg in phase.segments} - {None}
+        # one label names the phase; none, or several (an ambiguity), name nothing
+        phase.label = labels.pop() if len(labels) == 1 else None
+    return phases
+
+
+def _agreeing(phases) -> list:
+    """The labelled phases that do what most phases of their label do (reach, or carry).
+
+    A label inferred over a cluster reaches a few members that do the other thing (a slow start of a
+    reach clustered with carries): the skill is what most of its phases are.
+    """
+    kinds = {}
+    for ph in phases:
+        if ph.label is not None:
+            kinds.setdefault(ph.label, []).append(ph.kind)
+    major = {label: max(set(ks), key=lambda k: (ks.count(k), k == "carry")) for label, ks in kinds.items()}
+    return [ph for ph in phases if ph.label is not None and ph.kind == major[ph.label]]
+
+
+def _bound(phase, action, args, binding):
+    """``{source object: scene object}`` binding the phase to the step's arguments, or None if it cannot."""
+    params = [p for p, _ in action.parameters]
+    value = dict(zip(params, args, strict=True))
+    obj_param = binding.object or (params[0] if params else None)
+    target_param = binding.target or (params[1] if len(params) > 1 else None)
+    if phase.object is None or obj_param is None:
+        return None
+    names = {phase.object: value[obj_param]}
+    if phase.target is not None and target_param is not None:
+        if phase.target == phase.object:
+            return None
+        names[phase.target] = value[target_param]
+    return names
+
+
+def _closed(phase, at) -> bool:
+    """Whether the phase's recorded gripper command is closed at its first (``at=0``) or last (-1) sample."""
+    seg = phase.segments[at]
+    k = seg.primitive.start if at == 0 else seg.primitive.stop - 1
+    return bool(phase.source.actions[k, 6] > 0)
+
+
+def _gripper_fits(phase, action) -> bool:
+    """The phase's gripper does what the action's holding facts say: closed where the precondition
+    holds something (and open where it needs a free hand), closed at the end where the effect does."""
+    pre = atoms_of(action.precondition, "precondition")
+    eff = atoms_of(action.effect, "effect")
+    for atoms, at in ((pre, 0), (eff, -1)):
+        for neg, pred, _ in atoms:
+            if pred == "holding" and not neg and not _closed(phase, at):
+                return False
+            if pred == "handempty" and not neg and _closed(phase, at):
+                return False
+    return True
+
+
+def _candidates(phases, action, args, binding):
+    """The phases that can carry out ``(action args)``, bound; those on the very same objects if any."""
+    options = []
+    for phase in phases:
+        if phase.label is None or phase.label.lower() != action.name or not _gripper_fits(phase, action):
+            continue
+        names = _bound(phase, action, args, binding)
+        if names is not None:
+            options.append((phase, names))
+    same = [(p, n) for p, n in options if all(k == v for k, v in n.items())]
+    return same or options
+
+
+def _ground(action, args):
+    value = dict(zip([p for p, _ in action.parameters], args, strict=True))
+    out = []
+    for neg, pred, atom_args in atoms_of(action.effect, f"action {action.name} effect"):
+        out.append((neg, (pred, tuple(value.get(a, a) for a in atom_args))))
+    pre = [(neg, (pred, tuple(value.get(a, a) for a in atom_args)))
+           for neg, pred, atom_args in atoms_of(action.precondition, f"action {action.name} precondition")]
+    return pre, out
+
+
+def _apply(state, effects):
+    state = set(state)
+    for neg, atom in effects:
+        if neg:
+            state.discard(atom)
+    for neg, atom in effects:
+        if not neg:
+            state.add(atom)
+    return state
+
+
+def _differences(expected, observed, predicates):
+    """Facts of the observed predicates that the plan expects and the scene does not show, and the reverse."""
+    exp = {a for a in expected if a[0] in OBSERVED and a[0] in predicates}
+    obs = {a for a in observed if a[0] in predicates}
+    return sorted(exp - obs), sorted(obs - exp)
+
+
+def _plan(domain, world, facts, goal, search, name):
+    objects = {o: "object" for o in [*world.objects, *world.places]}
+    init = sorted(a for a in facts if a[0] in domain.predicates)
+    problem = problem_text(objects, init, goal, domain=domain.name, name=name)
+    # the planner answers in lower case (PDDL's names are case-insensitive): back to the scene's names
+    canon = {o.lower(): o for o in objects}
+    return [(a.lower(), tuple(canon.get(x.lower(), x) for x in args)) for a, args in
+            solve(domain.text, problem, search=search)], problem
+
+
+def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=None, method: str = "lte",
+                 replan: bool = False, horizon: int = 600, placement=None, disturb=None, search="satisficing",
+                 random_state=None, paths: bool = False, progress=None) -> dict:
+    """Plan a task over the library's described skills and carry it out in ``episodes`` robosuite scenes.
+
+    Parameters
+    ----------
+    library : str, path-like or Store
+        Demonstrations recorded with ``skillbank sim record`` (tool pose, actions, object poses),
+        clustered, with labels and PDDL descriptions (``library label``, ``library describe``).
+    scene : str
+        ``robosuite:TASK``, TASK a key of :data:`COMPOSED`.
+    episodes : int, default=1
+        Scenes; episode ``k`` is placed by robosuite's sampler from seed ``seed + k``.
+    goal : list of str, optional
+        The goal's facts, e.g. ``["(on cubeB cubeA)", "(on cubeA cubeC)"]``; default the task's (every
+        object in its place; the cubes A on B on C).
+    method : str, default="lte"
+        How each segment is adapted (:data:`skillbank.selection.METHODS`), or ``"replay"``: the phases'
+        recorded actions, open loop, in the planned order (the baseline), or ``"rigid"``.
+    replan : bool, default=False
+        When a step's effect is not what the scene shows, or the scene no longer shows what the plan
+        expects, plan again from the facts observed (up to 3 times) instead of stopping.
+    horizon : int, default=600
+        Control steps (20 per second) a plan step may take.
+    placement : float, optional
+        Widens every object's x and y placement range to plus or minus this many metres.
+    disturb : dict, optional
+        ``{"after": K, "object": NAME, "position": [x, y, z]}``: once step K (from 1) has run and been
+        checked, the object is put at the position: the world changing behind the plan's back.
+    search : {"satisficing", "optimal"}
+        The planner's search (:data:`skillbank.planning.SEARCHES`).
+    paths : bool, default=False
+        Add each episode's tool positions (``path``, one per control step) and each step's first index.
+
+    Returns
+    -------
+    dict
+        ``{"scene", "method", "seed", "episodes", "successes", "success_rate", "interval", "failures",
+        "per_episode", "timing"}``; ``failures`` counts the reasons (:data:`STEP_REASONS`); each
+        episode has its ``seed``, ``success``, ``plan`` (the first, as text), ``replans``, ``steps``
+        (per step: ``action``, ``args``, ``planned`` effect, ``observed`` facts of its predicates and
+        the poses of its objects, ``source`` and ``primitives``, ``ok``, and for a failure ``reason``
+        and ``detail``), ``facts`` (observed at the start and at the end), ``objects`` (at rest,
+        before the first step) and, for a failure, ``failure``.
+    """
+    name, spec = _task(scene)
+    episodes = check_positive(episodes, name="episodes", integer=True)
+    horizon = check_positive(horizon, name="horizon", integer=True)
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    if method not in METHODS and method not in BASELINES:
+        raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
+    if placement is not None:
+        placement = check_positive(placement, name="placement")
+    if goal is not None and (isinstance(goal, str) or not all(isinstance(g, str) for g in goal) or not goal):
+        raise ValueError(f"goal: expected a list of facts such as '(on cubeA cubeB)', got {goal!r}")
+    if disturb is not None:
+        disturb = _check_disturb(disturb)
+    store = open_store(library, create=False)
+    try:
+        domain = skill_domain(store)
+        bindings = {d["label"].lower(): d["binding"] for d in store.descriptions()}
+        sources = _sources(store)
+    finally:
+        if store is not library:
+            store.close()
+    bindings = {a: check_binding(bindings.get(a), domain.actions[a].parameters, name=f"binding of {a!r}")
+                for a in domain.actions}
+    phases = _agreeing([ph for src in sources for ph in _phases(src)])
+    named = sorted({ph.label for ph in phases if ph.label})
+    missing = [a for a in domain.actions if not any(ph.label and ph.label.lower() == a for ph in phases)]
+    if missing:
+        raise ValueError(f"library: no phase of a demonstration (a reach, or a carry and its release) is "
+                         f"labelled {missing}; phases are labelled {named}. Label a primitive of each skill "
+                         "(skillbank library label DB --primitive ID NAME)")
+    suite = import_robosuite()
+    if spec.env == "Stack3":
+        stack3_class()
+    environment = _make(suite, spec.env, seed, 10 ** 6)
+    if placement is not None:
+        _widen(environment, placement)
+    rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0, "plan": 0.0}
+    try:
+        for k in range(episodes):
+            row = _episode(environment, spec, name, domain, bindings, phases, int(seed) + k, goal, method,
+                           replan, horizon, disturb, search, random_state, paths, timings)
+            rows.append(row)
+            if progress is not None:
+                progress(k + 1, sum(r["success"] for r in rows))
+    finally:
+        environment.close()
+    successes = sum(r["success"] for r in rows)
+    failures = {}
+    for r in rows:
+        if not r["success"]:
+            failures[r["failure"]["reason"]] = failures.get(r["failure"]["reason"], 0) + 1
+    return {"scene": scene, "method": method, "seed": int(seed), "placement": placement, "episodes": episodes,
+            "successes": successes, "success_rate": successes / episodes,
+            "interval": list(binomial_interval(successes, episodes)), "failures": failures,
+            "timing": {"plan_seconds": timings["plan"], "adapt_seconds": timings["adapt"],
+                       "driven_seconds": timings["driven"], "segments": timings["segments"]},
+            "per_episode": rows}
+
+
+def _check_disturb(disturb):
+    if not isinstance(disturb, dict) or set(disturb) != {"after", "object", "position"}:
+        raise ValueError(f"disturb: expected {{'after': K, 'object': NAME, 'position': [x, y, z]}}, got "
+                         f"{disturb!r}")
+    after = check_positive(disturb["after"], name="disturb.after", integer=True)
+    position = np.asarray(disturb["position"], float)
+    if position.shape != (3,) or not np.isfinite(position).all():
+        raise ValueError(f"disturb.position: expected 3 finite numbers (m), got {disturb['position']!r}")
+    return {"after": after, "object": str(disturb["object"]), "position": position}
+
+
+def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, replan, horizon, disturb, search,
+             random_state, paths, timings):
+    _reseed(env, seed)
+    obs = env.reset()
+    world = _World(env, spec, obs)
+    atoms = _goal_atoms(spec, world, goal)
+    if spec.goal == "tower":
+        env.order = _tower(atoms)
+    if disturb is not None and disturb["object"] not in world.objects:
+        raise ValueError(f"disturb.object: the scene has no object {disturb['object']!r}; it has "
+                         f"{world.objects}")
+    episode = _Episode(env, obs, 10 ** 9, trace=paths)
+    episode.rest(world.objects)
+    episode.fingers = _fingers(env, episode.obs)
+    facts = world.facts(episode.obs)
+    row = {"seed": seed, "success": False, "objects": {o: world.pose(episode.obs, o)["position"]
+                                                        for o in world.objects},
+           "facts": {"start": sorted(_text(a) for a in facts)}, "steps": [], "replans": 0}
+    tic = time.perf_counter()
+    try:
+        plan, _ = _plan(domain, world, facts, atoms, search, name)
+    except ValueError as error:
+        timings["plan"] += time.perf_counter() - tic
+        row["plan"] = []
+        row["failure"] = {"step": None, "reason": "no plan", "detail": str(error).splitlines()[0]}
+        return row
+    timings["plan"] += time.perf_counter() - tic
+    row["plan"] = [_text((a, args)) for a, args in plan]
+    expected, failure, starts = set(facts), None, []
+    queue = list(plan)
+    while queue and failure is None and not episode.success:
+        act, args = queue.pop(0)
+        action = domain.actions[act]
+        number = len(row["steps"]) + 1
+        pre, effects = _ground(action, args)
+        step = {"step": number, "action": act, "args": list(args),
+                "planned": {"add": [_text(a) for n, a in effects if not n],
+                            "delete": [_text(a) for n, a in effects if n]}}
+        lacking, extra = _differences(expected, world.facts(episode.obs), domain.predicates)
+        if lacking:
+            step.update(ok=False, reason="world changed",
+                        detail=f"before this step the plan expects {', '.join(map(_text, lacking))}, which "
+                               f"the scene no longer shows")
+        else:
+            starts.append(episode.steps)
+            _run_step(episode, world, step, action, args, bindings[act], phases, method, horizon,
+                      random_state, timings)
+        row["steps"].append(step)
+        if step["ok"]:
+            expected = _apply(expected, effects)
+            if disturb is not None and disturb["after"] == number:
+                world.move(disturb["object"], disturb["position"])
+                episode.rest(world.objects)
+                step["disturbed"] = {"object": disturb["object"],
+                                     "position": [float(v) for v in disturb["position"]]}
+            continue
+        if replan and row["replans"] < MAX_REPLANS and step["reason"] not in ("no skill", "collision"):
+            row["replans"] += 1
+            observed = world.facts(episode.obs)
+            tic = time.perf_counter()
+            try:
+                queue, _ = _plan(domain, world, observed, atoms, search, name)
+            except ValueError as error:
+                failure = {"step": number, "reason": "no plan", "detail": str(error).splitlines()[0]}
+            timings["plan"] += time.perf_counter() - tic
+            step["replanned"] = [_text(s) for s in queue]
+            expected = set(observed)
+            continue
+        failure = {"step": number, "reason": step["reason"], "detail": step["detail"]}
+    for _ in range(SETTLE):  # a last second for the objects to come to rest
+        if episode.success:
+            break
+        episode.act(np.r_[np.zeros(6), episode.driver.grip])
+    row["success"] = bool(episode.success)
+    row["facts"]["end"] = sorted(_text(a) for a in world.facts(episode.obs))
+    row["end_objects"] = {o: world.pose(episode.obs, o)["position"] for o in world.objects}
+    row["control_steps"] = episode.steps
+    if paths:
+        row["path"] = np.round(np.array(episode.path), 6).tolist()
+        row["step_starts"] = starts
+    if not row["success"]:
+        if failure is None:
+            lacking = [g for g in atoms if _text(g) not in row["facts"]["end"]]
+            shown = f"; the scene does not show {', '.join(map(_text, lacking))}" if lacking else ""
+            failure = {"step": None, "reason": "misplaced",
+                       "detail": f"the environment's success check fails at the end{shown}"}
+        row["failure"] = failure
+    return row
+
+
+def _run_step(episode, world, step, action, args, binding, phases, method, horizon, random_state, timings):
+    """Carry out one plan step by the nearest phase bound to its arguments; fill ``step``'s facts."""
+    options = _candidates(phases, action, args, binding)
+    if not options:
+        step.update(ok=False, reason="no skill", detail=f"no phase labelled {action.name!r} acts on objects "
+                                                        f"that can be bound to {list(args)}")
+        return
+    bound = [(ph, [replace(seg, names=names) for seg in ph.segments]) for ph, names in options]
+    phase, segments = min(bound, key=lambda b: _cost(b[1], episode.obs, episode.fingers))
+    step["source"] = phase.source.id
+    step["primitives"] = [seg.primitive.id for seg in segments]
+    episode.horizon = episode.steps + horizon
+    episode.contact = None  # an arm link's touch, in this step
+    if phase.kind == "reach" and method != "replay":
+        # a reach was shown from where its demonstration began (the robot's start, clear of the scene):
+        # the tool goes back there first, as the demonstrations' robot did, rather than sweep across
+        # the scene from where the last step left it
+        demo = segments[0].primitive.demo
+        step["transit"] = _transit(episode, np.asarray(demo["position"][0], float),
+                                   np.asarray(demo["orientation"][0], float))
+    failure = _run_segments(episode, segments, phase.source.actions, method, random_state, timings)
+    timings["segments"] += len(segments)
+    if failure is None:
+        _let_fingers_settle(episode)
+    pre, effects = _ground(action, args)
+    observed = world.facts(episode.obs)
+    shown = {a for a in observed if a[0] in {atom[0] for _, atom in effects}}
+    step["observed"] = {"facts": sorted(_text(a) for a in shown),
+                        "objects": {o: world.pose(episode.obs, o) for o in args if o in world.objects}}
+    if episode.contact is not None:
+        step["arm_contact"] = episode.contact[1]
+    if failure is not None and not episode.success:
+        i, reason, detail = failure
+        if episode.contact is not None and reason != "timeout":
+            reason, detail = "collision", f"{episode.contact[1]}; then {reason}: {detail}"
+        step.update(ok=False, reason=reason, detail=f"segment {i} (primitive {segments[i].primitive.id}): "
+                                                     f"{detail}")
+        return
+    wrong = [(n, a) for n, a in effects if a[0] in OBSERVED and (a in observed) == n]
+    if wrong and not episode.success:
+        neg, atom = wrong[0]
+        held = atom[0] == "holding"
+        reason = "not held" if held and not neg else "misplaced"
+        where = step["observed"]["objects"].get(atom[1][0] if atom[1] else None)
+        landed = "" if where is None else f"; {atom[1][0]} is at {where['position']} m" + \
+            (" in the gripper" if where["held"] else "")
+        step.update(ok=False, reason=reason, detail=f"the plan expects {'not ' if neg else ''}{_text(atom)}, "
+                                                     f"the scene does not show it{landed}")
+        return
+    step["ok"] = True
+
+
+def _transit(episode, position, quat) -> float:
+    """Move the tool in a straight line to ``position``, ``quat`` (minimum jerk, at most
+    :data:`TRANSIT_SPEED`), if it is farther than :data:`TRANSIT_FROM`; returns the distance moved."""
+    here_p = np.array(episode.obs["robot0_eef_pos"], float)
+    here_q = np.array(episode.obs["robot0_eef_quat"], float)
+    distance = float(np.linalg.norm(position - here_p))
+    if distance <= TRANSIT_FROM:
+        return 0.0
+    # a minimum-jerk profile peaks at 1.875 times its mean speed
+    n = max(CONTROL_FREQ, int(np.ceil(1.875 * distance / TRANSIT_SPEED * CONTROL_FREQ)))
+    s = _min_jerk_at(np.linspace(0.0, 1.0, n + 1)[1:])
+    qs = slerp([0.0, 1.0], np.stack([here_q, quat]), s)
+    for k in range(n):
+        if episode.over:
+            break
+        episode.step(here_p + s[k] * (position - here_p), qs[k])
+    episode.settle(position, quat)
+    return round(distance, 4)
+
+
+def _let_fingers_settle(episode, *, most=CONTROL_FREQ, still=1e-4) -> None:
+    """Hold the tool where it is until the fingers stop moving (at most ``most`` steps): a step that ends
+    by closing the gripper holds the object once the fingers have closed, not when the command was given."""
+    fingers = np.array(episode.obs["robot0_gripper_qpos"], float)
+    here_p = np.array(episode.obs["robot0_eef_pos"], float)
+    here_q = np.array(episode.obs["robot0_eef_quat"], float)
+    for _ in range(most):
+        if episode.over:
+            break
+        episode.step(here_p, here_q)
+        now = np.array(episode.obs["robot0_gripper_qpos"], float)
+        if np.abs(now - fingers).max() < still:
+            break
+        fingers = now
+
