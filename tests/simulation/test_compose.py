@@ -1,0 +1,148 @@
+"""Plans over learned skills carried out in robosuite (#26): real episodes, short ones.
+
+The library is three scripted demonstrations of robosuite's Stack (cube A onto cube B), labelled as a
+person would (one reaching primitive ``pick``, one carrying primitive ``place``) and described in PDDL;
+the plans stack three cubes, which no demonstration showed.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from skillbank.cli import main
+from skillbank.experiments._composition import PICK, PLACE, _label_one_each
+from skillbank.pipeline import Library
+
+pytest.importorskip("robosuite", reason="needs the sim extra (pip install 'skillbank[sim]')")
+
+from skillbank.simulation import COMPOSED, STEP_REASONS, execute_plan, record  # noqa: E402
+from skillbank.simulation._compose import _phases  # noqa: E402
+from skillbank.simulation._evaluate import _sources  # noqa: E402
+
+AWAY = [-0.15, -0.15, 0.83]  # m: on the table, outside where robosuite's sampler puts the cubes
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("compose")
+    data = folder / "stack.hdf5"
+    record("robosuite:Stack", episodes=3, out=data, seed=0)
+    db = folder / "stack.db"
+    with Library(db) as lib:
+        lib.add_files([data], assign="recluster")
+        labelled = _label_one_each(lib)
+    return db, labelled
+
+
+def run(*args):
+    import contextlib
+    import io
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return code, out.getvalue(), err.getvalue()
+
+
+def test_labels_given_once_name_every_demonstration_phase(library):
+    db, labelled = library
+    with Library(db, readonly=True) as lib:
+        prims = {p.id: p for p in lib.primitives(load=False)}
+        assert prims[labelled["pick"]].label_source == "given"
+        sources = _sources(lib.store)
+    phases = [ph for src in sources for ph in _phases(src)]
+    # every demonstration reaches for cube A, then carries it onto cube B: two phases each
+    assert [(ph.kind, ph.object, ph.target) for ph in phases] == [("reach", "cubeA", None),
+                                                                  ("carry", "cubeA", "cubeB")] * 3
+    assert {ph.label for ph in phases if ph.kind == "reach"} == {"pick"}
+
+
+def test_a_tower_no_demonstration_showed_is_planned_and_stands(library):
+    db, _ = library
+    goal = ["(on cubeC cubeA)", "(on cubeA cubeB)"]  # C on A on B: the demonstrations put A on B only
+    report = execute_plan(db, "robosuite:Stack3", seed=101, goal=goal)
+    row = report["per_episode"][0]
+    assert row["plan"] == ["(pick cubeA)", "(place cubeA cubeB)", "(pick cubeC)", "(place cubeC cubeA)"]
+    assert row["success"] and report["successes"] == 1 and report["failures"] == {}
+    assert all(step["ok"] for step in row["steps"])
+    for step in row["steps"]:  # what the plan said each step would do is what the simulation shows
+        assert set(step["planned"]["add"]) <= set(step["observed"]["facts"])
+    # the cube carried to its place was bound to cube C: the demonstrations only ever carried cube A
+    assert row["steps"][3]["observed"]["objects"]["cubeC"]["held"] is False
+    assert {"(on cubeC cubeA)", "(on cubeA cubeB)", "(handempty)"} <= set(row["facts"]["end"])
+    assert "(loose cubeA)" in row["facts"]["start"] and "(handempty)" in row["facts"]["start"]
+
+
+def test_a_step_undone_behind_the_plans_back_stops_it_and_replanning_recovers(library):
+    db, _ = library
+    disturb = {"after": 2, "object": "cubeB", "position": AWAY}  # cube B knocked off cube C
+    stopped = execute_plan(db, "robosuite:Stack3", seed=102, disturb=disturb)["per_episode"][0]
+    assert not stopped["success"]
+    assert stopped["failure"]["reason"] == "world changed" and stopped["failure"]["step"] == 3
+    assert "(on cubeB cubeC)" in stopped["failure"]["detail"]
+    assert stopped["steps"][1]["disturbed"]["object"] == "cubeB"
+    recovered = execute_plan(db, "robosuite:Stack3", seed=102, disturb=disturb, replan=True)
+    row = recovered["per_episode"][0]
+    assert row["success"] and row["replans"] == 1
+    assert row["steps"][2]["reason"] == "world changed"
+    assert row["steps"][2]["replanned"][:2] == ["(pick cubeB)", "(place cubeB cubeC)"]
+    assert [s["action"] for s in row["steps"] if s["ok"]] == ["pick", "place"] * 3
+
+
+def test_plan_cli_on_a_robosuite_scene_prints_json_and_a_figure(library, tmp_path):
+    db, _ = library
+    figure = tmp_path / "plan.png"
+    code, out, err = run("plan", db, "--scene", "robosuite:Stack3", "--simulate", "--seed", "101",
+                         "--goal", "(on cubeC cubeA) (on cubeA cubeB)", "--plot", figure, "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["successes"] == 1 and doc["planner"]["search"] == "satisficing"
+    assert doc["written"] == [str(figure)] and figure.stat().st_size > 10_000
+    assert set(doc) >= {"episodes", "successes", "success_rate", "interval", "failures", "per_episode"}
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--scene", "robosuite:Kitchen", "--simulate"], "plans run in robosuite tasks"),
+    (["--scene", "robosuite:Stack3"], "add --simulate"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--out", "x.csv"], "--out: a robosuite scene"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--goal", "on cubeA"], "goal: expected facts"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--goal", "(on cubeA cubeD) (on cubeB cubeC)"],
+     "names 'cubed', which the scene does not have"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--goal", "(on cubeA cubeB)"], "one tower of"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--disturb", "2:cubeB"], "disturb: expected K:OBJECT"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--disturb", "2:cubeQ:0,0,1"], "no object 'cubeQ'"),
+    (["--scene", "robosuite:Stack3", "--simulate", "--method", "fast"], "method: expected one of"),
+])
+def test_bad_robosuite_plans_are_one_line_and_exit_2(library, args, message):
+    db, _ = library
+    code, out, err = run("plan", db, *args)
+    assert code == 2 and out == ""
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_library_without_descriptions_or_labelled_phases_is_refused(library, tmp_path):
+    db, _ = library
+    bare = tmp_path / "bare.db"
+    with Library(db, readonly=True) as lib, Library(bare) as new:
+        demos = [lib.demonstration(d) for d in lib.demonstration_ids()]
+    with Library(bare) as new:
+        new.add_many(demos, assign="recluster")
+    with pytest.raises(ValueError, match="no skill descriptions"):
+        execute_plan(bare, "robosuite:Stack3")
+    with Library(bare) as new:
+        new.describe("pick", PICK, {})
+        new.describe("place", PLACE, {})
+    with pytest.raises(ValueError, match=r"no phase of a demonstration .* is labelled \['pick', 'place'\]"):
+        execute_plan(bare, "robosuite:Stack3")
+    with pytest.raises(ValueError, match="scene: expected robosuite:TASK"):
+        execute_plan(db, "Stack3")
+    with pytest.raises(ValueError, match=r"disturb\.position: expected 3 finite numbers"):
+        execute_plan(db, "robosuite:Stack3", disturb={"after": 1, "object": "cubeA", "position": [0, np.nan, 1]})
+
+
+def test_the_tasks_and_reasons_are_documented():
+    assert set(COMPOSED) == {"PickPlace", "Stack3"}
+    assert {"world changed", "not held", "misplaced", "no plan"} <= set(STEP_REASONS)
