@@ -140,7 +140,8 @@ def test_a_library_without_descriptions_or_labelled_phases_is_refused(library, t
     with pytest.raises(ValueError, match="scene: expected robosuite:TASK"):
         execute_plan(db, "Stack3")
     with pytest.raises(ValueError, match=r"disturb\.position: expected 3 finite numbers"):
-        execute_plan(db, "robosuite:Stack3", disturb={"after": 1, "object": "cubeA", "position": [0, np.nan, 1]})
+        execute_plan(db, "robosuite:Stack3",
+                     disturb={"after": 1, "object": "cubeA", "position": [0, np.nan, 1]})
 
 
 def test_the_tasks_and_reasons_are_documented():
