@@ -98,6 +98,7 @@ STEP_REASONS = {
 MAX_REPLANS = 3
 TRANSIT_FROM = 0.05  # m: a reach starting farther than this from its demonstration's start goes there first
 TRANSIT_SPEED = 0.25  # m/s: the transit's peak speed
+TRANSIT_RISE = 0.1  # m: how far above the higher of its two ends a transit goes across
 ABOVE = 0.01  # m: an object stands on another when its centre is this much higher and they touch
 
 
@@ -135,7 +136,11 @@ class _World:
                 continue
             p = np.asarray(obs[f"{o}_pos"], float)
             for t in self.objects:
-                if t != o and p[2] > obs[f"{t}_pos"][2] + ABOVE and \
+                if t == o:
+                    continue
+                dz = p[2] - obs[f"{t}_pos"][2]
+                # on it: touching it from above (higher, and more above it than beside it), not beside it
+                if dz > ABOVE and np.linalg.norm(p[:2] - obs[f"{t}_pos"][:2]) < dz / 2 and \
                         self.env.check_contact(self.models[o], self.models[t]):
                     on.add(("on", (o, t)))
             for place in self.places:
@@ -481,6 +486,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
         raise ValueError(f"disturb.object: the scene has no object {disturb['object']!r}; it has "
                          f"{world.objects}")
     episode = _Episode(env, obs, 10 ** 9, trace=paths)
+    episode.leave = True
     episode.rest(world.objects)
     episode.fingers = _fingers(env, episode.obs)
     facts = world.facts(episode.obs)
@@ -579,7 +585,10 @@ def _run_step(episode, world, step, action, args, binding, phases, method, horiz
         demo = segments[0].primitive.demo
         step["transit"] = _transit(episode, np.asarray(demo["position"][0], float),
                                    np.asarray(demo["orientation"][0], float))
-    failure = _run_segments(episode, segments, phase.source.actions, method, random_state, timings)
+    misses = []  # the step is judged by its effect, which the world shows, not by where the tool stopped
+    failure = _run_segments(episode, segments, phase.source.actions, method, random_state, timings, misses)
+    if misses:
+        step["notes"] = misses
     timings["segments"] += len(segments)
     if failure is None:
         _let_fingers_settle(episode)
@@ -612,22 +621,32 @@ def _run_step(episode, world, step, action, args, binding, phases, method, horiz
 
 
 def _transit(episode, position, quat) -> float:
-    """Move the tool in a straight line to ``position``, ``quat`` (minimum jerk, at most
-    :data:`TRANSIT_SPEED`), if it is farther than :data:`TRANSIT_FROM`; returns the distance moved."""
+    """Move the tool to ``position``, ``quat`` if it is farther than :data:`TRANSIT_FROM`: up by
+    :data:`TRANSIT_RISE` above the higher of the two ends, across, and down, each a straight minimum-jerk
+    line at most :data:`TRANSIT_SPEED` (the wrist turning on the way across); returns the distance moved.
+
+    Rising first takes the arm out of what it has just reached into (a bin's far corner: its forearm
+    lies over the bin's wall) before it swings back.
+    """
     here_p = np.array(episode.obs["robot0_eef_pos"], float)
     here_q = np.array(episode.obs["robot0_eef_quat"], float)
     distance = float(np.linalg.norm(position - here_p))
     if distance <= TRANSIT_FROM:
         return 0.0
-    # a minimum-jerk profile peaks at 1.875 times its mean speed
-    n = max(CONTROL_FREQ, int(np.ceil(1.875 * distance / TRANSIT_SPEED * CONTROL_FREQ)))
-    s = _min_jerk_at(np.linspace(0.0, 1.0, n + 1)[1:])
-    qs = slerp([0.0, 1.0], np.stack([here_q, quat]), s)
-    for k in range(n):
-        if episode.over:
-            break
-        episode.step(here_p + s[k] * (position - here_p), qs[k])
-    episode.settle(position, quat)
+    z = max(here_p[2], position[2]) + TRANSIT_RISE
+    corners = [here_p, np.r_[here_p[:2], z], np.r_[position[:2], z], np.asarray(position, float)]
+    turns = [here_q, here_q, quat, quat]
+    for a, b, qa, qb in zip(corners[:-1], corners[1:], turns[:-1], turns[1:], strict=True):
+        length = float(np.linalg.norm(b - a))
+        # a minimum-jerk profile peaks at 1.875 times its mean speed
+        n = max(CONTROL_FREQ // 2, int(np.ceil(1.875 * length / TRANSIT_SPEED * CONTROL_FREQ)))
+        u = _min_jerk_at(np.linspace(0.0, 1.0, n + 1)[1:])
+        qs = slerp([0.0, 1.0], np.stack([qa, qb]), u)
+        for k in range(n):
+            if episode.over:
+                return round(distance, 4)
+            episode.step(a + u[k] * (b - a), qs[k])
+    episode.settle(np.asarray(position, float), quat)
     return round(distance, 4)
 
 
