@@ -39,6 +39,12 @@ def run(args) -> int:
                   f"{ex['csv']}")
         if summary.get("planning"):
             print(f"tasks never demonstrated, planned over the skills: {summary['planning']}")
+        for name, r in (summary.get("composed") or {}).items():
+            if name == "skipped":
+                print(f"composed tasks in physics: not run ({r})")
+                continue
+            print(f"composed in physics, experiment {name}: {r['successes']}/{r['episodes']} by robosuite's "
+                  f"check ({r['command']}; {r['figure']})")
         print(f"figures and summary written to {summary['out']}")
         print(f"open {summary['summary']}")
     return 0

@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ._options import show_progress
+
 __all__ = ["add_parser", "run"]
 
 
@@ -104,7 +106,6 @@ def run(args) -> int:
 
 def _composition(args) -> int:
     from ..experiments import composition_experiment  # the whole stack, when it runs
-    from ._options import show_progress
 
     progress = None
     if show_progress(args):

@@ -65,7 +65,8 @@ def _goal(rng) -> list:
 
 
 def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demos: int = 10,
-                           method: str = "lte", replan: bool = False, folder=None, progress=None) -> dict:
+                           method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
+                           progress=None) -> dict:
     """Record, build, label, describe, plan and execute: the whole loop of a composed task.
 
     Parameters
@@ -83,6 +84,8 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         Plan again from the observed facts when a step's effect did not happen.
     folder : path-like, optional
         Where the recordings and the library are written (default: a temporary folder, removed).
+    paths : bool, default=False
+        Keep each episode's tool path (for :func:`skillbank.plotting.plot_composed`).
     progress : callable, optional
         ``progress(stage, done, total)``.
 
@@ -124,12 +127,12 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
             for k in range(episodes):
                 goal = _goal(np.random.default_rng(first + k))
                 rows += execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
-                                     replan=replan)["per_episode"]
+                                     replan=replan, paths=paths)["per_episode"]
                 if progress is not None:
                     progress("episodes", k + 1, episodes)
         else:
             rows = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
-                                progress=None if progress is None else
+                                paths=paths, progress=None if progress is None else
                                 (lambda done, _: progress("episodes", done, episodes)))["per_episode"]
     successes = sum(r["success"] for r in rows)
     failures = {}

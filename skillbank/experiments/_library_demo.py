@@ -228,6 +228,20 @@ def _markdown(result, rows, reuses, seg) -> str:
         lines += ["## Tasks never demonstrated", "", "Skills labelled in libraries of their own, "
                   "described with PDDL actions, composed by a planner and chained into one trajectory: "
                   "[planning/summary.md](planning/summary.md).", ""]
+    composed = result.get("composed") or {}
+    if composed.get("skipped"):
+        lines += ["## Composed tasks in physics", "", f"Not run: {composed['skipped']}.", ""]
+    elif composed:
+        lines += ["## Composed tasks in physics (robosuite)", "",
+                  "Pick and place learned from three demonstrations of one object at a time, one primitive "
+                  "of each skill labelled, planned in PDDL and carried out closed loop in robosuite, each "
+                  "step checked against what the simulation shows (a short run of `skillbank experiment`):",
+                  ""]
+        for name, r in composed.items():
+            lines += [f"- `{r['command']}`: {r['successes']}/{r['episodes']} by the environment's check; "
+                      f"first plan {' '.join(r['plans'][0])}" +
+                      (f"; failures {r['failures']}" if r["failures"] else ""),
+                      "", f"![{name}](composed/{Path(r['figure']).name})", ""]
     if seg is not None:
         lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
                   "demonstration): [segmentation/summary.md](segmentation/summary.md).", ""]
@@ -315,7 +329,34 @@ def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
     return rows, source, features, figures, reuses, lib.summary()
 
 
-def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=0,
+def _composed(out: Path, seed) -> dict:
+    """A short run of ``experiment stack3`` and ``experiment unload``: three demonstrations per task, two
+    and one scenes; each with the figure of its first episode. Empty without robosuite."""
+    try:
+        import robosuite  # noqa: F401 - the sim extra, only to know whether it is there
+    except ImportError:
+        return {"skipped": "robosuite is not installed (pip install 'skillbank[sim]')"}
+    from ..plotting import plot_composed  # matplotlib, with the rest of the demo's figures
+    from ._composition import composition_experiment
+
+    out.mkdir(parents=True, exist_ok=True)
+    done = {}
+    for name, episodes in (("stack3", 2), ("unload", 1)):
+        report = composition_experiment(name, episodes=episodes, seed=int(seed or 0), demos=3, paths=True)
+        first = report["per_episode"][0]
+        figure = plot_composed(first, out / f"{name}.png",
+                               title=f"experiment {name}, seed {first['seed']}: {' '.join(first['plan'])}")
+        for row in report["per_episode"]:
+            row.pop("path", None)
+        done[name] = {"successes": report["successes"], "episodes": report["episodes"],
+                      "failures": report["failures"], "plans": [r["plan"] for r in report["per_episode"]],
+                      "figure": str(figure),
+                      "command": f"skillbank experiment {name} --episodes {episodes} --demos 3 "
+                                 f"--seed {seed or 0}"}
+    return done
+
+
+def run_library_demo(out, *, data=None, segmentation: bool = True, composed: bool = True, random_state=0,
                      progress: bool = False) -> dict:
     """Build a primitive library, cluster and label it, reuse two skills; write figures and a summary.
 
@@ -333,6 +374,9 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         Folder holding ``rail/`` and ``seed/``.
     segmentation : bool, default=True
         Also run :func:`run_segmentation_demo` into ``out/segmentation``.
+    composed : bool, default=True
+        Also run short versions of ``experiment stack3`` and ``experiment unload`` (robosuite, about
+        two minutes) into ``out/composed``.
     random_state : int, default=0
         Seeds the clustering and the synthetic demonstrations.
     progress : bool, default=False
@@ -361,7 +405,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         if not (data / "rail").is_dir() or not (data / "seed").is_dir():
             raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
     # load, add, cluster, label; the clusters' figure; the two reuse tasks; the segmentation demo
-    step = _Steps(4 + 1 + 2 + 1 + 1 + int(bool(segmentation)), progress)
+    step = _Steps(4 + 1 + 2 + 1 + 1 + int(bool(composed)) + int(bool(segmentation)), progress)
     try:
         with Library(db) as lib:
             rows, source, features, figures, reuses, summary = _build_and_reuse(
@@ -373,6 +417,10 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
         step("planning (tasks never demonstrated)")
         planning = run_planning_demo(out / "planning", data=data, random_state=random_state)
         figures.update({f"plan_{k}": v["files"]["figure"] for k, v in planning["tasks"].items()})
+        if composed:
+            step("composed tasks in physics (robosuite)")
+        composed = _composed(out / "composed", random_state) if composed else {}
+        figures.update({f"composed_{k}": v["figure"] for k, v in composed.items() if "figure" in v})
         seg = None
         if segmentation:
             step("segmentation demo")
@@ -382,7 +430,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, random_state=
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
               "skills": rows, "reuse": reuses, "figures": figures, "executable": executable,
-              "planning": planning["summary"],
+              "planning": planning["summary"], "composed": composed,
               "segmentation": None if seg is None else seg["summary"]}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"

@@ -52,7 +52,7 @@ def _saved_figures(monkeypatch) -> dict:
 
 def test_lasa_library_demo(tmp_path, capsys, monkeypatch):
     saved = _saved_figures(monkeypatch)
-    res = run_library_demo(tmp_path, segmentation=False)
+    res = run_library_demo(tmp_path, segmentation=False, composed=False)
     assert capsys.readouterr().err == ""  # no progress bar unless asked for
     check_result(res, tmp_path)
     labels = {r["label"] for r in res["skills"]}
@@ -81,7 +81,7 @@ def test_lasa_library_demo(tmp_path, capsys, monkeypatch):
         assert ax.get_xlabel() == "x (m)" and ax.get_zlabel() == "z (m)"
         assert {"start", "goal"} <= {t.get_text() for t in ax.get_legend().get_texts()}
     # a second run replaces the library rather than adding to it; this one shows its progress
-    again = run_library_demo(tmp_path, segmentation=False, progress=True)
+    again = run_library_demo(tmp_path, segmentation=False, composed=False, progress=True)
     assert again["n_demonstrations"] == 32 and again["n_primitives"] == res["n_primitives"]
     err = capsys.readouterr().err
     for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
@@ -109,7 +109,7 @@ def test_progress_steps_are_named_as_they_start(capsys):
 
 
 def test_reused_trajectory_meets_the_task(tmp_path):
-    res = run_library_demo(tmp_path, segmentation=False)
+    res = run_library_demo(tmp_path, segmentation=False, composed=False)
     with Library(res["library"]) as lib:
         from skillbank.experiments._library_demo import _goal_task
 
@@ -121,13 +121,13 @@ def test_reused_trajectory_meets_the_task(tmp_path):
 
 
 def test_demo_with_segmentation_links_it(tmp_path):
-    res = run_library_demo(tmp_path)
+    res = run_library_demo(tmp_path, composed=False)
     assert Path(res["segmentation"]).is_file()
     assert "segmentation/summary.md" in Path(res["summary"]).read_text()
 
 
 def test_rail_library_demo(tmp_path, data_dir):
-    res = run_library_demo(tmp_path, data=data_dir, segmentation=False)
+    res = run_library_demo(tmp_path, data=data_dir, segmentation=False, composed=False)
     check_result(res, tmp_path)
     skills = {r["label"] for r in res["skills"]}
     assert res["reuse"][0]["skill"] in skills
@@ -140,4 +140,4 @@ def test_rail_library_demo(tmp_path, data_dir):
 
 def test_bad_data_folder(tmp_path):
     with pytest.raises(ValueError, match=r"data: expected a folder with rail/ and seed/"):
-        run_library_demo(tmp_path / "out", data=tmp_path, segmentation=False)
+        run_library_demo(tmp_path / "out", data=tmp_path, segmentation=False, composed=False)
