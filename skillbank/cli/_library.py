@@ -13,6 +13,7 @@ from ..core._text import printable
 from ..core._validation import summarise
 from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
 from ._library_transfer import _copy, _export, _import
+from ._library_view import add_view_parser
 from ._options import (
     add_constraint_options,
     add_execution_options,
@@ -175,6 +176,8 @@ def add_parser(sub):
     c.add_argument("--json", action="store_true",
                    help="print the removed demonstration and its primitives as JSON")
     c.set_defaults(func=_remove)
+
+    add_view_parser(cmds)
     return p
 
 
