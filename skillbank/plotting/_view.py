@@ -106,6 +106,10 @@ class LibraryView:
     extra : dict, optional
         ``{page name: (title, html, figures)}`` of further pages (a reuse's or a plan's
         result), linked from the index.
+    snapshot : bool, default=False
+        Read the library's clustering and primitives once, at the first page,
+        and render every page from that picture (a static site); by default each
+        page reads the library as it is then (a served view).
 
     Examples
     --------
@@ -121,10 +125,13 @@ class LibraryView:
     (True, True)
     """
 
-    def __init__(self, library, *, page_size: int = PAGE_SIZE, extra: dict | None = None):
+    def __init__(self, library, *, page_size: int = PAGE_SIZE, extra: dict | None = None,
+                 snapshot: bool = False):
         self.store = getattr(library, "store", library)
         self.page_size = check_positive(page_size, name="page_size", integer=True)
         self.extra = dict(extra or {})
+        self._snapshot = bool(snapshot)
+        self._memo = None
 
     # -- routes ----------------------------------------------------------------------------------
     def pages(self) -> list[str]:
@@ -167,7 +174,12 @@ class LibraryView:
 
     # -- what the library holds ------------------------------------------------------------------
     def _state(self, *, features: bool = False) -> dict:
-        """The current version, its clusters and labels, every primitive without samples."""
+        """The current version, its clusters and labels, every primitive without samples (and features).
+
+        Read at each call, unless the view is a ``snapshot`` (one picture for a whole static site).
+        """
+        if self._memo is not None:
+            return self._memo
         store = self.store
         version = store.current_version()
         prims = store.primitives(load=False)
@@ -178,9 +190,11 @@ class LibraryView:
                "unassigned": [p.id for p in prims if p.cluster is None],
                "labels": {} if version is None else store.cluster_labels(version),
                "demonstrations": store.demonstration_ids()}
-        if features:
+        if features or self._snapshot:
             out["features"] = {p.id: p.features for p in prims if p.cluster is not None
                                and p.features is not None}
+        if self._snapshot:
+            self._memo = out
         return out
 
     def _label_sources(self, state) -> dict:
@@ -332,13 +346,14 @@ class LibraryView:
         return page(f"{title} ({label or 'no label'})", "\n".join(body), figures=figures, plotly=bool(traces))
 
     def _demonstration_list(self, number: int) -> str | None:
-        ids = self.store.demonstration_ids()
+        state = self._state()
+        ids = state["demonstrations"]
         total = self._n_pages(len(ids))
         if number > total:
             return None
         shown = ids[(number - 1) * self.page_size: number * self.page_size]
         count = {}
-        for p in self.store.primitives(load=False):
+        for p in state["prims"]:
             count[p.demonstration_id] = count.get(p.demonstration_id, 0) + 1
         rows = [[link(f"demonstration-{d}.html", f"demonstration {d}"), str(count.get(d, 0))] for d in shown]
         body = [f"<h1>Demonstrations</h1><p>{len(ids)} demonstration(s).</p>",
@@ -517,7 +532,7 @@ def write_view(library, out, *, page_size: int = PAGE_SIZE, extra: dict | None =
     5
     """
     check_out(out)  # before the work
-    view = LibraryView(library, page_size=page_size, extra=extra)
+    view = LibraryView(library, page_size=page_size, extra=extra, snapshot=True)
     files = {name: view.render(name).encode() for name in view.pages()}
     files.update(_assets())
     site = write_site(files, out)

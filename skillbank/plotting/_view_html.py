@@ -108,6 +108,7 @@ def page(title, body: str, *, figures: dict | None = None, plotly: bool = False,
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f'<meta http-equiv="Content-Security-Policy" content="{CSP}">'
             '<meta name="viewport" content="width=device-width, initial-scale=1">'
+            '<link rel="icon" href="data:,">'  # no favicon request
             f"<title>{text(title)}</title>"
             f'<link rel="stylesheet" href="{root}assets/view.css">{scripts}</head>'
             f'<body><header><a class="home" href="{root}index.html">skillbank library view</a></header>'
