@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ._library_location import _DB_READ, _location, _open, _target
 
-__all__ = ["add_view_parser"]
+__all__ = ["add_view_parser", "check_view", "write_library_view"]
 
 
 def add_view_parser(cmds) -> None:
@@ -29,6 +29,28 @@ def add_view_parser(cmds) -> None:
                    help="print the folder, its index and the page count as JSON (with --serve: the URL, once "
                         "listening)")
     c.set_defaults(func=_view)
+
+
+def check_view(path) -> None:
+    """A ``--view DIR`` a site can be written to, and plotly.js there to write: checked before any work."""
+    # the plotting package and plotly's JavaScript, only when a view is asked for
+    from ..plotting._view import check_out, plotly_js
+
+    plotly_js()
+    check_out(path, name="view")
+
+
+def write_library_view(args, extra: dict) -> dict:
+    """Write the web view of ``args.db`` to ``args.view`` with the ``extra`` result pages; what was written.
+
+    Returns ``{"out", "index", "pages": {name: path of each extra page}}``.
+    """
+    from ..plotting._view import write_view  # the web view, only when one is asked for
+
+    with _open(args, readonly=True) as lib:
+        done = write_view(lib, args.view, extra=extra)
+    return {"out": done["out"], "index": done["index"],
+            "pages": {name: str(Path(done["out"]) / name) for name in extra}}
 
 
 def _view(args) -> int:

@@ -87,11 +87,13 @@ def link(href: str, label) -> str:
 
 
 def table(headers, rows, *, cls: str = "") -> str:
-    """An HTML table; ``headers`` are escaped, each cell of ``rows`` is HTML already (escape it first)."""
-    head = "".join(f"<th>{text(h)}</th>" for h in headers)
+    """An HTML table; ``headers`` (None: no header row) are escaped, each cell of ``rows`` is HTML already
+    (escape it first)."""
+    head = "" if headers is None else \
+        "<thead><tr>" + "".join(f"<th>{text(h)}</th>" for h in headers) + "</tr></thead>"
     body = "".join("<tr>" + "".join(f"<td>{cell}</td>" for cell in row) + "</tr>" for row in rows)
     attr = f' class="{text(cls)}"' if cls else ""
-    return f"<table{attr}><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    return f"<table{attr}>{head}<tbody>{body}</tbody></table>"
 
 
 def page(title, body: str, *, figures: dict | None = None, plotly: bool = False, root: str = "") -> str:
