@@ -66,6 +66,12 @@ def collisions():
 # -- the web view: a small library and a real browser -----------------------------------------------
 #: A label that would run a script if a page wrote it as HTML.
 HOSTILE = "<img src=x onerror=alert(1)>"
+#: The action of a press skill (as tests/planning's).
+PRESS_PDDL = """(:action press
+  :parameters (?b - button)
+  :precondition (free ?b)
+  :effect (and (pressed ?b) (not (free ?b))))
+"""
 #: Debian's Chromium; the tests drive it with playwright's Python package and never download a browser.
 CHROMIUM = Path(os.environ.get("SKILLBANK_CHROMIUM", "/usr/bin/chromium"))
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -100,12 +106,13 @@ def build_view_library(path) -> dict:
         picked = lib.add(synthetic_multistream(), assign="none")
         lib.cluster()
         straight = lib.primitives(demonstration=1, load=False)[0].cluster
+        bowed = lib.primitives(demonstration=7, load=False)[0].cluster
         lib.label(HOSTILE, cluster=straight)
         lib.label("own-label", primitive=2)
         lib.store.set_description(HOSTILE, "(:action x :parameters (?b) :effect (</pre><script>alert(2)"
                                             "</script> ?b))", {"note": "</script><script>alert(3)</script>"})
         summary = lib.summary()
-    return {"path": Path(path), "straight": straight, "segmented": picked, "summary": summary}
+    return {"path": Path(path), "straight": straight, "bowed": bowed, "segmented": picked, "summary": summary}
 
 
 @pytest.fixture(scope="session")
