@@ -39,6 +39,8 @@ def run(args) -> int:
                   f"{ex['csv']}")
         if summary.get("planning"):
             print(f"tasks never demonstrated, planned over the skills: {summary['planning']}")
+        if summary.get("view"):
+            print(f"the library's web view: open {summary['view']}")
         print(f"figures and summary written to {summary['out']}")
         print(f"open {summary['summary']}")
     return 0

@@ -26,7 +26,8 @@ import numpy as np
 from ..core._validation import check_positive
 from ._view_html import ASSETS_CSS, ASSETS_JS, link, page, table, text
 
-__all__ = ["LibraryView", "write_view", "write_site", "check_out", "plotly_js", "PAGE_SIZE", "MARKER"]
+__all__ = ["LibraryView", "write_view", "write_site", "check_out", "scene", "plotly_js", "PAGE_SIZE",
+           "MARKER"]
 
 #: Members drawn and listed on one page of a skill, demonstrations on one page of the list.
 PAGE_SIZE = 100
@@ -91,6 +92,34 @@ def _xyz(Y: np.ndarray) -> np.ndarray:
     if Y.shape[1] >= 3:
         return Y[:, :3]
     return np.column_stack([Y, np.zeros((len(Y), 3 - Y.shape[1]))])
+
+
+def scene(paths, unit: str = "") -> dict:
+    """A plotly 3-D scene for ``paths`` (arrays of 3 columns) at one scale on every axis, a flat axis
+    (a letter drawn on a table) given a tenth of the largest extent so that it is not stretched.
+
+    Examples
+    --------
+    >>> s = scene([np.array([[0.0, 0.0, 0.0], [1.0, 2.0, 0.0]])])
+    >>> s["aspectratio"], s["zaxis"]["range"]
+    ({'x': 0.5, 'y': 1.0, 'z': 0.1}, [-0.1, 0.1])
+    """
+    suffix = f" ({unit})" if unit else ""
+    out = {"aspectmode": "manual", **{f"{a}axis": {"title": {"text": a + suffix}} for a in "xyz"}}
+    pts = [np.asarray(P, dtype=float).reshape(-1, 3) for P in paths if len(P)]
+    pts = np.concatenate(pts) if pts else np.zeros((0, 3))
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if not len(pts):
+        return {**out, "aspectmode": "cube"}
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    extent = hi - lo
+    span = max(float(extent.max()), 1e-9)
+    sides = np.maximum(extent, 0.1 * span)
+    centre = 0.5 * (lo + hi)
+    for k, a in enumerate("xyz"):
+        out[f"{a}axis"]["range"] = [float(centre[k] - 0.5 * sides[k]), float(centre[k] + 0.5 * sides[k])]
+    out["aspectratio"] = {a: round(float(sides[k] / sides.max()), 6) for k, a in enumerate("xyz")}
+    return out
 
 
 class LibraryView:
@@ -325,9 +354,9 @@ class LibraryView:
             rows.append([str(p.id), link(f"demonstration-{p.demonstration_id}.html",
                                          f"demonstration {p.demonstration_id}"),
                          f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}", lab])
+        drawn = [np.column_stack([tr["x"], tr["y"], tr["z"]]) for tr in traces]
         layout = {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "showlegend": len(traces) <= 30,
-                  "scene": {"aspectmode": "data", "xaxis": {"title": {"text": "x"}},
-                            "yaxis": {"title": {"text": "y"}}, "zaxis": {"title": {"text": "z"}}},
+                  "legend": {"x": 1.0, "xanchor": "right", "y": 0.92}, "scene": scene(drawn),
                   "hovermode": "closest", "uirevision": "keep"}
         body = [f"<h1>{text(title)}: {self._label_cell(label, source) if cluster is not None else ''}</h1>",
                 f"<p>{len(ids)} member(s)" + (f" in clustering version {state['version']}"

@@ -13,14 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._view import PATH_POINTS, STREAM_POINTS, _num, _thin, _xyz
+from ._view import PATH_POINTS, STREAM_POINTS, _num, _thin, _xyz, scene
 from ._view_html import link, table, text
 
 __all__ = ["reuse_page", "plan_page"]
 
-_LAYOUT_3D = {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "hovermode": "closest",
-              "scene": {"aspectmode": "data", "xaxis": {"title": {"text": "x (m)"}},
-                        "yaxis": {"title": {"text": "y (m)"}}, "zaxis": {"title": {"text": "z (m)"}}}}
+
+
+def _layout_3d(traces) -> dict:
+    drawn = [np.column_stack([t["x"], t["y"], t["z"]]) for t in traces]
+    return {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "hovermode": "closest", "scene": scene(drawn, "m")}
 
 
 def _line(Y, name: str, *, colour: str, width: float, dash: str = "solid", group: str | None = None,
@@ -139,7 +141,7 @@ def reuse_page(result, *, skill, method: str, constraints=None, stored=(), simul
                             dash="dash", group="adapted candidates", show=k == 0))
     traces.append(_line(result.trajectory["position"], "reproduction", colour="#d62728", width=6))
     traces += _constraint_traces(constraints)
-    figures = {"reuse": {"data": traces, "layout": _LAYOUT_3D}}
+    figures = {"reuse": {"data": traces, "layout": _layout_3d(traces)}}
     d = result.to_dict()
     rows = [["skill", text(skill)], ["method", text(method)],
             ["used", text(", ".join(map(str, result.used)))],
@@ -187,7 +189,7 @@ def plan_page(result, scene, *, skills=None, simulation=None) -> tuple:
                               colour="#000000", symbol="x", size=4))
     names = list(scene.obstacles)
     traces += _obstacles([scene.obstacles[n] for n in names], names)
-    figures = {"plan": {"data": traces, "layout": _LAYOUT_3D}}
+    figures = {"plan": {"data": traces, "layout": _layout_3d(traces)}}
     rows = []
     for k, s in enumerate(result.steps):
         page = skills.get(s.skill)
