@@ -345,7 +345,7 @@ def test_a_missing_library_is_one_line(cli, tmp_path):
 
 def test_the_command_serves_until_interrupted(view_library):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    argv = ["library", "view", str(view_library["path"]), "--serve", "127.0.0.1:0", "--json"]
+    argv = ["library", "view", str(view_library["path"]), "--serve", "0", "--json"]  # the host: 127.0.0.1
     proc = subprocess.Popen([sys.executable, "-m", "skillbank.cli", *argv], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, stdin=subprocess.DEVNULL)
     try:
@@ -363,3 +363,13 @@ def test_the_command_serves_until_interrupted(view_library):
         _, err = proc.communicate(timeout=20)
     assert proc.returncode == 0 and "stopped" in err
     assert '"DELETE /index.html HTTP/1.1" 405' in err
+
+
+def test_a_port_in_use_is_one_line(cli, view_library):
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        code, out, err = cli("library", "view", view_library["path"], "--serve", f"127.0.0.1:{port}")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith(f"skillbank library view: error: serve: cannot listen on 127.0.0.1:{port}: ")
