@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import re
+import socket
 import sys
 import threading
 from http import HTTPStatus
@@ -50,6 +51,10 @@ def parse_address(text: str) -> tuple[str, int]:
     if not port.isdigit() or not 0 <= int(port) <= 65535 or (_ and not host):
         raise ValueError(f"serve: expected [HOST:]PORT with PORT an integer in 0..65535, got {text!r}")
     return host or DEFAULT_HOST, int(port)
+
+
+class _Server6(ThreadingHTTPServer):
+    address_family = socket.AF_INET6  # an IPv6 host ("::1")
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -134,7 +139,7 @@ class ViewServer:
         try:
             self._library = self._worker.submit(open_library).result()
             self._view = LibraryView(self._library, page_size=page_size)
-            self._http = ThreadingHTTPServer((host, port), _Handler)
+            self._http = (_Server6 if ":" in host else ThreadingHTTPServer)((host, port), _Handler)
         except BaseException:
             self.close()
             raise

@@ -373,3 +373,19 @@ def test_a_port_in_use_is_one_line(cli, view_library):
         code, out, err = cli("library", "view", view_library["path"], "--serve", f"127.0.0.1:{port}")
     assert code == 2 and out == "" and err.count("\n") == 1
     assert err.startswith(f"skillbank library view: error: serve: cannot listen on 127.0.0.1:{port}: ")
+
+
+def test_an_ipv6_host_is_served(view_library):
+    try:
+        socket.socket(socket.AF_INET6).close()
+        with socket.socket(socket.AF_INET6) as probe:
+            probe.bind(("::1", 0))
+    except OSError as exc:
+        pytest.skip(f"no IPv6 loopback here: {exc}")
+    with ViewServer(lambda: Library(view_library["path"], readonly=True), host="::1", log=None) as server:
+        server.start()
+        assert server.url.startswith("http://[::1]:")
+        conn = http.client.HTTPConnection("::1", server.port, timeout=10)
+        conn.request("HEAD", "/")
+        assert conn.getresponse().status == 200
+        conn.close()
