@@ -389,3 +389,19 @@ def test_an_ipv6_host_is_served(view_library):
         conn.request("HEAD", "/")
         assert conn.getresponse().status == 200
         conn.close()
+
+
+def test_a_page_that_fails_is_a_500_logged_without_its_password(view_library, monkeypatch):
+    def broken(self, name):
+        raise ValueError("library 'postgresql://ann:s3cret@db.lab/skills': connection lost")
+
+    monkeypatch.setattr(LibraryView, "render", broken)
+    log = io.StringIO()
+    with ViewServer(lambda: Library(view_library["path"], readonly=True), log=log) as server:
+        server.start()
+        status, _, body = _raw(server, b"GET /index.html HTTP/1.0\r\n\r\n")
+        assert (status, body) == (500, b"the page could not be rendered\n")
+        assert _raw(server, b"GET /assets/view.css HTTP/1.0\r\n\r\n")[0] == 200  # still serving
+    logged = log.getvalue()
+    assert "s3cret" not in logged and "postgresql://ann:***@db.lab/skills" in logged
+    assert "error rendering /index.html: library" in logged
