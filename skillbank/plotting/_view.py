@@ -94,7 +94,7 @@ def _xyz(Y: np.ndarray) -> np.ndarray:
     return np.column_stack([Y, np.zeros((len(Y), 3 - Y.shape[1]))])
 
 
-def scene(paths, unit: str = "") -> dict:
+def scene(paths, *, unit: str = "") -> dict:
     """A plotly 3-D scene for ``paths`` (arrays of 3 columns) at one scale on every axis, a flat axis
     (a letter drawn on a table) given a tenth of the largest extent so that it is not stretched.
 
@@ -202,8 +202,8 @@ class LibraryView:
         return max(1, -(-n // self.page_size))
 
     # -- what the library holds ------------------------------------------------------------------
-    def _state(self, *, features: bool = False) -> dict:
-        """The current version, its clusters and labels, every primitive without samples (and features).
+    def _state(self) -> dict:
+        """The current version, its clusters and labels, every primitive without samples (with features)
 
         Read at each call, unless the view is a ``snapshot`` (one picture for a whole static site).
         """
@@ -219,9 +219,8 @@ class LibraryView:
                "unassigned": [p.id for p in prims if p.cluster is None],
                "labels": {} if version is None else store.cluster_labels(version),
                "demonstrations": store.demonstration_ids()}
-        if features or self._snapshot:
-            out["features"] = {p.id: p.features for p in prims if p.cluster is not None
-                               and p.features is not None}
+        out["features"] = {p.id: p.features for p in prims
+                           if p.cluster is not None and p.features is not None}
         if self._snapshot:
             self._memo = out
         return out
@@ -235,7 +234,7 @@ class LibraryView:
         carried = {}
         earlier = [v["version"] for v in self.store.versions() if v["version"] < version]
         if earlier:
-            # the pipeline's own rule, to tell a carried label from one given since
+            # the pipeline's own rule, to tell a carried label from one given since (it imports scikit-learn)
             from ..pipeline import carry_labels
 
             old = earlier[-1]
@@ -266,7 +265,7 @@ class LibraryView:
         return f'<span class="label {kind}">{text(label)}</span> <span class="note">({kind})</span>'
 
     def _index(self) -> str:
-        state = self._state(features=True)
+        state = self._state()
         store, version, info = self.store, state["version"], state["info"]
         prims = state["prims"]
         body = [f"<h1>Library {text(store.location)}</h1>",

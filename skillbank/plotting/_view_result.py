@@ -22,7 +22,8 @@ __all__ = ["reuse_page", "plan_page"]
 
 def _layout_3d(traces) -> dict:
     drawn = [np.column_stack([t["x"], t["y"], t["z"]]) for t in traces]
-    return {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "hovermode": "closest", "scene": scene(drawn, "m")}
+    return {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "hovermode": "closest",
+            "scene": scene(drawn, unit="m")}
 
 
 def _line(Y, name: str, *, colour: str, width: float, dash: str = "solid", group: str | None = None,
