@@ -59,6 +59,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_scale.py ingest
 	$(PY) benchmarks/bench_scale.py cluster
 	$(PY) benchmarks/bench_robosuite.py --episodes 20 --seed 5000
+	$(PY) benchmarks/bench_view.py
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache
