@@ -404,3 +404,12 @@ def test_a_page_that_fails_is_a_500_logged_without_its_password(view_library, mo
     logged = log.getvalue()
     assert "s3cret" not in logged and "postgresql://ann:***@db.lab/skills" in logged
     assert "error rendering /index.html: library" in logged
+
+
+def test_an_empty_library_has_a_view(cli, tmp_path):
+    assert cli("library", "init", tmp_path / "empty.db")[0] == 0
+    code, out, _ = cli("library", "view", tmp_path / "empty.db", "--out", tmp_path / "site", "--json")
+    assert code == 0 and json.loads(out)["pages"] == 4
+    index = (tmp_path / "site" / "index.html").read_text()
+    assert "0 demonstration(s), 0 primitive(s); no clustering yet" in index
+    assert "No skill has a description" in (tmp_path / "site" / "planning.html").read_text()
