@@ -218,6 +218,7 @@ class LibraryView:
         out = {"version": version, "info": info, "n_clusters": n, "prims": prims, "clusters": clusters,
                "unassigned": [p.id for p in prims if p.cluster is None],
                "labels": {} if version is None else store.cluster_labels(version),
+               "inferred": {} if version is None else store.inferred_labels(version),
                "demonstrations": store.demonstration_ids()}
         out["features"] = {p.id: p.features for p in prims
                            if p.cluster is not None and p.features is not None}
@@ -225,22 +226,34 @@ class LibraryView:
             self._memo = out
         return out
 
-    def _label_sources(self, state) -> dict:
-        """``{cluster: "given" | "inferred"}``: a label the clustering carried from the previous version's
-        majority (:func:`~skillbank.pipeline.carry_labels`) is inferred; any other was given."""
-        version, labels = state["version"], state["labels"]
-        if not labels:
-            return {}
-        carried = {}
-        earlier = [v["version"] for v in self.store.versions() if v["version"] < version]
-        if earlier:
-            # the pipeline's own rule, to tell a carried label from one given since (it imports scikit-learn)
-            from ..pipeline import carry_labels
+    def _skill_label(self, state, cluster) -> tuple:
+        """``(label, source, note)`` of a cluster as ``library list`` tells it: ``"given"`` (the cluster's
+        own label), ``"inferred"`` (the one label its labelled primitives agree on), or no label; the note
+        says when a given label was carried over from the previous version by the reclustering
+        (:func:`~skillbank.pipeline.carry_labels`: more than half of the new cluster's members had it)."""
+        if cluster in state["labels"]:
+            label, note = state["labels"][cluster], ""
+            carried = self._carried(state)
+            if carried.get(cluster) == label:
+                note = f"carried from version {carried['from']}"
+            return label, "given", note
+        if cluster in state["inferred"]:
+            return state["inferred"][cluster], "inferred", "from its labelled members"
+        return None, None, ""
 
-            old = earlier[-1]
-            carried = carry_labels(self.store.members(old), self.store.cluster_labels(old),
-                                   dict(state["clusters"]))
-        return {k: "inferred" if carried.get(k) == lab else "given" for k, lab in labels.items()}
+    def _carried(self, state) -> dict:
+        """``{cluster: label}`` the reclustering carried from the previous version (and ``"from"``)."""
+        if "carried" not in state:
+            state["carried"] = {}
+            earlier = [v["version"] for v in self.store.versions() if v["version"] < state["version"]]
+            if earlier and state["labels"]:
+                # the pipeline's own rule, to tell a carried label from one given since (it imports sklearn)
+                from ..pipeline import carry_labels
+
+                old = earlier[-1]
+                state["carried"] = {**carry_labels(self.store.members(old), self.store.cluster_labels(old),
+                                                   dict(state["clusters"])), "from": old}
+        return state["carried"]
 
     @staticmethod
     def _separation(state) -> dict:
@@ -258,11 +271,14 @@ class LibraryView:
         return {k: (float(delta[k].min()), int(np.argmin(delta[k]))) for k in range(n)}
 
     # -- pages -------------------------------------------------------------------------------------
-    def _label_cell(self, label, source) -> str:
+    @staticmethod
+    def _label_cell(label, source, note: str = "") -> str:
+        """A label with where it comes from (given, cluster, inferred), escaped."""
         if label is None:
             return '<span class="none">-</span>'
         kind = source or "given"
-        return f'<span class="label {kind}">{text(label)}</span> <span class="note">({kind})</span>'
+        said = f"{kind}, {note}" if note else kind
+        return f'<span class="label {kind}">{text(label)}</span> <span class="note">({text(said)})</span>'
 
     def _index(self) -> str:
         state = self._state()
@@ -282,12 +298,11 @@ class LibraryView:
                         f"criterion {text(params.get('criterion'))}; a cluster is kept when it is at least "
                         f"{text(threshold)} apart from every other (separation along the line joining their "
                         "means, in pooled standard deviations).</p>")
-            sources = self._label_sources(state)
             separation = self._separation(state)
             counts = np.bincount(list(state["clusters"].values()), minlength=state["n_clusters"])
-            own, labels = {}, state["labels"]
+            own = {}
             for p in prims:
-                if p.cluster is not None and p.label is not None and p.label != labels.get(p.cluster):
+                if p.cluster is not None and p.label is not None and p.label_source == "given":
                     own.setdefault(p.cluster, {}).setdefault(p.label, 0)
                     own[p.cluster][p.label] += 1
             rows = []
@@ -296,7 +311,7 @@ class LibraryView:
                 sep = "-" if gap is None else f"{_num(gap[0])} from cluster {gap[1]}"
                 mine = ", ".join(f"{text(lab)} ×{c}" for lab, c in sorted(own.get(k, {}).items()))
                 rows.append([link(f"skill-{k}.html", f"cluster {k}"),
-                             self._label_cell(state["labels"].get(k), sources.get(k)),
+                             self._label_cell(*self._skill_label(state, k)),
                              f'<span class="num">{int(counts[k])}</span>', str(version), sep,
                              mine or '<span class="none">-</span>'])
             body += ["<h2>Skills</h2>", table(["skill", "label", "members", "version",
@@ -333,8 +348,7 @@ class LibraryView:
         shown = set(ids[(number - 1) * self.page_size: number * self.page_size])
         members = [p for p in state["prims"] if p.id in shown]
         demos = self.store.demonstrations(sorted({p.demonstration_id for p in members})) if members else {}
-        label = state["labels"].get(cluster)
-        source = self._label_sources(state).get(cluster) if cluster is not None else None
+        label, source, note = self._skill_label(state, cluster) if cluster is not None else (None, None, "")
         traces, rows = [], []
         for p in members:
             demo = demos[p.demonstration_id]
@@ -347,9 +361,7 @@ class LibraryView:
                                "x": Y[:, 0], "y": Y[:, 1], "z": Y[:, 2], "customdata": cd,
                                "marker": {"size": 2}, "line": {"width": 4},
                                "hovertemplate": f"primitive {p.id}<extra></extra>"})
-            own = p.label is not None and p.label != label
-            lab = self._label_cell(p.label, "given" if own else source) if p.label is not None else \
-                '<span class="none">-</span>'
+            lab = self._label_cell(p.label, p.label_source)
             rows.append([str(p.id), link(f"demonstration-{p.demonstration_id}.html",
                                          f"demonstration {p.demonstration_id}"),
                          f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}", lab])
@@ -357,7 +369,8 @@ class LibraryView:
         layout = {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "showlegend": len(traces) <= 30,
                   "legend": {"x": 1.0, "xanchor": "right", "y": 0.92}, "scene": scene(drawn),
                   "hovermode": "closest", "uirevision": "keep"}
-        body = [f"<h1>{text(title)}: {self._label_cell(label, source) if cluster is not None else ''}</h1>",
+        heading = self._label_cell(label, source, note) if cluster is not None else ""
+        body = [f"<h1>{text(title)}: {heading}</h1>",
                 f"<p>{len(ids)} member(s)" + (f" in clustering version {state['version']}"
                                               if cluster is not None else "")
                 + f"; showing {len(members)} (page {number} of {total}). Drag to rotate, scroll to zoom; "

@@ -131,6 +131,7 @@ th { background: #f3f5f8; }
 td.num, th.num { text-align: right; }
 .given { color: #0a6b2d; font-weight: 600; }
 .inferred { color: #8a5a00; font-style: italic; }
+.cluster { color: #23395d; }
 .none { color: #888; }
 .figure { width: 100%; height: 560px; border: 1px solid #e3e3e3; }
 .figure.small { height: 220px; }

@@ -90,8 +90,9 @@ def _reach(start, goal, *, bend, n=60, seed=0):
 
 def build_view_library(path) -> dict:
     """A library of 6 straight and 6 bowed 3-D reaches (stored whole) and one segmented pick-and-place,
-    clustered; the straight reaches' cluster labelled with :data:`HOSTILE`, one primitive labelled itself,
-    one hostile description. Returns what the pages should show."""
+    clustered; the straight reaches' cluster labelled with :data:`HOSTILE`, one of its primitives labelled
+    itself, one bowed reach labelled 'arc' (so its cluster's label is inferred), one hostile description.
+    Returns what the pages should show."""
     from skillbank.experiments._demo import synthetic_multistream
     from skillbank.pipeline import Library
 
@@ -109,6 +110,7 @@ def build_view_library(path) -> dict:
         bowed = lib.primitives(demonstration=7, load=False)[0].cluster
         lib.label(HOSTILE, cluster=straight)
         lib.label("own-label", primitive=2)
+        lib.label("arc", primitive=lib.primitives(demonstration=8, load=False)[0].id)  # a sparse label
         lib.store.set_description(HOSTILE, "(:action x :parameters (?b) :effect (</pre><script>alert(2)"
                                             "</script> ?b))", {"note": "</script><script>alert(3)</script>"})
         summary = lib.summary()

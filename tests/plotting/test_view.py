@@ -99,7 +99,8 @@ def test_a_label_carried_by_a_reclustering_is_inferred(tmp_path, view_library):
     with Library(path) as lib:
         lib.cluster()
         html = LibraryView(lib).render("index.html")
-    assert "&lt;img src=x onerror=alert(1)&gt;</span> <span class=\"note\">(inferred)" in html
+    hostile = "&lt;img src=x onerror=alert(1)&gt;"
+    assert f'{hostile}</span> <span class="note">(given, carried from version 1)' in html
     assert "clustering version 2" in html and "<h2>Clustering versions</h2>" in html
 
 
@@ -413,3 +414,15 @@ def test_an_empty_library_has_a_view(cli, tmp_path):
     index = (tmp_path / "site" / "index.html").read_text()
     assert "0 demonstration(s), 0 primitive(s); no clustering yet" in index
     assert "No skill has a description" in (tmp_path / "site" / "planning.html").read_text()
+
+
+def test_a_skill_page_says_where_each_members_label_comes_from(view_library):
+    with Library(view_library["path"], readonly=True) as lib:
+        view = LibraryView(lib)
+        bowed = view.render(f"skill-{view_library['bowed']}.html")
+        straight = view.render(f"skill-{view_library['straight']}.html")
+    arc = '<span class="label {0}">arc</span> <span class="note">({0})</span>'
+    assert bowed.count(arc.format("given")) == 1 and bowed.count(arc.format("inferred")) == 5
+    assert "<h1>cluster" in bowed and "(inferred, from its labelled members)</span></h1>" in bowed
+    own = '<span class="label given">own-label</span> <span class="note">(given)</span>'
+    assert straight.count(own) == 1 and straight.count('<span class="note">(cluster)</span>') == 5
