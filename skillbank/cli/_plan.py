@@ -266,7 +266,7 @@ def _plan_physics(args) -> int:
 
     from ..simulation import execute_plan  # robosuite and the planner, when a plan runs
 
-    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance")
+    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance", "view")
              if getattr(args, n, None) is not None]
     if given:
         raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's UR5e in its own world and writes "

@@ -101,3 +101,11 @@ def test_plan_view_in_the_browser(visit, planned_view):
     assert v.ready == "1" and v.page.locator("div.figure canvas").count() >= 1
     assert [u for u in v.requests if not u.startswith(root)] == []
     assert v.console_errors() == [] and v.errors == []
+
+
+def test_a_robosuite_scene_takes_no_view(cli, view_library, tmp_path):
+    code, out, err = cli("plan", view_library["path"], "--scene", "robosuite:Stack3", "--simulate", "--view",
+                         tmp_path / "view")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith("skillbank plan: error: --view: a robosuite scene runs robosuite's UR5e in its own")
+    assert not (tmp_path / "view").exists()
