@@ -2,19 +2,20 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-# One stamp per install: the demo needs the package, its planner and the simulator (`plan`, `sim`), the tests
+# One stamp per install: the demo needs the package, its planner, the simulator and the web view (`plan`, `sim`,
+# `view`), the tests
 # everything in `test` (which holds both, so installing it also satisfies the demo's stamp).
 DEMO_STAMP := $(VENV)/.installed-demo
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: install demo test lint bench clean
+.PHONY: install demo test lint bench clean browser
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 
 $(DEMO_STAMP): pyproject.toml | $(PY)
-	$(PY) -m pip install --quiet -e '.[plan,sim]'
+	$(PY) -m pip install --quiet -e '.[plan,sim,view]'
 	touch $@
 
 $(TEST_STAMP): pyproject.toml | $(PY)
@@ -29,7 +30,17 @@ demo: $(DEMO_STAMP)
 lint: $(TEST_STAMP)
 	$(PY) -m ruff check .
 
-test: $(TEST_STAMP) lint
+# The web view's tests drive Debian's headless Chromium (docs/view.md); installed once, when missing.
+CHROMIUM := /usr/bin/chromium
+
+browser:
+	@if [ ! -x $(CHROMIUM) ]; then \
+		if command -v apt-get >/dev/null 2>&1; then \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver; \
+		else echo "make: $(CHROMIUM) is missing and apt-get is not here: install Chromium" >&2; fi; \
+	fi
+
+test: $(TEST_STAMP) lint browser
 	$(PY) -m pytest
 
 bench: $(TEST_STAMP)
@@ -48,6 +59,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_scale.py ingest
 	$(PY) benchmarks/bench_scale.py cluster
 	$(PY) benchmarks/bench_robosuite.py --episodes 20 --seed 5000
+	$(PY) benchmarks/bench_view.py
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache

@@ -13,6 +13,7 @@ from ..core._text import printable
 from ..core._validation import summarise
 from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
 from ._library_transfer import _copy, _export, _import
+from ._library_view import add_view_parser, check_view, write_library_view
 from ._options import (
     add_constraint_options,
     add_execution_options,
@@ -138,6 +139,9 @@ def add_parser(sub):
     c.add_argument("--out", type=Path, default=None,
                    help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
+    c.add_argument("--view", type=Path, default=None, metavar="DIR",
+                   help="write the library's web view to DIR with the result's page (reuse.html: the "
+                        "reproduction over the candidates, constraints, obstacles, joints, simulation)")
     c.add_argument("--json", action="store_true",
                    help="print the result as JSON: t, streams, joint_names, trajectory (the position path), "
                         "used, rejected, constraint_error, orientation_error, collision, peak_joint_velocity")
@@ -175,6 +179,8 @@ def add_parser(sub):
     c.add_argument("--json", action="store_true",
                    help="print the removed demonstration and its primitives as JSON")
     c.set_defaults(func=_remove)
+
+    add_view_parser(cmds)
     return p
 
 
@@ -418,12 +424,14 @@ def _reuse(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
+    if args.view is not None:
+        check_view(args.view)
     with _open(args, readonly=True) as lib:
         skill = _skill(lib, args.skill)
         result = lib.reuse(skill, constraints, method=args.method, k=args.k, rank=args.rank,
                            random_state=args.seed, progress=show_progress(args), clearance_margin=margin,
                            **options, **execution)
-        used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None else {}
+        used = {p.id: p.demo for p in lib.skill(skill)} if args.plot is not None or args.view else {}
     arm = whole_robot(args, result.trajectory, world, own)
     collision = bool(result.collision) or (arm is not None and arm.min_distance < 0)
     sim = run_simulation(args, result.trajectory, world, own) if args.simulate else None
@@ -435,6 +443,13 @@ def _reuse(args) -> int:
 
         plot_edit(result.trajectory, args.plot, demos=[used[i] for i in result.used if i in used],
                   constraints=constraints, title=f"skill {args.skill}")
+    view = None
+    if args.view is not None:
+        from ..plotting._view_result import reuse_page  # the web view, only when one is asked for
+
+        page = reuse_page(result, skill=args.skill, method=args.method, constraints=constraints,
+                          stored=[(pid, demo["position"]) for pid, demo in used.items()], simulation=sim)
+        view = write_library_view(args, {"reuse.html": page})
     if args.json:
         doc = result.to_dict()
         doc["collision"] = collision
@@ -442,6 +457,8 @@ def _reuse(args) -> int:
             doc["clearance"] = arm.summary()
         if sim is not None:
             doc["simulation"] = sim.to_dict()
+        if view is not None:
+            doc["view"] = view
         print(json.dumps(doc, allow_nan=False))
         return status
     print(f"{args.db}: skill {args.skill!r} reproduced with {args.method} from primitive(s) {result.used}")
@@ -456,6 +473,8 @@ def _reuse(args) -> int:
     for path in (args.out, args.plot):
         if path is not None:
             print(f"  wrote {path}")
+    if view is not None:
+        print(f"  wrote the view with the result: open {view['pages']['reuse.html']}")
     return status
 
 

@@ -68,7 +68,7 @@ def _quiet_stdout() -> None:
 
 
 #: The options that name a file or folder a command writes.
-_OUTPUTS = ("out", "plot", "video")
+_OUTPUTS = ("out", "plot", "video", "view")
 
 
 def _check_outputs(args) -> None:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
+from ._library_view import check_view, write_library_view
 from ._options import (
     add_export_options,
     add_robot_options,
@@ -63,6 +64,9 @@ def add_parser(sub):
     p.add_argument("--plot", type=Path, default=None,
                    help="write a 3-D figure of the path coloured by step, with the scene's objects and "
                         "obstacles, and the PDDL files beside it (<plot>.domain.pddl, <plot>.problem.pddl)")
+    p.add_argument("--view", type=Path, default=None, metavar="DIR",
+                   help="write the library's web view to DIR with the plan's page (plan.html: the path by "
+                        "step over the scene's objects and obstacles, joints, simulated contacts, buttons)")
     p.add_argument("--json", action="store_true",
                    help="print plan, steps (action, args, skill, start, stop, used), t, streams, collision, "
                         "constraint_error as JSON")
@@ -109,6 +113,8 @@ def _plan(args) -> int:
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     for name in ("out", "plot"):
         check_folder(getattr(args, name), name)
+    if args.view is not None:
+        check_view(args.view)
     scene = load_scene(args.scene)
     if branch is not None:
         scene.branch = branch  # the command line's branch over the scene's
@@ -148,6 +154,8 @@ def _plan(args) -> int:
 
             written += list(write_pddl(result, _stem(args.plot)))
             written.insert(0, plot_plan(result, scene, args.plot, demos=prims))
+        if args.view is not None:  # last: a view that fails leaves no other output behind
+            written.append(Path(_plan_view(args, result, scene, sim)["pages"]["plan.html"]))
     status = 0 if sim is None or sim.confirmed else 1
     if args.json:
         doc = result.to_dict()
@@ -174,6 +182,18 @@ def _plan(args) -> int:
     if sim is not None:
         print_simulation(sim, planned=True)
     return status
+
+
+def _plan_view(args, result, scene, sim) -> dict:
+    """The library's web view with the plan's page, each step linked to its skill's page."""
+    from ..plotting._view_result import plan_page  # the web view, only when one is asked for
+    from ..store import open_store  # the store, as the plan opened it
+
+    with open_store(_target(args.db), create=False, readonly=True) as store:
+        version = store.current_version()
+        labels = {} if version is None else store.cluster_labels(version)
+    skills = {label: f"skill-{k}.html" for k, label in labels.items()}
+    return write_library_view(args, {"plan.html": plan_page(result, scene, skills=skills, simulation=sim)})
 
 
 def _planner(args) -> dict:
@@ -212,7 +232,7 @@ def _all_or_nothing(args):
 def _empty(args, result, scene) -> int:
     """Report a plan of no steps (exit 0): nothing is reproduced, so --out and --plot write nothing."""
     notes = list(result.notes)
-    asked = [f"--{name}" for name in ("out", "plot") if getattr(args, name) is not None]
+    asked = [f"--{name}" for name in ("out", "plot", "view") if getattr(args, name) is not None]
     if asked:
         notes.append(f"{' and '.join(asked)}: nothing written (a plan of no steps has no trajectory)")
     if args.simulate:
@@ -246,7 +266,7 @@ def _plan_physics(args) -> int:
 
     from ..simulation import execute_plan  # robosuite and the planner, when a plan runs
 
-    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance")
+    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance", "view")
              if getattr(args, n, None) is not None]
     if given:
         raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's UR5e in its own world and writes "

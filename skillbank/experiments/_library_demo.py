@@ -14,6 +14,8 @@ from ..core import Constraints, Demonstration, Sphere, exp_map
 from ..io import load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..plotting import plot_executable, plot_reuse, plot_skills
+from ..plotting._view import write_view
+from ..plotting._view_result import reuse_page
 from ._demo import fresh_library, run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._planning_demo import run_planning_demo, simulated
 
@@ -203,7 +205,9 @@ def _markdown(result, rows, reuses, seg) -> str:
         comp = ", ".join(f"{k} {v}" for k, v in r["composition"].items())
         share = f"{100 * r['majority']:.0f} %"
         lines.append(f"| {r['cluster']} | {r['label']} | {r['count']} | {share} | {comp} |")
-    lines += ["", "![clusters](clusters.png)", "", "## Reuse under new constraints", ""]
+    lines += ["", "![clusters](clusters.png)", "", "The library as a web site (skills, members in 3-D, "
+              "demonstrations and their cuts, the reuses below): [view/index.html](view/index.html).", "",
+              "## Reuse under new constraints", ""]
     for item in reuses:
         lines += [f"### {item['skill']} ({item['method']})", "", item["task"] + ".", ""]
         if "error" in item:
@@ -303,8 +307,9 @@ def _physics_line(sim) -> str:
 
 
 def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
-    """Fill, cluster and label ``lib``, draw it, reuse two skills; the parts of the summary."""
-    figures, reuses = {}, []
+    """Fill, cluster and label ``lib``, draw it, reuse two skills; the parts of the summary, and the
+    reuses' pages of the library's web view."""
+    figures, reuses, pages = {}, [], {}
     if data is None:
         rows, tasks, source, features = _lasa_setup(lib, random_state, step)
     else:
@@ -322,11 +327,14 @@ def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
             continue
         fig = _plot_reuse(lib, task, res, out / f"reuse_{task.skill}.png")
         figures[f"reuse_{task.skill}"] = str(fig)
+        pages[f"reuse-{len(pages) + 1}.html"] = reuse_page(
+            res, skill=task.skill, method=task.method, constraints=task.constraints,
+            stored=[(p.id, p.demo["position"]) for p in lib.primitives(label=task.skill)])
         d = res.to_dict()
         reuses.append(dict(item, used=d["used"], rejected=d["rejected"], figure=str(fig),
                            constraint_error=d["constraint_error"], collision=d["collision"],
                            message=res.message))
-    return rows, source, features, figures, reuses, lib.summary()
+    return rows, source, features, figures, reuses, lib.summary(), pages
 
 
 def _composed(out: Path, seed) -> dict:
@@ -337,7 +345,7 @@ def _composed(out: Path, seed) -> dict:
     except ImportError:
         return {"skipped": "robosuite is not installed (pip install 'skillbank[sim]')"}
     from ..plotting import plot_composed  # matplotlib, with the rest of the demo's figures
-    from ._composition import composition_experiment
+    from ._composition import composition_experiment  # robosuite is there: the experiment can run
 
     out.mkdir(parents=True, exist_ok=True)
     done = {}
@@ -386,7 +394,8 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
     -------
     dict
         JSON-able: ``out``, ``summary`` (summary.md), ``library``, ``figures``,
-        ``skills`` (cluster rows), ``reuse`` (one item per reused skill), timing.
+        ``skills`` (cluster rows), ``reuse`` (one item per reused skill), ``view``
+        (the library's web view, ``out/view/index.html``), timing.
 
     Examples
     --------
@@ -404,16 +413,19 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
         data = Path(data)
         if not (data / "rail").is_dir() or not (data / "seed").is_dir():
             raise ValueError(f"data: expected a folder with rail/ and seed/, got {str(data)!r}")
-    # load, add, cluster, label; the clusters' figure; the two reuse tasks; the segmentation demo
-    step = _Steps(4 + 1 + 2 + 1 + 1 + int(bool(composed)) + int(bool(segmentation)), progress)
+    # load, add, cluster, label; the clusters' figure; the two reuse tasks; the executable one; the web
+    # view; planning; the composed tasks in physics; the segmentation demo
+    step = _Steps(4 + 1 + 2 + 1 + 1 + 1 + int(bool(composed)) + int(bool(segmentation)), progress)
     try:
         with Library(db) as lib:
-            rows, source, features, figures, reuses, summary = _build_and_reuse(
+            rows, source, features, figures, reuses, summary, pages = _build_and_reuse(
                 lib, out, data, random_state, step)
             step("executable reproduction (UR5e)")
             executable = _executable(lib, out, data, random_state)
             figures["executable"] = executable["figure"]
             summary = lib.summary()
+            step("web view of the library")
+            view = write_view(lib, out / "view", extra=pages)
         step("planning (tasks never demonstrated)")
         planning = run_planning_demo(out / "planning", data=data, random_state=random_state)
         figures.update({f"plan_{k}": v["files"]["figure"] for k, v in planning["tasks"].items()})
@@ -430,7 +442,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
     result = {"out": str(out), "library": str(db), "source": source, "features": features,
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
               "skills": rows, "reuse": reuses, "figures": figures, "executable": executable,
-              "planning": planning["summary"], "composed": composed,
+              "planning": planning["summary"], "view": view["index"], "composed": composed,
               "segmentation": None if seg is None else seg["summary"]}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"

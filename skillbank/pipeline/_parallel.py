@@ -114,9 +114,13 @@ def bounds(demo, segment, segmentation):
     result = MultimodalSegmenter(**params).fit(demo, streams).result_
     # the streams without information that took no part in the cut, and why (none: no key)
     aside = {"set_aside": dict(result.set_aside)} if result.set_aside else {}
+    # each cut with the streams that supported it and their evidence there (the library's web view shows it)
+    support = [{"at": int(k), "streams": s} for k, s in zip(result.keypoints, result.keypoint_support,
+                                                             strict=True)]
     return result.bounds, {"segment": True, "method": "skillbank.segmentation.MultimodalSegmenter",
                            "streams": streams, "requested": params, "resolved": result.params,
-                           "mode": result.mode, "skillbank_version": __version__, **aside}
+                           "mode": result.mode, "skillbank_version": __version__, "cut_support": support,
+                           **aside}
 
 
 def assignment(parts, snapshot):

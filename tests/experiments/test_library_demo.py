@@ -33,6 +33,11 @@ def check_result(res, out):
     assert rows[0, 0] == 0.0 and ex["constraint_error"] < 1e-6 and ex["orientation_error"] < 1e-9
     assert ex["peak_joint_velocity"] <= 1.0 + 1e-9
     assert "reach_ur5e.csv" in Path(res["summary"]).read_text()
+    # the library's web view, with the two reuses' pages linked from its index
+    index = Path(res["view"])
+    assert index == out / "view" / "index.html" and "view/index.html" in Path(res["summary"]).read_text()
+    assert {"reuse-1.html", "reuse-2.html", "assets"} <= {p.name for p in index.parent.iterdir()}
+    assert '<a href="reuse-1.html">' in index.read_text()
     # a task never demonstrated, planned and chained
     assert Path(res["planning"]).is_file() and "planning/summary.md" in Path(res["summary"]).read_text()
 
@@ -86,10 +91,11 @@ def test_lasa_library_demo(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
                  "figure of the clusters", "reusing WShape", "reusing place", "executable reproduction",
-                 "planning"):
+                 "web view of the library", "planning"):
         assert step in err, err
-    # 4 steps to build the library, its figure, two reuses, the executable one, planning; no segmentation
-    assert "0/9 [00:00, loading LASA]" in err and "8/9" in err
+    # 4 steps to build the library, its figure, two reuses, the executable one, the web view, planning; no
+    # segmentation
+    assert "0/10 [00:00, loading LASA]" in err and "9/10" in err
 
 
 def test_progress_steps_are_named_as_they_start(capsys):
