@@ -617,8 +617,10 @@ def _run_step(episode, world, step, action, args, binding, phases, method, horiz
         where = step["observed"]["objects"].get(atom[1][0] if atom[1] else None)
         landed = "" if where is None else f"; {atom[1][0]} is at {where['position']} m" + \
             (" in the gripper" if where["held"] else "")
-        step.update(ok=False, reason=reason, detail=f"the plan expects {'not ' if neg else ''}{_text(atom)}, "
-                                                     f"the scene does not show it{landed}")
+        detail = f"the plan expects {'not ' if neg else ''}{_text(atom)}, the scene does not show it{landed}"
+        if episode.contact is not None:  # an arm link touched the scene first: that is what went wrong
+            reason, detail = "collision", f"{episode.contact[1]}; then {reason}: {detail}"
+        step.update(ok=False, reason=reason, detail=detail)
         return
     step["ok"] = True
 

@@ -556,7 +556,10 @@ def _check(seg, before, episode):
         if abs(gap1 - gap0) > CARRIED + ARRIVED:
             if travel < 0.01:
                 return "missed grasp", f"{obj} stayed where it was ({gap1:.3f} m from the tool)"
-            return "dropped", f"{obj} is {gap1:.3f} m from the tool, {gap0:.3f} m when the segment began"
+            # a segment that ends with the gripper open lets the object go: where it went is for the
+            # task's check (or a plan step's effect) to judge, not a drop
+            if seg.primitive.demo["actions"][-1, 6] > 0:
+                return "dropped", f"{obj} is {gap1:.3f} m from the tool, {gap0:.3f} m when the segment began"
     return None
 
 
