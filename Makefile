@@ -60,6 +60,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_scale.py cluster
 	$(PY) benchmarks/bench_robosuite.py --episodes 20 --seed 5000
 	$(PY) benchmarks/bench_view.py
+	$(PY) benchmarks/bench_composition.py --episodes 20 --seed 30
 
 clean:
 	rm -rf $(VENV) demo_output .pytest_cache .ruff_cache
