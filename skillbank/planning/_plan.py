@@ -186,10 +186,15 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     _check_scene_against(dom, scene)
     objects = {name: obj.type for name, obj in scene.objects.items()}
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
-    check_groundings(dom, objects, max_groundings=max_groundings)
+    if search == "optimal":  # jupyddl builds every type-consistent ground action before it searches
+        check_groundings(dom, objects, max_groundings=max_groundings)
     try:
-        steps = solve(dom.text, problem, search=search, max_expansions=max_expansions, time_limit=time_limit)
+        steps = solve(dom.text, problem, search=search, max_expansions=max_expansions, time_limit=time_limit,
+                      max_groundings=max_groundings)
     except ValueError as exc:
+        if str(exc).startswith("domain: expected at most max_groundings"):
+            # more are reachable than the bound: the count over the scene's objects says by how much
+            check_groundings(dom, objects, max_groundings=max_groundings)
         unused = unused_types(dom, objects)  # a scene of switches planned with a 'press ?b - button' action
         if not unused or not str(exc).startswith(("goal:", "planner:")):
             raise

@@ -40,7 +40,8 @@ _CLOCK_EVERY = 2048
 
 
 class SearchFailed(Exception):
-    """The search ended without a plan: ``reason`` is ``"expansions"``, ``"time"`` or ``"exhausted"``."""
+    """The search ended without a plan: ``reason`` is ``"expansions"``, ``"time"``, ``"exhausted"`` or
+    ``"groundings"`` (more reachable ground actions than the bound)."""
 
     def __init__(self, reason: str, expanded: int):
         super().__init__(reason)
@@ -407,12 +408,14 @@ def _typing(parents, objects):
     return allowed
 
 
-def ground(domain: str, problem: str, *, deadline: float | None = None) -> Grounded:
+def ground(domain: str, problem: str, *, deadline: float | None = None,
+           max_groundings: int | None = None) -> Grounded:
     """Ground the STRIPS ``domain`` and ``problem`` (PDDL text) where relaxed reachability allows.
 
     Raises ValueError (one line, ``"planner: the PDDL was refused: ..."``) on
     text outside the subset, and :class:`SearchFailed` past ``deadline``
-    (a :func:`time.perf_counter` value).
+    (a :func:`time.perf_counter` value) or when more than ``max_groundings``
+    ground actions are reachable (``reason`` ``"groundings"``).
 
     Examples
     --------
@@ -460,6 +463,8 @@ def ground(domain: str, problem: str, *, deadline: float | None = None) -> Groun
             if deadline is not None and len(seen) % _CLOCK_EVERY == 0 and time.perf_counter() > deadline:
                 raise SearchFailed("time", 0)
             adds = [(p, _ground_args(a, full)) for p, a in s.add]
+            if max_groundings is not None and len(raw) >= max_groundings:
+                raise SearchFailed("groundings", 0)
             raw.append((key, [(p, _ground_args(a, full)) for p, a in s.fluent],
                         [(p, _ground_args(a, full)) for p, a in s.neg_fluent], adds,
                         [(p, _ground_args(a, full)) for p, a in s.delete]))

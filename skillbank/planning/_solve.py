@@ -182,7 +182,7 @@ def _step(name: str) -> tuple:
 
 
 def solve(domain: str, problem: str, *, search: str = "satisficing", max_expansions: int = MAX_EXPANSIONS,
-          time_limit: float = TIME_LIMIT) -> list:
+          time_limit: float = TIME_LIMIT, max_groundings: int | None = None) -> list:
     """A plan ``[(action, (args...))]`` of a domain and problem (PDDL text); the shortest with ``"optimal"``.
 
     Parameters
@@ -199,6 +199,11 @@ def solve(domain: str, problem: str, *, search: str = "satisficing", max_expansi
     time_limit : float
         Seconds the planner may run before it gives up (the satisficing
         search counts its grounding too).
+    max_groundings : int, optional
+        Ground actions the satisficing search may build, counted as it grounds
+        only what relaxed reachability allows (default: no bound; the optimal
+        search grounds everything: :func:`check_groundings` bounds it before it
+        starts, as :func:`~skillbank.planning.plan_task` does).
 
     Raises
     ------
@@ -220,11 +225,12 @@ def solve(domain: str, problem: str, *, search: str = "satisficing", max_expansi
     [('press', ('b2',))]
     """
     return solve_with_info(domain, problem, search=search, max_expansions=max_expansions,
-                           time_limit=time_limit)[0]
+                           time_limit=time_limit, max_groundings=max_groundings)[0]
 
 
 def solve_with_info(domain: str, problem: str, *, search: str = "satisficing",
-                    max_expansions: int = MAX_EXPANSIONS, time_limit: float = TIME_LIMIT) -> tuple:
+                    max_expansions: int = MAX_EXPANSIONS, time_limit: float = TIME_LIMIT,
+                    max_groundings: int | None = None) -> tuple:
     """``(steps, info)``: :func:`solve`'s plan and how it was found.
 
     ``info`` holds ``search`` (the name asked for), ``planner`` (its entry
@@ -244,11 +250,14 @@ def solve_with_info(domain: str, problem: str, *, search: str = "satisficing",
         raise ValueError(f"search: expected one of {', '.join(map(repr, SEARCHES))}, got {search!r}")
     max_expansions = check_positive(max_expansions, name="max_expansions", integer=True)
     time_limit = check_positive(time_limit, name="time_limit")
+    if max_groundings is not None:
+        max_groundings = check_positive(max_groundings, name="max_groundings", integer=True)
     start = time.perf_counter()
     if search == "optimal":
         steps, expanded = _optimal(domain, problem, max_expansions=max_expansions, time_limit=time_limit)
     else:
-        steps, expanded = _satisficing(domain, problem, max_expansions=max_expansions, time_limit=time_limit)
+        steps, expanded = _satisficing(domain, problem, max_expansions=max_expansions, time_limit=time_limit,
+                                       max_groundings=max_groundings)
     info = {"search": search, "planner": SEARCHES[search], "expanded": expanded,
             "seconds": time.perf_counter() - start}
     return steps, info
@@ -272,17 +281,22 @@ def _together_error(goals) -> ValueError:
                       "sequence of the skills' actions makes them true at once")
 
 
-def _satisficing(domain: str, problem: str, *, max_expansions: int, time_limit: float) -> tuple:
+def _satisficing(domain: str, problem: str, *, max_expansions: int, time_limit: float,
+                 max_groundings: int | None = None) -> tuple:
     """skillbank's grounding and GBFS with h_ff, then action elimination: ``(steps, states expanded)``."""
     deadline = time.perf_counter() + time_limit
     try:
-        task = _search.ground(domain, problem, deadline=deadline)
+        task = _search.ground(domain, problem, deadline=deadline, max_groundings=max_groundings)
         if task.unreachable:
             raise _unreachable_error(task.unreachable)
         plan, expanded = _search.search(task, max_expansions=max_expansions, deadline=deadline)
     except _search.SearchFailed as failed:
         if failed.reason == "exhausted":
             raise _together_error(sorted(task.facts[g] for g in task.goal)) from None
+        if failed.reason == "groundings":
+            raise ValueError(f"domain: expected at most max_groundings={max_groundings} ground actions "
+                             f"reachable from the initial facts, got more; give fewer objects or parameters, "
+                             "or raise the bound (--max-groundings, plan(max_groundings=...))") from None
         raise _gave_up(failed.reason, failed.expanded, max_expansions=max_expansions,
                        time_limit=time_limit) from None
     # the greedy search can wander; dropping the actions the goal does not need is cheap (quadratic in

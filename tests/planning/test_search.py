@@ -259,3 +259,22 @@ def test_cli_plan_json_names_the_planner(described_library, synthetic_db, tmp_pa
         doc = json.loads(out)
         assert doc["planner"] == {"search": search, "name": SEARCHES[search]}
         assert len(doc["plan"]) == 2
+
+
+def test_the_bound_on_ground_actions_counts_what_is_reachable():
+    from skillbank.planning import MAX_GROUNDINGS, check_groundings, parse_domain  # the bound and the count
+
+    n = 320
+    problem = press_problem(n)
+    domain = parse_domain(PRESS)
+    objects = {f"b{k}": "button" for k in range(1, n + 1)}
+    # every pair of buttons is (n^2 = 102400) over the bound; only the n that (next ?b ?n) allows are built
+    with pytest.raises(ValueError, match="got 102400 in this scene"):
+        check_groundings(domain, objects)
+    plan = solve(PRESS, problem, max_groundings=MAX_GROUNDINGS)
+    assert len(plan) == n
+    with pytest.raises(ValueError, match=r"^domain: expected at most max_groundings=100 ground actions "
+                                         r"reachable from the initial facts, got more; .*--max-groundings"):
+        solve(PRESS, problem, max_groundings=100)
+    with pytest.raises(ValueError, match=r"^max_groundings: expected an integer > 0"):
+        solve(PRESS, problem, max_groundings=0)
