@@ -25,6 +25,7 @@ import numpy as np
 
 from ..pipeline import Library
 from ..simulation import binomial_interval, execute_plan, record
+from ..simulation._compose import tally
 from ..simulation._stack3 import CUBES
 
 __all__ = ["composition_experiment", "COMPOSITIONS", "PICK", "PLACE"]
@@ -134,11 +135,7 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
             rows = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
                                 paths=paths, progress=None if progress is None else
                                 (lambda done, _: progress("episodes", done, episodes)))["per_episode"]
-    successes = sum(r["success"] for r in rows)
-    failures = {}
-    for r in rows:
-        if not r["success"]:
-            failures[r["failure"]["reason"]] = failures.get(r["failure"]["reason"], 0) + 1
+    successes, failures = tally(rows)
     return {"experiment": name, "scene": scene, "method": method, "seed": int(seed), "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,

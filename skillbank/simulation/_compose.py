@@ -323,14 +323,11 @@ def _candidates(phases, action, args, binding):
     return same or options
 
 
-def _ground(action, args):
+def _effects(action, args):
+    """The action's effect bound to ``args``: ``[(negated, (predicate, args))]``."""
     value = dict(zip([p for p, _ in action.parameters], args, strict=True))
-    out = []
-    for neg, pred, atom_args in atoms_of(action.effect, f"action {action.name} effect"):
-        out.append((neg, (pred, tuple(value.get(a, a) for a in atom_args))))
-    pre = [(neg, (pred, tuple(value.get(a, a) for a in atom_args)))
-           for neg, pred, atom_args in atoms_of(action.precondition, f"action {action.name} precondition")]
-    return pre, out
+    return [(neg, (pred, tuple(value.get(a, a) for a in atom_args)))
+            for neg, pred, atom_args in atoms_of(action.effect, f"action {action.name} effect")]
 
 
 def _apply(state, effects):
@@ -344,11 +341,18 @@ def _apply(state, effects):
     return state
 
 
-def _differences(expected, observed, predicates):
-    """Facts of the observed predicates that the plan expects and the scene does not show, and the reverse."""
-    exp = {a for a in expected if a[0] in OBSERVED and a[0] in predicates}
-    obs = {a for a in observed if a[0] in predicates}
-    return sorted(exp - obs), sorted(obs - exp)
+def _lacking(expected, observed, predicates):
+    """Facts of the observed predicates that the plan expects and the scene does not show."""
+    return sorted(a for a in expected if a[0] in OBSERVED and a[0] in predicates and a not in observed)
+
+
+def tally(rows) -> tuple:
+    """``(successes, {reason: count})`` of episodes' rows (each with ``success`` and, failed, ``failure``)."""
+    failures = {}
+    for r in rows:
+        if not r["success"]:
+            failures[r["failure"]["reason"]] = failures.get(r["failure"]["reason"], 0) + 1
+    return sum(bool(r["success"]) for r in rows), failures
 
 
 def _plan(domain, world, facts, goal, search, name):
@@ -453,11 +457,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
                 progress(k + 1, sum(r["success"] for r in rows))
     finally:
         environment.close()
-    successes = sum(r["success"] for r in rows)
-    failures = {}
-    for r in rows:
-        if not r["success"]:
-            failures[r["failure"]["reason"]] = failures.get(r["failure"]["reason"], 0) + 1
+    successes, failures = tally(rows)
     return {"scene": scene, "method": method, "seed": int(seed), "placement": placement, "episodes": episodes,
             "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
@@ -488,8 +488,8 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
     if disturb is not None and disturb["object"] not in world.objects:
         raise ValueError(f"disturb.object: the scene has no object {disturb['object']!r}; it has "
                          f"{world.objects}")
-    episode = _Episode(env, obs, 10 ** 9, trace=paths)
-    episode.leave = True
+    # each segment also leaves as its demonstration did: a composed scene stands beside what it picks up
+    episode = _Episode(env, obs, 10 ** 9, trace=paths, leave=True)
     episode.rest(world.objects)
     episode.fingers = _fingers(env, episode.obs)
     facts = world.facts(episode.obs)
@@ -512,18 +512,18 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
         act, args = queue.pop(0)
         action = domain.actions[act]
         number = len(row["steps"]) + 1
-        pre, effects = _ground(action, args)
+        effects = _effects(action, args)
         step = {"step": number, "action": act, "args": list(args),
                 "planned": {"add": [_text(a) for n, a in effects if not n],
                             "delete": [_text(a) for n, a in effects if n]}}
-        lacking, extra = _differences(expected, world.facts(episode.obs), domain.predicates)
+        lacking = _lacking(expected, world.facts(episode.obs), domain.predicates)
         if lacking:
             step.update(ok=False, reason="world changed",
                         detail=f"before this step the plan expects {', '.join(map(_text, lacking))}, which "
                                f"the scene no longer shows")
         else:
             starts.append(episode.steps)
-            _run_step(episode, world, step, action, args, bindings[act], phases, method, horizon,
+            _run_step(episode, world, step, action, args, effects, bindings[act], phases, method, horizon,
                       random_state, timings)
         row["steps"].append(step)
         if step["ok"]:
@@ -568,7 +568,8 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
     return row
 
 
-def _run_step(episode, world, step, action, args, binding, phases, method, horizon, random_state, timings):
+def _run_step(episode, world, step, action, args, effects, binding, phases, method, horizon, random_state,
+              timings):
     """Carry out one plan step by the nearest phase bound to its arguments; fill ``step``'s facts."""
     options = _candidates(phases, action, args, binding)
     if not options:
@@ -595,19 +596,22 @@ def _run_step(episode, world, step, action, args, binding, phases, method, horiz
     timings["segments"] += len(segments)
     if failure is None:
         _let_fingers_settle(episode)
-    pre, effects = _ground(action, args)
     observed = world.facts(episode.obs)
     shown = {a for a in observed if a[0] in {atom[0] for _, atom in effects}}
     step["observed"] = {"facts": sorted(_text(a) for a in shown),
                         "objects": {o: world.pose(episode.obs, o) for o in args if o in world.objects}}
     if episode.contact is not None:
         step["arm_contact"] = episode.contact[1]
+
+    def fail(reason, detail):
+        if episode.contact is not None and reason != "timeout":
+            # an arm link touched the scene first: that is what went wrong
+            reason, detail = "collision", f"{episode.contact[1]}; then {reason}: {detail}"
+        step.update(ok=False, reason=reason, detail=detail)
+
     if failure is not None and not episode.success:
         i, reason, detail = failure
-        if episode.contact is not None and reason != "timeout":
-            reason, detail = "collision", f"{episode.contact[1]}; then {reason}: {detail}"
-        step.update(ok=False, reason=reason, detail=f"segment {i} (primitive {segments[i].primitive.id}): "
-                                                     f"{detail}")
+        fail(reason, f"segment {i} (primitive {segments[i].primitive.id}): {detail}")
         return
     wrong = [(n, a) for n, a in effects if a[0] in OBSERVED and (a in observed) == n]
     if wrong and not episode.success:
@@ -617,10 +621,8 @@ def _run_step(episode, world, step, action, args, binding, phases, method, horiz
         where = step["observed"]["objects"].get(atom[1][0] if atom[1] else None)
         landed = "" if where is None else f"; {atom[1][0]} is at {where['position']} m" + \
             (" in the gripper" if where["held"] else "")
-        detail = f"the plan expects {'not ' if neg else ''}{_text(atom)}, the scene does not show it{landed}"
-        if episode.contact is not None:  # an arm link touched the scene first: that is what went wrong
-            reason, detail = "collision", f"{episode.contact[1]}; then {reason}: {detail}"
-        step.update(ok=False, reason=reason, detail=detail)
+        fail(reason, f"the plan expects {'not ' if neg else ''}{_text(atom)}, the scene does not show "
+                     f"it{landed}")
         return
     step["ok"] = True
 

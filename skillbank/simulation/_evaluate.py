@@ -334,8 +334,9 @@ class _Contacts:
 
 
 class _Episode:
-    def __init__(self, env, obs, horizon, trace=False):
-        self.env, self.horizon = env, horizon
+    def __init__(self, env, obs, horizon, trace=False, leave=False):
+        """``leave``: adapted segments also leave as their demonstrations did (:func:`_path_adapted`)."""
+        self.env, self.horizon, self.leave = env, horizon, leave
         self.path = [] if trace else None
         self.driver = _Driver(env, obs, keep=False)
         self.steps, self.success, self.contact, self.segment = 0, False, None, 0
@@ -586,7 +587,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     P, Q, G = _path_rigid(seg, episode.obs)
                 else:
                     P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
-                                            leave=getattr(episode, "leave", False))
+                                            leave=episode.leave)
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
             timings["adapt"] += time.perf_counter() - tic
