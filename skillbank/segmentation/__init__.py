@@ -3,7 +3,9 @@
 :class:`MultimodalSegmenter` (or :func:`segment`) cuts a demonstration; it
 returns a :class:`SegmentationResult` with a :class:`StreamSegmentation` per
 stream. :func:`jerk`, :func:`jerk_profile`, :func:`detect_changepoints` and
-:func:`gate_changepoints` are the per-stream steps, for studying one stream.
+:func:`gate_changepoints` are the per-stream steps, for studying one stream;
+:func:`motion_time_scale` is the motion's own time scale, which bounds the
+default window.
 The other helpers live in the private modules and may change without notice.
 """
 
@@ -12,8 +14,10 @@ from ._gate import gate_changepoints
 from ._profile import jerk, jerk_profile
 from ._result import SegmentationResult, StreamSegmentation
 from ._segmenter import MultimodalSegmenter, segment
+from ._timescale import motion_time_scale, speed_correlation_time
 
 __all__ = [
     "MultimodalSegmenter", "segment", "SegmentationResult", "StreamSegmentation",
     "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
+    "motion_time_scale", "speed_correlation_time",
 ]

@@ -25,13 +25,15 @@ from ._keypoints import (
 from ._motion import merge_motionless, motion_evidence, moves, turning
 from ._profile import _stream_jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
+from ._timescale import motion_time_scale
 
 __all__ = ["MultimodalSegmenter", "segment", "to_samples"]
 
 _STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize", "stop_ratio", "min_turn")
 _SECONDS = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*s\s*$")
 
-#: ``window="auto"`` is this fraction of the demonstration's length. With
+#: ``window="auto"`` is this fraction of the demonstration's length (at most the motion's
+#: time scale, :func:`_auto_window`). With
 #: ``min_size`` two windows, a demonstration then holds at most 12 segments,
 #: and each of a handful of primitives spans several windows.
 AUTO_WINDOW_FRACTION = 0.04
@@ -146,7 +148,11 @@ class MultimodalSegmenter(Params):
     ----------
     window : int or str, default="auto"
         Sliding-window width, in samples or seconds (``"0.1s"``). ``"auto"``
-        uses 4 % of the demonstration's length (at least 8 samples).
+        uses 4 % of the demonstration's length, but never more than its motion's
+        time scale (:func:`~skillbank.segmentation.motion_time_scale`, the
+        speed's correlation time), and at least 8 samples: a demonstration of a
+        few movements gets 4 %, a long recording a window set by its movements,
+        so the cost per sample and the cuts per minute do not grow with it.
     min_size : int or str, default="auto"
         Minimum segment length; ``"auto"`` uses 2 × window.
     threshold : float, default=0.4
@@ -248,7 +254,7 @@ class MultimodalSegmenter(Params):
         self.floor = floor
         self.random_state = random_state
 
-    def _stream_settings(self, name: str, t: np.ndarray) -> dict:
+    def _stream_settings(self, name: str, t: np.ndarray, auto_window: int = MIN_AUTO_WINDOW) -> dict:
         raw = {k: getattr(self, k) for k in _STREAM_KEYS}
         overrides = (self.stream_params or {}).get(name, {})
         unknown = set(overrides) - set(_STREAM_KEYS)
@@ -256,9 +262,7 @@ class MultimodalSegmenter(Params):
             raise ValueError(f"stream_params[{name!r}]: expected keys among {list(_STREAM_KEYS)}, "
                              f"got {sorted(unknown)}")
         raw.update(overrides)
-        n = t.shape[0]
-        window = max(MIN_AUTO_WINDOW, int(round(AUTO_WINDOW_FRACTION * n))) if raw["window"] == "auto" \
-            else to_samples(raw["window"], t, name="window")
+        window = auto_window if raw["window"] == "auto" else to_samples(raw["window"], t, name="window")
         # evidence needs no second window between keypoints: two rests always have a movement between
         windows = 1 if self.combine == "evidence" else MIN_SIZE_WINDOWS
         min_size = windows * window if raw["min_size"] == "auto" else to_samples(
@@ -316,8 +320,9 @@ class MultimodalSegmenter(Params):
         kinds = {name: stream_kind(name, self.stream_kinds) if evidence else "motion" for name in names}
         t, n = demo.t, demo.n_steps
         per_stream, speeds, set_aside, constant = {}, {}, {}, {}
+        auto_window = _auto_window(demo, names, self.stream_kinds)
         for name in names:
-            p = self._stream_settings(name, t)
+            p = self._stream_settings(name, t, auto_window)
             needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
             if n < needed:
                 raise ValueError(
@@ -436,6 +441,35 @@ class MultimodalSegmenter(Params):
 def _size_text(value: int) -> str:
     """A number of samples for a message: exact when short, in powers of ten when long."""
     return str(value) if value < 10**12 else f"{float(value):.3g}"
+
+
+def _auto_window(demo: Demonstration, names, stream_kinds) -> int:
+    """``window="auto"``: 4 % of the demonstration, but never longer than its motion's time scale.
+
+    The time scale is the speed's correlation time
+    (:func:`~skillbank.segmentation.motion_time_scale`). In a demonstration of a
+    handful of movements 4 % of it is the shorter (about a fifth of a movement,
+    where the speed decorrelates over a third or more of one), so such
+    demonstrations are cut as they always were; in a long recording the motion
+    bounds the window, so the cost per sample and the cuts per minute stop
+    growing with the recording's length.
+    """
+    n = demo.n_steps
+    fraction = AUTO_WINDOW_FRACTION * n
+    informative = {}
+    for name in names:
+        Y = demo[name]
+        still = constant_columns(Y)
+        if not still.all():
+            informative[name] = Y[:, ~still]
+    motion = [name for name in informative if stream_kind(name, stream_kinds) == "motion"]
+    # the motion streams carry the movements' time scale; a recording without one (a force
+    # sensor alone) takes it from what it has
+    chosen = motion or list(informative)
+    window = fraction
+    if chosen and fraction > MIN_AUTO_WINDOW:
+        window = min(fraction, motion_time_scale([speed_norm(demo.t, informative[k]) for k in chosen]))
+    return max(MIN_AUTO_WINDOW, int(round(window)))
 
 
 def _check_sizes(params: dict, n: int) -> None:

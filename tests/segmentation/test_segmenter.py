@@ -247,6 +247,7 @@ def test_public_api():
     assert sorted(segmentation.__all__) == sorted([
         "MultimodalSegmenter", "segment", "SegmentationResult", "StreamSegmentation",
         "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
+        "motion_time_scale", "speed_correlation_time",
     ])
     assert all(hasattr(segmentation, name) for name in segmentation.__all__)
     for name in ("to_samples", "windowed_mean", "speed_norm", "smoothed_speed", "refine_to_jerk_centre"):
