@@ -48,6 +48,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_segmentation.py
 	$(PY) benchmarks/bench_ruptures.py
 	$(PY) benchmarks/bench_segmentation_quality.py
+	$(PY) benchmarks/bench_segmentation_scale.py
 	$(PY) benchmarks/bench_clustering.py
 	$(PY) benchmarks/bench_clustering_quality.py --seeds 10
 	$(PY) benchmarks/bench_editing.py

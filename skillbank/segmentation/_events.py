@@ -244,16 +244,57 @@ REST_BAND = 0.02
 MOVEMENT_FRACTION = 0.2
 
 
-def _run_around(mask: np.ndarray, i: int) -> tuple[int, int]:
-    """``(start, end)`` of the run of True in ``mask`` that holds index ``i`` (``mask[i]`` is True).
+def _run_around(v: np.ndarray, c: int, lo: int, hi: int, level: float) -> tuple[int, int]:
+    """``(start, end)``: the run of samples of ``v`` at or below ``level`` that holds ``c``, within ``[lo, hi]``.
 
-    Two scans outward from ``i`` in compiled code: the valleys of a long noisy
-    stream are many, and each one's run is short.
+    Scans outward from ``c`` in blocks that double (compiled code per block),
+    so the cost is about the run's length, however wide ``[lo, hi]`` is: the
+    deepest valleys of an hour-long recording span all of it.
     """
-    left, right = mask[i::-1], mask[i:]
-    k = left.size if left.all() else int(np.argmin(left))
-    m = right.size if right.all() else int(np.argmin(right))
-    return i - k + 1, i + m - 1
+    start, step = c, 16
+    while start > lo:
+        a = max(lo, start - step)
+        above = np.flatnonzero(v[a:start] > level)
+        if above.size:
+            start = a + int(above[-1]) + 1
+            break
+        start, step = a, 2 * step
+    end, step = c, 16
+    while end < hi:
+        b = min(hi, end + step)
+        above = np.flatnonzero(v[end + 1:b + 1] > level)
+        if above.size:
+            end = end + int(above[0])
+            break
+        end, step = b, 2 * step
+    return start, end
+
+
+def _nearest_deeper(rank: np.ndarray, gap_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each valley (in position order): the nearest deeper one before it and the highest speed between.
+
+    ``rank`` orders the valleys by depth (0 the deepest); ``gap_max[i]`` is the
+    highest speed from valley ``i - 1`` (or the start) to valley ``i``. Returns
+    the index of the nearest earlier valley of lower rank (-1 for none) and the
+    highest speed from it (or the start) to the valley. One pass with a stack:
+    the stretches of the valleys it pops tile the way back to the deeper one,
+    so their maxima combine into this one's, and each valley is popped once.
+    """
+    m = rank.shape[0]
+    left = np.full(m, -1, dtype=np.int64)
+    peak = np.empty(m)
+    stack: list[int] = []
+    for i in range(m):
+        top = float(gap_max[i])
+        r = rank[i]
+        while stack and rank[stack[-1]] > r:
+            j = stack.pop()
+            if peak[j] > top:
+                top = peak[j]
+        left[i] = stack[-1] if stack else -1
+        peak[i] = top
+        stack.append(i)
+    return left, peak
 
 
 def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -290,27 +331,34 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
     valleys, _ = find_peaks(-v, prominence=VALLEY_PROMINENCE * typical)
     if valleys.size == 0:
         return np.array([], dtype=int), np.array([], dtype=float), np.array([], dtype=float)
-    order = np.argsort(v[valleys], kind="stable")
+    m = valleys.size
+    rank = np.empty(m, dtype=np.int64)
+    rank[np.argsort(v[valleys], kind="stable")] = np.arange(m)  # ties: the earlier valley is deeper
+    # the highest speed between consecutive valleys (and from each end to its nearest valley)
+    bounds = np.r_[0, valleys, n - 1]
+    gaps = np.maximum.reduceat(v, bounds[:-1])[:m + 1]
+    gaps[:m] = np.maximum(gaps[:m], v[valleys])  # reduceat stops short of each stretch's end valley
+    gaps[m] = max(float(gaps[m]), float(v[n - 1]))
+    left, peak_l = _nearest_deeper(rank, gaps[:m])
+    right_rev, peak_r_rev = _nearest_deeper(rank[::-1], gaps[1:][::-1])
+    right = np.where(right_rev[::-1] >= 0, m - 1 - right_rev[::-1], -1)
+    peak_r = peak_r_rev[::-1]
     events, conf, ratios = [], [], []
-    for rank, k in enumerate(order):
+    for k in range(m):
         c = int(valleys[k])
-        deeper = valleys[order[:rank]]
-        left = deeper[deeper < c]
-        right = deeper[deeper > c]
-        lo = int(left.max()) if left.size else 0
-        hi = int(right.min()) if right.size else n - 1
-        peak_l, peak_r = float(v[lo:c + 1].max()), float(v[c:hi + 1].max())
-        side = min(peak_l, peak_r)
+        lo = int(valleys[left[k]]) if left[k] >= 0 else 0
+        hi = int(valleys[right[k]]) if right[k] >= 0 else n - 1
+        side = min(float(peak_l[k]), float(peak_r[k]))
         if side < MOVEMENT_FRACTION * typical:
             # no movement on one side: the valley is the rest before the first or after the last
             continue
         ratio = float(v[c]) / side
         # the run of the valley's bottom that holds c, within the valley
-        a, b = _run_around(v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c]), c - lo)
-        events.append(lo + (a + b) // 2)
+        a, b = _run_around(v, c, lo, hi, float(v[c]) + REST_BAND * (side - float(v[c])))
+        events.append((a + b) // 2)
         ratios.append(ratio)
         conf.append(MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** REST_EXPONENT))
-    order = np.argsort(events)
+    order = np.argsort(events, kind="stable")
     return (np.asarray(events, dtype=int)[order], np.asarray(conf)[order], np.asarray(ratios)[order])
 
 

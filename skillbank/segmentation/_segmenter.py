@@ -320,7 +320,9 @@ class MultimodalSegmenter(Params):
         kinds = {name: stream_kind(name, self.stream_kinds) if evidence else "motion" for name in names}
         t, n = demo.t, demo.n_steps
         per_stream, speeds, set_aside, constant = {}, {}, {}, {}
-        auto_window = _auto_window(demo, names, self.stream_kinds)
+        # each stream's constant columns and speed, computed once for the window and the cuts
+        still_of, speed_of = {}, {}
+        auto_window = _auto_window(demo, names, self.stream_kinds, still_of, speed_of)
         for name in names:
             p = self._stream_settings(name, t, auto_window)
             needed = max(MIN_SAMPLES, MIN_SEGMENTS * p["min_size"])
@@ -333,7 +335,7 @@ class MultimodalSegmenter(Params):
             Y = demo[name]
             # a constant column has no boundary to show, and every measure below divides by its
             # spread: it is left out before any of them, and a stream of only such columns set aside
-            still = constant_columns(Y)
+            still = still_of[name] if name in still_of else constant_columns(Y)
             if still.all():
                 set_aside[name] = why_constant(Y)
                 per_stream[name] = _nothing(name, p, n, kinds[name], 0.0 if evidence else floor)
@@ -343,7 +345,7 @@ class MultimodalSegmenter(Params):
                 Y = Y[:, ~still]
             # the jerk norm serves the profile and the refinement, the speed
             # the relative scale, the time stamps' round-off and the gate: each is computed once
-            speed = speed_norm(t, Y)
+            speed = speed_of[name] if name in speed_of else speed_norm(t, Y)
             absj, j, prof, step = _stream_jerk(t, Y, speed, window=p["window"], scale=p["scale"],
                                                normalize=p["normalize"], grace=p["grace"])
             sigma = SIGMA_PER_WINDOW * p["window"]
@@ -443,7 +445,7 @@ def _size_text(value: int) -> str:
     return str(value) if value < 10**12 else f"{float(value):.3g}"
 
 
-def _auto_window(demo: Demonstration, names, stream_kinds) -> int:
+def _auto_window(demo: Demonstration, names, stream_kinds, still_of: dict, speed_of: dict) -> int:
     """``window="auto"``: 4 % of the demonstration, but never longer than its motion's time scale.
 
     The time scale is the speed's correlation time
@@ -452,23 +454,26 @@ def _auto_window(demo: Demonstration, names, stream_kinds) -> int:
     where the speed decorrelates over a third or more of one), so such
     demonstrations are cut as they always were; in a long recording the motion
     bounds the window, so the cost per sample and the cuts per minute stop
-    growing with the recording's length.
+    growing with the recording's length. ``still_of`` and ``speed_of`` receive
+    each stream's constant columns and the speed of the others, for the cuts.
     """
     n = demo.n_steps
     fraction = AUTO_WINDOW_FRACTION * n
     informative = {}
     for name in names:
         Y = demo[name]
-        still = constant_columns(Y)
+        still = still_of[name] = constant_columns(Y)
         if not still.all():
-            informative[name] = Y[:, ~still]
+            informative[name] = Y[:, ~still] if still.any() else Y
     motion = [name for name in informative if stream_kind(name, stream_kinds) == "motion"]
     # the motion streams carry the movements' time scale; a recording without one (a force
     # sensor alone) takes it from what it has
     chosen = motion or list(informative)
     window = fraction
     if chosen and fraction > MIN_AUTO_WINDOW:
-        window = min(fraction, motion_time_scale([speed_norm(demo.t, informative[k]) for k in chosen]))
+        for k in chosen:
+            speed_of[k] = speed_norm(demo.t, informative[k])
+        window = min(fraction, motion_time_scale([speed_of[k] for k in chosen]))
     return max(MIN_AUTO_WINDOW, int(round(window)))
 
 

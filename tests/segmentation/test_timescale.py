@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from skillbank import Demonstration
 from skillbank.segmentation import (
@@ -11,6 +13,7 @@ from skillbank.segmentation import (
     segment,
     speed_correlation_time,
 )
+from skillbank.segmentation._changepoints import suppress_close
 from skillbank.segmentation._segmenter import AUTO_WINDOW_FRACTION
 
 
@@ -100,3 +103,64 @@ def test_the_window_and_the_cuts_per_minute_do_not_grow_with_the_recording(seed)
     matched = np.abs(found[:, None] - truth[None, :]).min(axis=0) < 0.5
     assert matched.mean() > 0.95
     assert found.size <= 1.05 * truth.size + 2
+
+
+def _suppress_straightforward(positions, scores, *, min_size, n_steps):
+    kept = []
+    for k in np.argsort(-np.asarray(scores, dtype=float), kind="stable"):
+        p = int(positions[k])
+        if min_size <= p <= n_steps - min_size and all(abs(p - q) >= min_size for q in kept):
+            kept.append(p)
+    return sorted(kept)
+
+
+@given(st.lists(st.tuples(st.integers(0, 500), st.integers(0, 5)), max_size=60), st.integers(1, 40))
+def test_suppress_close_matches_the_straightforward_loop(events, min_size):
+    positions = [p for p, _ in events]
+    scores = [float(s) for _, s in events]  # ties broken by order, as the loop does
+    got = suppress_close(positions, scores, min_size=min_size, n_steps=500).tolist()
+    assert got == _suppress_straightforward(positions, scores, min_size=min_size, n_steps=500)
+
+
+def _rest_events_straightforward(v, typical):
+    """The rule of :func:`rest_events` as first written: every valley against every deeper one."""
+    from scipy.signal import find_peaks
+
+    from skillbank.segmentation._events import HALF_REST_RATIO, MAX_CONFIDENCE, MOVEMENT_FRACTION, REST_BAND
+
+    n = v.shape[0]
+    valleys, _ = find_peaks(-v, prominence=0.02 * typical)
+    order = np.argsort(v[valleys], kind="stable")
+    out = []
+    for rank, k in enumerate(order):
+        c = int(valleys[k])
+        deeper = valleys[order[:rank]]
+        left, right = deeper[deeper < c], deeper[deeper > c]
+        lo = int(left.max()) if left.size else 0
+        hi = int(right.min()) if right.size else n - 1
+        side = min(float(v[lo:c + 1].max()), float(v[c:hi + 1].max()))
+        if side < MOVEMENT_FRACTION * typical:
+            continue
+        mask = v[lo:hi + 1] <= v[c] + REST_BAND * (side - v[c])
+        a = b = c - lo
+        while a > 0 and mask[a - 1]:
+            a -= 1
+        while b < mask.size - 1 and mask[b + 1]:
+            b += 1
+        ratio = float(v[c]) / side
+        out.append((lo + (a + b) // 2, MAX_CONFIDENCE / (1.0 + (ratio / HALF_REST_RATIO) ** 4), ratio))
+    return sorted(out)
+
+
+@given(st.integers(0, 10**6), st.integers(20, 400), st.sampled_from([0.0, 0.05, 0.3]))
+def test_rest_events_match_the_straightforward_rule(seed, n, noise):
+    from skillbank.segmentation._events import rest_events
+
+    rng = np.random.default_rng(seed)
+    v = np.abs(np.sin(np.cumsum(rng.uniform(0.0, 0.3, n)))) + noise * rng.random(n)
+    v = np.round(v, 2)  # ties between valleys, and flat bottoms
+    at, conf, ratio = rest_events(v, typical=1.0)
+    want = _rest_events_straightforward(v, 1.0)
+    assert at.tolist() == [w[0] for w in want]
+    np.testing.assert_allclose(conf, [w[1] for w in want])
+    np.testing.assert_allclose(ratio, [w[2] for w in want])
