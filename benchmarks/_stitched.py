@@ -338,7 +338,7 @@ def _force(rng, t, clean, chosen, starts, durations, n):
 
 
 def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixed"), jitter=0.0,
-               rates=None):
+               rates=None, primitives=None):
     """``n`` sequences for one ``seed``, with each condition's levels balanced over them.
 
     Factors: noise (0, 10, 20 µm), rate (``rates``, default ``RATES``: 100, 300, 500 Hz), gripper
@@ -348,7 +348,9 @@ def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixe
     ``i`` of ``rates=(1000.0,)`` is sequence ``i`` of ``rates=(100.0,)`` sampled ten times as
     finely (the same primitives, timing, poses and noise level; the gripper's and the force's
     random draws follow the position noise's, so they differ where there is noise). ``jitter``: see
-    :func:`make_sequence` (0, an even clock, in the recorded tables).
+    :func:`make_sequence` (0, an even clock, in the recorded tables). ``primitives``: ``(lo, hi)``,
+    each sequence chains a number of primitives drawn uniformly in that range (from a generator of
+    its own, so the other draws are the default suite's); default 2 to 5.
     """
     rng = np.random.default_rng(seed)
 
@@ -361,8 +363,10 @@ def make_suite(seed, n, *, data=None, families=("rail", "lasa", "buttons", "mixe
     out = []
     for i in range(n):
         cond = {"noise": noise[i], "rate": rate[i], "gripper": grip[i], "force": frc[i], "family": fam[i]}
+        count = None if primitives is None else int(
+            np.random.default_rng([seed, i, 7]).integers(primitives[0], primitives[1] + 1))
         demo, truth = make_sequence(np.random.default_rng([seed, i]), rate=rate[i], noise=noise[i],
                                     gripper=grip[i], force=frc[i], sources=SOURCES[fam[i]], jitter=jitter,
-                                    data=data)
+                                    data=data, n_primitives=count)
         out.append(Case(demo, truth, seed, i, cond))
     return out

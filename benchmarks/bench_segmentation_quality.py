@@ -4,7 +4,7 @@ Run from the repository root (``make bench`` installs ruptures, the ``bench`` ex
 
     .venv/bin/python benchmarks/bench_segmentation_quality.py [--quick] [--seeds 0 1 2 3 4]
         [--n 48] [--jitter 0] [--rates 100 300 500] [--by-rate] [--no-ruptures] [--json PATH]
-        [--data DIR]
+        [--data DIR] [--primitives LO HI] [--old-window]
 
 The sequences come from ``benchmarks/_stitched.py`` (its docstring describes the generator):
 2 to 5 real primitives (RAIL, LASA, three-button pieces), each brought smoothly to rest, dwells of
@@ -13,6 +13,9 @@ gripper and a force stream. Each seed gives ``--n`` sequences with every conditi
 balanced over them. ``--rates`` samples at other rates (balanced over the sequences like the
 default three); ``--by-rate`` instead builds one suite per rate, the same motions at each, and
 prints skillbank's defaults per rate and noise level (how the defaults hold at 1-2 kHz).
+``--primitives 20 49`` chains 20 to 49 primitives per sequence instead (recordings of minutes, as
+a lab records), and ``--old-window`` adds skillbank with the former default window, 4 % of the
+recording, beside the defaults.
 
 Score of one sequence (:func:`score`): predicted and true boundary times are matched one to one
 (Hungarian assignment: the most matches within ``tol`` = 0.1 s, then the smallest total error);
@@ -187,14 +190,15 @@ def ruptures_method(kind, penalties, signals=("velocity", "position")):
 
 
 # -------------------------------------------------------------------------------------- evaluation
-def build_suite(seeds=(0, 1, 2, 3, 4), n=48, data=None, jitter=0.0, rates=None):
+def build_suite(seeds=(0, 1, 2, 3, 4), n=48, data=None, jitter=0.0, rates=None, primitives=None):
     """The cases of every seed, in order (``_stitched.make_suite(seed, n)`` for each seed).
 
     ``rates``: the sampling rates (Hz) balanced over each seed's sequences; default
     ``_stitched.RATES`` (100, 300, 500).
     """
     return [case for s in seeds
-            for case in make_suite(int(s), int(n), data=data, jitter=jitter, rates=rates)]
+            for case in make_suite(int(s), int(n), data=data, jitter=jitter, rates=rates,
+                                   primitives=primitives)]
 
 
 def _summarise(rows) -> dict:
@@ -290,10 +294,20 @@ def _grid(methods):
     return lambda demo: {param: m(demo) for param, m in methods.items()}
 
 
-def run(suite, *, ruptures=True, tol=TOL) -> dict:
-    """Every method on ``suite``: ``{label: report}`` (hindsight picks in ``report["choice"]``)."""
+def fraction_window(demo):
+    """The default window before issue 27: 4 % of the recording (at least 8 samples), whatever its motion."""
+    return segment(demo, window=max(8, round(0.04 * demo.n_steps))).keypoint_times
+
+
+def run(suite, *, ruptures=True, tol=TOL, old_window=False) -> dict:
+    """Every method on ``suite``: ``{label: report}`` (hindsight picks in ``report["choice"]``).
+
+    ``old_window``: also skillbank with the window the default used to be (:func:`fraction_window`).
+    """
     reports = {}
     reports["skillbank (defaults)"] = evaluate(skillbank_method(), suite, tol)
+    if old_window:
+        reports["skillbank (window 4 % of the recording)"] = evaluate(fraction_window, suite, tol)
     reports["skillbank (stops only)"] = evaluate(skillbank_method(min_turn=None), suite, tol)
     reports["skillbank (product rule)"] = evaluate(skillbank_method(combine="product"), suite, tol)
     reports["skillbank (paper)"] = evaluate(
@@ -383,6 +397,10 @@ def main(argv=None) -> None:
     parser.add_argument("--by-rate", action="store_true",
                         help="skillbank's defaults on one suite per rate (the same motions at each)")
     parser.add_argument("--no-ruptures", action="store_true", help="skip the ruptures baselines")
+    parser.add_argument("--primitives", type=int, nargs=2, metavar=("LO", "HI"), default=None,
+                        help="primitives per sequence (default 2 5); e.g. 20 49 for long recordings")
+    parser.add_argument("--old-window", action="store_true",
+                        help="also skillbank with the former default window, 4 %% of the recording")
     parser.add_argument("--data", default=None, help="shared data folder (holds seed/ and rail/)")
     parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
     args = parser.parse_args(argv)
@@ -402,9 +420,12 @@ def main(argv=None) -> None:
                 {f"{r:g} Hz": rep for r, rep in reports.items()})}, indent=1))
         return
     start = time.perf_counter()
-    suite = build_suite(seeds, n, data=args.data, jitter=args.jitter, rates=args.rates)
+    if args.primitives is not None and not 1 <= args.primitives[0] <= args.primitives[1]:
+        raise SystemExit(f"--primitives: expected 1 <= LO <= HI, got {args.primitives}")
+    suite = build_suite(seeds, n, data=args.data, jitter=args.jitter, rates=args.rates,
+                        primitives=args.primitives)
     gen = time.perf_counter() - start
-    reports = run(suite, ruptures=not args.no_ruptures)
+    reports = run(suite, ruptures=not args.no_ruptures, old_window=args.old_window)
 
     import scipy
     versions = f"Python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}"

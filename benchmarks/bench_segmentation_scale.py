@@ -11,7 +11,10 @@ the rests, 0.1 mrad of joint noise. Each size is segmented with skillbank's defa
 process (``run_child``: wall time from the fit's start, and the process's peak resident memory
 beyond the recording, which is built first): ``new`` is the default window (4 % of the
 recording, at most the motion's time scale), ``old`` the window the default used to be (4 % of
-the recording, given as ``window=N``), on the smaller sizes only (its cost is quadratic).
+the recording, given as ``window=N``), on the smaller sizes only (its cost is quadratic), and
+the peer, ruptures ``Pelt(l2)`` (extra ``bench``) as ``bench_ruptures.py`` runs it: the streams'
+velocities standardised side by side, penalty ``3 log(n) d``, minimum segment 0.2 s, a change
+considered every :data:`RUPTURES_JUMP` samples.
 Reported: seconds, microseconds per sample, peak memory, keypoints, true boundaries, the window,
 and the recall of the true boundaries within 0.5 s.
 
@@ -42,6 +45,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import run_child  # noqa: E402
 
 RATE = 500.0
+#: ruptures considers a change every this many samples (its ``jump``): 20 ms at 500 Hz, finer than
+#: the 0.5 s the recall allows, and a tenth of the candidates (and of its time) of every sample.
+RUPTURES_JUMP = 10
 _NS = 1_000_000_000
 _T0 = 1_700_000_000 * _NS
 
@@ -97,10 +103,37 @@ print(json.dumps({{"seconds": seconds, "peak_beyond_mb": peak - before, "keypoin
 """
 
 
-def fit_child(n: int, seed: int, params: dict) -> dict:
+_RUPTURES = """
+import json, resource, sys, time
+sys.path.insert(0, {bench!r})
+import numpy as np
+import ruptures
+from bench_segmentation_scale import recording
+t, q, x, g, truth = recording({n}, seed={seed})
+# what ruptures is given in bench_ruptures.py: each stream's velocity, standardised, side by side
+signal = np.column_stack([np.gradient(q, t, axis=0), np.gradient(x, t, axis=0), g])
+signal = (signal - signal.mean(axis=0)) / signal.std(axis=0)
+del q, x, g
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+start = time.perf_counter()
+bkps = ruptures.Pelt(model="l2", min_size=int(0.2 * {rate}), jump={jump}).fit(signal).predict(
+    pen=3 * np.log({n}) * signal.shape[1])
+seconds = time.perf_counter() - start
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+kp = np.asarray(bkps[:-1], float) / {rate}
+hit = np.abs(kp[:, None] - truth[None, :]).min(axis=0) < 0.5 if kp.size else np.zeros(0, bool)
+print(json.dumps({{"seconds": seconds, "peak_beyond_mb": peak - before, "keypoints": int(kp.size),
+                  "truth": int(truth.size), "recall": float(hit.mean()) if hit.size else 0.0,
+                  "window": None}}))
+"""
+
+
+def fit_child(n: int, seed: int, params: dict, *, peer: bool = False) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out.json"
-        code = _FIT.format(bench=str(Path(__file__).resolve().parent), n=n, seed=seed, params=params)
+        bench = str(Path(__file__).resolve().parent)
+        code = (_RUPTURES.format(bench=bench, n=n, seed=seed, rate=RATE, jump=RUPTURES_JUMP) if peer
+                else _FIT.format(bench=bench, n=n, seed=seed, params=params))
         run = run_child([sys.executable, "-c", code], stdout=out)
         if run.returncode:
             raise RuntimeError(run.stderr.strip().splitlines()[-1:])
@@ -197,7 +230,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", type=int, nargs="+",
                    default=[100_000, 300_000, 1_000_000, 3_000_000, 10_000_000])
-    p.add_argument("--old-sizes", type=int, nargs="+", default=[100_000, 200_000, 400_000])
+    p.add_argument("--old-sizes", type=int, nargs="*", default=[100_000, 200_000, 400_000])
+    p.add_argument("--ruptures-sizes", type=int, nargs="*", default=[100_000, 200_000, 400_000],
+                   help="sizes for ruptures Pelt(l2) (the bench extra); none: skip it")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     p.add_argument("--bag-messages", type=int, default=1_000_000, help="0: no bag")
     p.add_argument("--json", type=Path, default=None)
@@ -212,6 +247,11 @@ def main(argv=None) -> int:
         row = fit_child(n, args.seeds[0], {"window": int(round(0.04 * n))})
         report["old"].append(row)
         print("old", row, flush=True)
+    report["ruptures"] = []
+    for n in args.ruptures_sizes:
+        row = fit_child(n, args.seeds[0], {}, peer=True)
+        report["ruptures"].append(row)
+        print("ruptures Pelt(l2)", row, flush=True)
     for seed in args.seeds:
         row = excerpt(seed)
         report["excerpt"].append(row)

@@ -245,7 +245,7 @@ MOVEMENT_FRACTION = 0.2
 
 
 def _run_around(v: np.ndarray, c: int, lo: int, hi: int, level: float) -> tuple[int, int]:
-    """``(start, end)``: the run of samples of ``v`` at or below ``level`` that holds ``c``, within ``[lo, hi]``.
+    """``(start, end)``: the run of ``v`` at or below ``level`` that holds ``c``, within ``[lo, hi]``.
 
     Scans outward from ``c`` in blocks that double (compiled code per block),
     so the cost is about the run's length, however wide ``[lo, hi]`` is: the
