@@ -8,7 +8,7 @@ import numpy as np
 from scipy.signal import peak_prominences
 
 from ..core._validation import check_array, check_positive, check_time
-from ._roundoff import roundoff_level
+from ._roundoff import CLOCK_SPAN, roundoff_level
 
 __all__ = ["jerk", "jerk_profile", "windowed_mean", "normalize_profile", "speed_norm"]
 
@@ -413,11 +413,12 @@ def _stream_jerk(t, Y, speed, *, window: int, scale: str, normalize: str, grace:
     j = scaled(jerk_norm)
     m = windowed_mean(j, window)
     divide = _profile_scale(m, method=normalize, grace=grace)
-    levels = (roundoff_level(Y), roundoff_level(t)[0])
+    levels = (roundoff_level(Y), roundoff_level(t, span=CLOCK_SPAN)[0])
     if matters(levels):
         # the grid's half step bounds the round-off; exact values on a coarse grid have none
         # (above the floor: a full-precision stream's levels are the floor either way)
-        grid, levels = levels, (roundoff_level(Y, empirical=True), roundoff_level(t, empirical=True)[0])
+        grid, levels = levels, (roundoff_level(Y, empirical=True),
+                                roundoff_level(t, empirical=True, span=CLOCK_SPAN)[0])
         # levels the data left as they were still matter, as just found: no second profile scale
         unchanged = np.array_equal(grid[0], levels[0]) and grid[1] == levels[1]
         if unchanged or matters(levels):

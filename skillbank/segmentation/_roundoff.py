@@ -52,6 +52,11 @@ HALF_STEP_PER_SIGMA = np.sqrt(3.0)
 #: sampling rather than by how many digits a file happened to keep.
 RANGE_BITS = 32
 
+#: ... and a clock's floor is that of an hour at most (s): a clock counts time in absolute units (a
+#: controller's microseconds, a bag's nanoseconds), so a longer recording is timed no less finely,
+#: and the stride the jerk is taken over (with it where the cuts fall) must not grow with its length.
+CLOCK_SPAN = 3600.0
+
 
 def _sample(x: np.ndarray, biggest: int) -> np.ndarray:
     """Up to ``PRECISION_SAMPLE`` evenly spread values of ``x``, and its largest (at ``biggest``)."""
@@ -150,8 +155,10 @@ def empirical_level(x) -> np.ndarray:
     return HALF_STEP_PER_SIGMA * mad / (MAD_PER_SIGMA * THIRD_DIFFERENCE_GAIN)
 
 
-def resolution_floor(x) -> np.ndarray:
+def resolution_floor(x, *, span=None) -> np.ndarray:
     """Per-column least round-off of ``x``: half a step of a ``RANGE_BITS``-bit count over the column's range.
+
+    ``span``: the largest range that counts (:data:`CLOCK_SPAN` for time stamps).
 
     Examples
     --------
@@ -164,10 +171,12 @@ def resolution_floor(x) -> np.ndarray:
         return np.zeros(x.shape[1])
     # column by column: a reduction over the rows of a narrow array is ten times slower
     spans = np.array([x[:, k].max() - x[:, k].min() for k in range(x.shape[1])])
+    if span is not None:
+        spans = np.minimum(spans, span)
     return spans * 2.0 ** -(RANGE_BITS + 1)
 
 
-def roundoff_level(x, *, empirical: bool = False) -> np.ndarray:
+def roundoff_level(x, *, empirical: bool = False, span=None) -> np.ndarray:
     """Per-column round-off of ``x``: :func:`value_resolution`, less where the data show less, above a floor.
 
     With ``empirical=True``, each column's level is the smaller of its grid's
@@ -176,6 +185,7 @@ def roundoff_level(x, *, empirical: bool = False) -> np.ndarray:
     :func:`resolution_floor`, half a ``RANGE_BITS``-bit step of the column's
     range: a value known more finely than that was computed, not measured, and
     a copy that keeps fewer digits but still more than that is the same data.
+    ``span`` caps the range the floor is taken over (:func:`resolution_floor`).
 
     Examples
     --------
@@ -189,7 +199,7 @@ def roundoff_level(x, *, empirical: bool = False) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     x = x.reshape(x.shape[0], -1)
     level = np.array([value_resolution(x[:, k]) for k in range(x.shape[1])])
-    floor = resolution_floor(x)
+    floor = resolution_floor(x, span=span)
     # the data can show a grid too coarse only where it is coarser than the floor (which
     # spares the median of every third difference of a full-precision stream)
     coarse = level > floor

@@ -164,3 +164,15 @@ def test_rest_events_match_the_straightforward_rule(seed, n, noise):
     assert at.tolist() == [w[0] for w in want]
     np.testing.assert_allclose(conf, [w[1] for w in want])
     np.testing.assert_allclose(ratio, [w[2] for w in want])
+
+
+def test_a_clock_is_timed_as_finely_after_an_hour():
+    from skillbank.segmentation._roundoff import CLOCK_SPAN, roundoff_level
+
+    # stamps at full precision (no decimal grid), so the floor is what sets their level
+    hour = np.linspace(0.0, 3600.0, 10**5) * np.pi / 3
+    day = np.linspace(0.0, 86400.0, 10**5) * np.pi / 3
+    # a value's floor follows its range; a clock's stops at an hour's, so the jerk's stride (and the cuts)
+    # do not depend on how long the recording ran
+    assert roundoff_level(day)[0] > roundoff_level(hour)[0]
+    assert roundoff_level(day, span=CLOCK_SPAN)[0] == roundoff_level(hour, span=CLOCK_SPAN)[0]
