@@ -9,7 +9,7 @@ from tqdm import tqdm
 from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
 from ..core import Demonstration
 from ..core._validation import check_id, check_positive
-from ..planning import MAX_GROUNDINGS, TIME_LIMIT, describe_skill, plan_task
+from ..planning import TIME_LIMIT, describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ..store._rows import MAX_N_POINTS
@@ -445,7 +445,7 @@ class Library(Adding):
         return self.store.descriptions(history=history)
 
     def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False,
-             max_groundings: int = MAX_GROUNDINGS, time_limit: float = TIME_LIMIT,
+             max_groundings: int | None = None, time_limit: float = TIME_LIMIT,
              search: str = "satisficing"):
         """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
 

@@ -25,7 +25,16 @@ from ._chain import CLEARANCE, EMPTY_PLAN, PlanResult, PlanStep, arm_clearance, 
 from ._pddl import Action, Domain, domain_text, parse_action, parse_atom, parse_domain, problem_text
 from ._plan import describe_skill, plan_task, skill_domain, write_pddl
 from ._scene import Scene, SceneObject, load_scene, scene_from_dict
-from ._solve import INSTALL, MAX_GROUNDINGS, SEARCHES, TIME_LIMIT, check_groundings, solve, solve_with_info
+from ._solve import (
+    INSTALL,
+    MAX_GROUNDINGS,
+    MAX_REACHABLE_GROUNDINGS,
+    SEARCHES,
+    TIME_LIMIT,
+    check_groundings,
+    solve,
+    solve_with_info,
+)
 
 __all__ = [
     "Scene", "SceneObject", "load_scene", "scene_from_dict", "Action", "Domain", "parse_action",
@@ -33,6 +42,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "solve", "solve_with_info", "SEARCHES", "INSTALL", "PlanResult", "PlanStep", "reproduce_plan",
     "describe_skill", "skill_domain",
-    "plan_task", "write_pddl", "EMPTY_PLAN", "MAX_GROUNDINGS", "TIME_LIMIT", "check_groundings",
+    "plan_task", "write_pddl", "EMPTY_PLAN", "MAX_GROUNDINGS", "MAX_REACHABLE_GROUNDINGS", "TIME_LIMIT",
+    "check_groundings",
     "CLEARANCE", "arm_clearance",
 ]

@@ -11,7 +11,15 @@ from ._chain import PlanResult, _Skill, reproduce_plan
 from ._json import describe, read_bounded, utf8
 from ._pddl import Domain, domain_text, parse_action, parse_domain, problem_text
 from ._scene import Scene, load_scene, scene_from_dict
-from ._solve import MAX_EXPANSIONS, MAX_GROUNDINGS, TIME_LIMIT, check_groundings, solve, unused_types
+from ._solve import (
+    MAX_EXPANSIONS,
+    MAX_GROUNDINGS,
+    MAX_REACHABLE_GROUNDINGS,
+    TIME_LIMIT,
+    check_groundings,
+    solve,
+    unused_types,
+)
 
 __all__ = ["describe_skill", "skill_domain", "plan_task", "write_pddl", "MAX_DOMAIN_BYTES"]
 
@@ -128,7 +136,7 @@ def _scene(scene) -> Scene:
 
 
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
-              max_expansions: int = MAX_EXPANSIONS, max_groundings: int = MAX_GROUNDINGS,
+              max_expansions: int = MAX_EXPANSIONS, max_groundings: int | None = None,
               time_limit: float = TIME_LIMIT, progress=None, clearance=None,
               search: str = "satisficing") -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
@@ -155,9 +163,12 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     random_state : int, optional
     max_expansions : int
         States the planner may expand before giving up.
-    max_groundings : int
-        Ground actions the planner may build (checked before it starts; see
-        :data:`~skillbank.planning.MAX_GROUNDINGS`).
+    max_groundings : int, optional
+        Ground actions the planner may build: by default
+        :data:`~skillbank.planning.MAX_GROUNDINGS` type-consistent ones for the
+        optimal search (checked before it starts), and
+        :data:`~skillbank.planning.MAX_REACHABLE_GROUNDINGS` reachable ones for
+        the satisficing search (counted as it grounds).
     time_limit : float
         Seconds the planner may search before giving up.
     progress : callable, optional
@@ -186,6 +197,8 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     _check_scene_against(dom, scene)
     objects = {name: obj.type for name, obj in scene.objects.items()}
     problem = problem_text(objects, scene.init, scene.goal, domain=dom.name)
+    if max_groundings is None:
+        max_groundings = MAX_GROUNDINGS if search == "optimal" else MAX_REACHABLE_GROUNDINGS
     if search == "optimal":  # jupyddl builds every type-consistent ground action before it searches
         check_groundings(dom, objects, max_groundings=max_groundings)
     try:

@@ -29,7 +29,7 @@ from . import _search
 from ._pddl import Domain, _typed_list, parse_sexpr
 
 __all__ = ["solve", "solve_with_info", "SEARCHES", "planner", "MAX_EXPANSIONS", "MAX_GROUNDINGS",
-           "TIME_LIMIT", "INSTALL", "check_groundings", "unused_types"]
+           "MAX_REACHABLE_GROUNDINGS", "TIME_LIMIT", "INSTALL", "check_groundings", "unused_types"]
 
 #: States the search expands before it gives up (a 10-step button task expands under a hundred).
 MAX_EXPANSIONS = 200_000
@@ -37,6 +37,10 @@ MAX_EXPANSIONS = 200_000
 #: It grounds every one before it searches, at about 0.2 ms each (10^5 took 20 s): an action of 6
 #: parameters in a scene of 20 objects has 6.4e7 and would run for hours. A button task has one per button.
 MAX_GROUNDINGS = 100_000
+#: ... and the reachable ground actions skillbank's own satisficing search may build (it builds only
+#: those relaxed reachability allows, at about 20 µs and 1.4 kB each: 103041 in 2.1 s and 146 MB), so
+#: at most about 5 s and 350 MB of grounding.
+MAX_REACHABLE_GROUNDINGS = 250_000
 #: Seconds the search may run before it gives up (a button task takes well under one). With up to
 #: MAX_GROUNDINGS actions an expansion under LM-cut can take tens of milliseconds, so MAX_EXPANSIONS
 #: alone could keep a hard problem searching for hours.
@@ -201,7 +205,8 @@ def solve(domain: str, problem: str, *, search: str = "satisficing", max_expansi
         search counts its grounding too).
     max_groundings : int, optional
         Ground actions the satisficing search may build, counted as it grounds
-        only what relaxed reachability allows (default: no bound; the optimal
+        only what relaxed reachability allows (default
+        :data:`MAX_REACHABLE_GROUNDINGS`; the optimal
         search grounds everything: :func:`check_groundings` bounds it before it
         starts, as :func:`~skillbank.planning.plan_task` does).
 
@@ -252,6 +257,8 @@ def solve_with_info(domain: str, problem: str, *, search: str = "satisficing",
     time_limit = check_positive(time_limit, name="time_limit")
     if max_groundings is not None:
         max_groundings = check_positive(max_groundings, name="max_groundings", integer=True)
+    elif search != "optimal":
+        max_groundings = MAX_REACHABLE_GROUNDINGS
     start = time.perf_counter()
     if search == "optimal":
         steps, expanded = _optimal(domain, problem, max_expansions=max_expansions, time_limit=time_limit)

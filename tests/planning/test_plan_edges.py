@@ -194,7 +194,7 @@ def test_cli_plan_of_64_million_ground_actions_is_refused_before_grounding(descr
     code, out, err = limited("plan", synthetic_db, "--scene", scene, "--domain", domain, "--out",
                              folder / "plan.csv", memory=1 << 30, timeout=120)
     assert code == 2 and out == "" and err.count("\n") == 1, err
-    assert err.startswith("skillbank plan: error: domain: expected at most max_groundings=100000 ground "
+    assert err.startswith("skillbank plan: error: domain: expected at most max_groundings=250000 ground "
                           "actions (the planner builds each before it searches), got 64000000 in this scene "
                           "(action press: 6 parameter(s) over 20 object(s), 64000000)"), err
     assert sorted(p.name for p in folder.iterdir()) == ["scene.json", "wide.pddl"]

@@ -278,3 +278,16 @@ def test_the_bound_on_ground_actions_counts_what_is_reachable():
         solve(PRESS, problem, max_groundings=100)
     with pytest.raises(ValueError, match=r"^max_groundings: expected an integer > 0"):
         solve(PRESS, problem, max_groundings=0)
+
+
+def test_the_satisficing_search_has_its_own_bound_on_what_is_reachable(monkeypatch):
+    from skillbank.planning import MAX_GROUNDINGS, MAX_REACHABLE_GROUNDINGS, _solve
+
+    n = 320  # (n + 1)^2 = 103041 moves, every one reachable: over the optimal search's bound, under this one
+    assert (n + 1) ** 2 > MAX_GROUNDINGS and (n + 1) ** 2 < MAX_REACHABLE_GROUNDINGS
+    plan = solve(REACH, reach_problem(n))
+    assert len(plan) == n and {args[-1] for _, args in plan} == {f"t{k}" for k in range(n)}
+    monkeypatch.setattr(_solve, "MAX_REACHABLE_GROUNDINGS", 1000)
+    with pytest.raises(ValueError, match=r"^domain: expected at most max_groundings=1000 ground actions "
+                                         r"reachable"):
+        solve(REACH, reach_problem(40))
