@@ -238,7 +238,7 @@ def add_segmentation_options(p) -> None:
     p.add_argument("--stream", action="append", default=None, help="stream to use (repeatable; default all)")
     p.add_argument("--window", type=size, default=keep,
                    help="sliding-window width, samples or seconds like '0.1s' (default auto: 4 %% of the "
-                        "length, at least 8 samples)")
+                        "length but at most the motion's own time scale, at least 8 samples)")
     p.add_argument("--min-size", type=size, default=keep,
                    help="minimum segment length, samples or seconds like '0.5s' (default one window; two "
                         "windows with --combine product)")
