@@ -335,10 +335,8 @@ def rest_events(speed, *, typical: float) -> tuple[np.ndarray, np.ndarray, np.nd
     rank = np.empty(m, dtype=np.int64)
     rank[np.argsort(v[valleys], kind="stable")] = np.arange(m)  # ties: the earlier valley is deeper
     # the highest speed between consecutive valleys (and from each end to its nearest valley)
-    bounds = np.r_[0, valleys, n - 1]
-    gaps = np.maximum.reduceat(v, bounds[:-1])[:m + 1]
+    gaps = np.maximum.reduceat(v, np.r_[0, valleys])  # the last runs to the end
     gaps[:m] = np.maximum(gaps[:m], v[valleys])  # reduceat stops short of each stretch's end valley
-    gaps[m] = max(float(gaps[m]), float(v[n - 1]))
     left, peak_l = _nearest_deeper(rank, gaps[:m])
     right_rev, peak_r_rev = _nearest_deeper(rank[::-1], gaps[1:][::-1])
     right = np.where(right_rev[::-1] >= 0, m - 1 - right_rev[::-1], -1)

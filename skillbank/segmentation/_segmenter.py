@@ -254,7 +254,7 @@ class MultimodalSegmenter(Params):
         self.floor = floor
         self.random_state = random_state
 
-    def _stream_settings(self, name: str, t: np.ndarray, auto_window: int = MIN_AUTO_WINDOW) -> dict:
+    def _stream_settings(self, name: str, t: np.ndarray, auto_window: int) -> dict:
         raw = {k: getattr(self, k) for k in _STREAM_KEYS}
         overrides = (self.stream_params or {}).get(name, {})
         unknown = set(overrides) - set(_STREAM_KEYS)
@@ -335,7 +335,7 @@ class MultimodalSegmenter(Params):
             Y = demo[name]
             # a constant column has no boundary to show, and every measure below divides by its
             # spread: it is left out before any of them, and a stream of only such columns set aside
-            still = still_of[name] if name in still_of else constant_columns(Y)
+            still = still_of[name]
             if still.all():
                 set_aside[name] = why_constant(Y)
                 per_stream[name] = _nothing(name, p, n, kinds[name], 0.0 if evidence else floor)
@@ -454,8 +454,8 @@ def _auto_window(demo: Demonstration, names, stream_kinds, still_of: dict, speed
     where the speed decorrelates over a third or more of one), so such
     demonstrations are cut as they always were; in a long recording the motion
     bounds the window, so the cost per sample and the cuts per minute stop
-    growing with the recording's length. ``still_of`` and ``speed_of`` receive
-    each stream's constant columns and the speed of the others, for the cuts.
+    growing with the recording's length. ``still_of`` receives every stream's
+    constant columns and ``speed_of`` the speeds it measured, for the cuts.
     """
     n = demo.n_steps
     fraction = AUTO_WINDOW_FRACTION * n
