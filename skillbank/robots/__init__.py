@@ -1,8 +1,11 @@
 """Robot models: forward and inverse kinematics, joint limits and singularities, behind one interface.
 
 :class:`RobotModel` is the interface (poses as position and scalar-last
-quaternion; joints in kinematic-chain order); :class:`UR5e` is built in;
-:data:`ROBOTS` names every model and :func:`robot_model` builds one by name.
+quaternion; joints in kinematic-chain order); :class:`UR5e` is built in
+(analytic); any other arm comes from its URDF or MJCF description
+(:func:`load_description`, :class:`ChainModel`: numerical inverse
+kinematics). :data:`ROBOTS` and :data:`DESCRIPTIONS` name the registered
+models and :func:`robot_model` builds one by name or from a file.
 :meth:`RobotModel.ik` follows one inverse-kinematics branch along a pose path
 and raises :class:`KinematicsError` (a ``ValueError``) naming the first sample
 it cannot follow and why.
@@ -19,11 +22,15 @@ Examples
 
 from ._base import KinematicsError, RobotModel, Singularity
 from ._bodies import GRIPPERS, ROBOTIQ_2F85, Capsule, Gripper
+from ._chain import ChainModel, KinematicChain
 from ._clearance import Clearance, clearance
 from ._clearing import CLEARANCE, clearing_move
-from ._registry import ROBOTS, robot_model
+from ._description import check_description_files, enclosing_capsule, load_description
+from ._registry import DESCRIPTIONS, ROBOTS, robot_model
 from ._ur5e import UR5E_DH, UR5e
 
-__all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "robot_model",
+__all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "DESCRIPTIONS",
+           "robot_model", "ChainModel", "KinematicChain", "load_description", "check_description_files",
+           "enclosing_capsule",
            "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "Clearance", "clearance",
            "CLEARANCE", "clearing_move"]

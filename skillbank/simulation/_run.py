@@ -288,7 +288,7 @@ class _Runner:
         self.servo = np.array([M.actuator(f"servo_{j}").id for j in world.joints])
         self.damper = np.array([M.actuator(f"damper_{j}").id for j in world.joints])
         self.fadr = np.array([M.jnt_qposadr[M.joint(j).id] for j in world.fingers], dtype=int)
-        self.grip = np.array([M.actuator(f"grip_{s}").id for s in ("left", "right")][:len(world.fingers)],
+        self.grip = np.array([M.actuator(f"grip_{s}").id for s in ("left", "right")[:len(world.fingers)]],
                              dtype=int)
         # geom id -> (kind, name)
         self.owner = [world.owner.get(M.geom(i).name, (None, None)) for i in range(M.ngeom)]

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core import Box, Sphere
 from ..core._rotations import matrix_to_quaternion, quaternion_to_matrix
-from ._servo import servo_gains
+from ._servo import joint_inertia, servo_gains
 
 __all__ = ["World", "build_world", "LINK_MASSES", "GRIPPER_MASSES", "PRESS_FORCE", "GRIP_FORCE"]
 
@@ -160,11 +160,12 @@ def build_world(scene, model, *, press_force: float = PRESS_FORCE, grip_force: f
     >>> world.joints[0], world.frames[-1]
     ('shoulder_pan_joint', 'frame6')
     """
-    masses = LINK_MASSES.get(model.name)
+    # a model read from a description carries its links' masses; a built-in one's are listed here
+    masses = getattr(model, "link_masses", None) or LINK_MASSES.get(model.name)
     if masses is None:
         raise ValueError(f"robot: the simulation knows the link masses of {list(LINK_MASSES)}, got "
                          f"{model.name!r}; add its masses to skillbank.simulation.LINK_MASSES")
-    kp, kv = servo_gains(model.name, kp, kv)
+    kp, kv = servo_gains(model.name, kp, kv, inertia=joint_inertia(model, masses))
     world = World(xml="", robot=model.name)
     body = []
     body += _static(scene, world)

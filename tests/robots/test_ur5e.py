@@ -376,7 +376,7 @@ def test_a_joint_turning_beyond_its_range_is_a_limit_error(robot):
     (lambda r: UR5e(max_step=0), r"max_step: expected a number > 0, got 0"),
     (lambda r: UR5e(singularity_thresholds=0.1), r"singularity_thresholds: expected a mapping of kind to "
                                                  r"threshold, got 0\.1"),
-    (lambda r: robot_model("ur10"), r"robot: expected one of \['ur5e'\], got 'ur10'"),
+    (lambda r: robot_model("ur10"), r"robot: expected one of \['ur5e', 'panda'\] or a URDF / MJCF file"),
 ])
 def test_bad_input_is_one_clear_value_error(robot, call, match):
     with pytest.raises(ValueError, match=match):
