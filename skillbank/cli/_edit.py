@@ -70,7 +70,7 @@ def run(args) -> int:
     from ..io import load_positions, write_trajectory
     from ..metrics import comparison_metrics
     from ..representations import fit_reproduce, representation
-    from ..robots import CLEARANCE, robot_model
+    from ..robots import CLEARANCE
     from ..selection import executable_dict, keep_clear, make_executable, retime
 
     representation(args.method)  # an unknown name fails first, listing the registry's
@@ -111,7 +111,7 @@ def run(args) -> int:
         (collision, notes, done), _ = make(constraints)
     else:
         # every moving body keeps the margin from the obstacles: repaired with via points, or refused
-        kept = keep_clear(make, constraints, robot_model(execution["robot"]), margin=margin)
+        kept = keep_clear(make, constraints, execution["robot"], margin=margin)
         if kept.reason is not None:
             raise ValueError(f"edit: {kept.reason}; nothing was written")
         (collision, notes, done), constraints = kept.result, kept.constraints

@@ -10,7 +10,71 @@ from __future__ import annotations
 import math
 
 __all__ = ["add_robot_options", "add_export_options", "add_execution_options", "robot_params",
-           "execution_params", "export_params"]
+           "execution_params", "export_params", "add_tool_frame_option", "cli_robot", "ROBOT_HELP"]
+
+#: What ``--robot`` takes, for every command's help.
+ROBOT_HELP = ("a registered robot (ur5e, with its Robotiq 2F-85; panda) or a URDF / MJCF description file "
+              "(docs/robots.md)")
+
+
+def add_tool_frame_option(p) -> None:
+    """``--tool-frame LINK`` (the flange of a robot read from a description file) and ``--robot-base``."""
+    p.add_argument("--tool-frame", default=None, metavar="LINK",
+                   help="with --robot FILE: the link (or site) of the description that is the tool frame "
+                        "(default: the last link of its longest chain of joints)")
+    p.add_argument("--robot-base", default=None, metavar="X,Y,Z[,QX,QY,QZ,QW]",
+                   help="where the robot's base stands in the frame of the poses (metres, and a "
+                        "scalar-last quaternion; default: the poses are in the base frame)")
+
+
+def robot_base(text):
+    """``--robot-base``: ``X,Y,Z`` or ``X,Y,Z,QX,QY,QZ,QW`` as a 4 x 4 transform (None: not given).
+
+    Examples
+    --------
+    >>> robot_base("0.5,0,0.9")[:3, 3].tolist()
+    [0.5, 0.0, 0.9]
+    """
+    if text is None:
+        return None
+    import numpy as np  # core dependency, when a base is given
+
+    from ..core._rotations import check_quaternions, quaternion_to_matrix  # numpy only
+    from ._options import _numbers  # the one parser of comma-separated numbers
+
+    values = _numbers(text, "robot-base", text)
+    if len(values) not in (3, 7):
+        raise ValueError(f"robot-base: expected X,Y,Z or X,Y,Z,QX,QY,QZ,QW, got {len(values)} numbers in "
+                         f"{text!r}")
+    T = np.eye(4)
+    T[:3, 3] = values[:3]
+    if len(values) == 7:
+        T[:3, :3] = quaternion_to_matrix(check_quaternions(values[3:], name="robot-base quaternion"))
+    return T
+
+
+def cli_robot(args):
+    """The model of ``--robot`` (a name or a description file) and ``--tool-frame``, built once per command.
+
+    None without ``--robot``. Built on first use and kept on ``args``: a description is compiled once.
+    """
+    name = getattr(args, "robot", None)
+    tool_frame = getattr(args, "tool_frame", None)
+    if name is None:
+        if tool_frame is not None:
+            raise ValueError("tool-frame: --tool-frame names a link of a robot's description: give --robot "
+                             "FILE too")
+        if getattr(args, "robot_base", None) is not None:
+            raise ValueError("robot-base: --robot-base places a robot: give --robot too")
+        return None
+    model = getattr(args, "_robot_model", None)
+    if model is None:
+        from ..robots import robot_model  # numpy only (mujoco when a description file is read)
+
+        base = robot_base(getattr(args, "robot_base", None))
+        model = robot_model(str(name), tool_frame=tool_frame, base=base)
+        args._robot_model = model
+    return model
 
 
 def add_robot_options(p, *, what: str = "the whole result") -> None:
@@ -18,10 +82,11 @@ def add_robot_options(p, *, what: str = "the whole result") -> None:
 
     See :func:`robot_params`.
     """
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="add a 'joints' stream by inverse kinematics for this robot (ur5e), from the pose "
-                        "path (metres, quaternions, in the robot's base frame); the robot's own joint "
-                        "velocity and acceleration limits always apply (docs/robots.md)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help="add a 'joints' stream by inverse kinematics for this robot, from the pose path "
+                        f"(metres, quaternions, in the robot's base frame): {ROBOT_HELP}; the robot's own "
+                        "joint velocity and acceleration limits always apply")
+    add_tool_frame_option(p)
     p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
                    help=f"slow {what} down uniformly until no joint moves faster (needs --robot; the "
                         "robot's own limit where it is lower)")
@@ -73,7 +138,7 @@ def robot_params(args) -> dict:
     >>> import argparse
     >>> robot_params(argparse.Namespace(robot="ur5e", max_joint_velocity=1.0, max_joint_acceleration=None,
     ...                                 branch=None))
-    {'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}, 'branch': None}
+    {'robot': UR5e(), 'limits': {'joint_velocity': 1.0}, 'branch': None}
     """
     from ..core._validation import check_positive  # numpy only
 
@@ -90,11 +155,9 @@ def robot_params(args) -> dict:
     if branch is not None:
         if args.robot is None:
             raise ValueError(f"branch: --branch {branch} needs joints: give --robot too")
-        from ..robots import robot_model  # numpy only; loaded when a robot is asked for
-
         branch = int(branch) if branch.strip().isdigit() else branch  # an index, as the message offers
-        robot_model(args.robot).branch_index(branch)  # an unknown name fails first, listing the names
-    return {"robot": args.robot, "limits": limits, "branch": branch}
+        cli_robot(args).branch_index(branch)  # an unknown name fails first, listing the names
+    return {"robot": cli_robot(args), "limits": limits, "branch": branch}
 
 
 def execution_params(args) -> dict:
@@ -104,7 +167,7 @@ def execution_params(args) -> dict:
     --------
     >>> import argparse
     >>> execution_params(argparse.Namespace(duration=None, robot="ur5e", max_joint_velocity=1.0))
-    {'duration': None, 'robot': 'ur5e', 'limits': {'joint_velocity': 1.0}, 'branch': None}
+    {'duration': None, 'robot': UR5e(), 'limits': {'joint_velocity': 1.0}, 'branch': None}
     """
     duration = args.duration
     if duration is not None:

@@ -353,11 +353,10 @@ def output_format(args):
 
 
 def check_robot(args) -> None:
-    """An unknown robot name fails before the work, listing the registry's."""
-    if args.robot is not None:
-        from ..robots import robot_model  # numpy only; loaded when a robot is asked for
+    """An unknown robot name or a bad description file fails before the work (the registry's names listed)."""
+    from ._execution_options import cli_robot  # the one place --robot becomes a model
 
-        robot_model(args.robot)
+    cli_robot(args)
 
 
 def _binding(text):

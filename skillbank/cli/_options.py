@@ -39,7 +39,7 @@ SCHEDULER_VARIABLE = "SKILLBANK_SCHEDULER"
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
 CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity",
-                      "--start-orientation", "--goal-orientation", "--via-orientation")
+                      "--start-orientation", "--goal-orientation", "--via-orientation", "--robot-base")
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
 _SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "combine",
                   "stream_kinds", "mode")

@@ -8,6 +8,7 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
+from ._execution_options import cli_robot
 from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
 from ._library_view import check_view, write_library_view
@@ -135,7 +136,7 @@ def _plan(args) -> int:
                  if v is not None}
         if args.clearance is not None:
             bound["clearance"] = clearance_margin(args)
-        result = plan_task(store, scene, domain=args.domain, robot=args.robot, limits=limits,
+        result = plan_task(store, scene, domain=args.domain, robot=cli_robot(args), limits=limits,
                            random_state=args.seed, progress=tick, search=args.search, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}

@@ -31,7 +31,8 @@ def add_parser(sub):
                                    "skillbank[sim])")
     inner = p.add_subparsers(dest="sim_command", required=True)
     r = inner.add_parser("record", help="record successful scripted demonstrations of a robosuite task on "
-                                        "the UR5e into a robomimic HDF5 file (library add reads it)")
+                                        "the UR5e (or --robot) into a robomimic HDF5 file (library add reads "
+                                        "it)")
     r.add_argument("env", metavar="robosuite:TASK", help="the task, e.g. robosuite:Lift or robosuite:Stack")
     r.add_argument("--episodes", type=int, default=10, help="successful episodes to keep (default 10)")
     r.add_argument("--seed", type=int, default=0,
@@ -39,6 +40,9 @@ def add_parser(sub):
     r.add_argument("--max-tries", type=int, default=None,
                    help="episodes run at most (default 3 x --episodes); fewer successes write nothing")
     r.add_argument("--out", type=Path, required=True, help="the HDF5 file to write (must not exist)")
+    r.add_argument("--robot", default="UR5e",
+                   help="robosuite's arm: UR5e (default), Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7, each "
+                        "with its default gripper")
     r.add_argument("--json", action="store_true",
                    help="print env, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
@@ -114,7 +118,7 @@ def _record(args) -> int:
             bar.set_postfix_str(f"{tried} tried")
 
         report = record(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
-                        max_tries=args.max_tries, progress=tick)
+                        max_tries=args.max_tries, progress=tick, robot=args.robot)
     if args.json:
         print(json.dumps(report))
     else:

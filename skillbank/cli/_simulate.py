@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ._execution_options import ROBOT_HELP, add_tool_frame_option
 from ._library import check_robot
 from ._options import check_folder
 from ._world import run_simulation
@@ -35,7 +36,9 @@ def add_parser(sub):
     p.add_argument("--scene", type=Path, required=True,
                    help="scene file (JSON): table, obstacles, buttons, objects, goal "
                         "(see docs/simulation.md)")
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e, with its Robotiq 2F-85)")
+    p.add_argument("--robot", default="ur5e", metavar="NAME|FILE",
+                   help=f"the robot: {ROBOT_HELP}; default ur5e")
+    add_tool_frame_option(p)
     p.add_argument("--json", action="store_true",
                    help="print duration, real_time_factor, tracking, contacts, buttons, objects, facts, "
                         "notes as JSON")

@@ -83,14 +83,15 @@ def whole_robot(args, trajectory, scene, obstacles):
     """
     if getattr(args, "robot", None) is None or "joints" not in trajectory.streams:
         return None
-    from ..robots import clearance, robot_model  # numpy only
+    from ..robots import clearance  # numpy only
+    from ._execution_options import cli_robot  # the one place --robot becomes a model
 
     named = {f"obstacles[{k}]": ob for k, ob in enumerate(obstacles)}
     table = workspace = None
     if scene is not None:
         named.update(scene.obstacles)
         table, workspace = scene.table, scene.workspace
-    return clearance(robot_model(args.robot), trajectory["joints"], named, table=table, workspace=workspace,
+    return clearance(cli_robot(args), trajectory["joints"], named, table=table, workspace=workspace,
                      t=trajectory.t)
 
 
@@ -111,6 +112,7 @@ def run_simulation(args, trajectory, scene, obstacles=(), *, targets=None, video
 
     from ..planning import Scene  # the world's type
     from ..simulation import simulate  # the simulator's layer (MuJoCo is imported inside it)
+    from ._execution_options import cli_robot  # the one place --robot becomes a model
 
     own = {f"obstacles[{k}]": ob for k, ob in enumerate(obstacles)}
     if scene is None:
@@ -125,7 +127,7 @@ def run_simulation(args, trajectory, scene, obstacles=(), *, targets=None, video
 
         bar = tqdm(desc="physics steps", unit="step", leave=False)
     try:
-        return simulate(trajectory, scene, robot=args.robot, targets=targets, progress=bar, video=video)
+        return simulate(trajectory, scene, robot=cli_robot(args), targets=targets, progress=bar, video=video)
     finally:
         if bar is not None:
             bar.close()

@@ -276,6 +276,11 @@ def _urscript(demo: Demonstration, path: Path, rate: float, gripper_command: str
     if "joints" not in demo.streams:
         raise ValueError("demo: a URScript export replays joints, and the trajectory has no 'joints' stream "
                          "(reuse or edit with robot='ur5e' / --robot ur5e)")
+    robot = demo.metadata.get("robot")
+    # URScript runs on Universal Robots' controllers only; their models are named UR3, UR5e, UR10, ...
+    if robot is not None and not re.match(r"ur\d", str(robot), re.IGNORECASE):
+        raise ValueError(f"demo: URScript runs on Universal Robots arms only, and this trajectory's joints "
+                         f"are for {robot!r}: export a ROS 2 bag (--format rosbag), CSV or NPZ instead")
     Q = demo["joints"]
     if Q.shape[1] != 6:
         raise ValueError(f"demo: a UR arm has 6 joints, the 'joints' stream has {Q.shape[1]}")

@@ -1,13 +1,14 @@
 """Demonstrations recorded in robosuite, in robomimic's HDF5 layout: ``skillbank sim record``.
 
-A scripted demonstrator drives robosuite's UR5e (with its default Robotiq
-2F-85 and operational-space controller, ``OSC_POSE`` with delta inputs) the
-way a person teleoperating would: it reaches above the object, comes down,
-closes the gripper, lifts, carries and places, each move a minimum-jerk
-profile of the tool point, the tool held at its start orientation. From
-episode to episode the speed of every move, the pauses, the approach
-direction and the grasp point vary (drawn from the seed), and only
-episodes that the environment's own ``_check_success()`` accepts are kept.
+A scripted demonstrator drives robosuite's UR5e (or another of its arms,
+``robot=``), each with its default gripper (the UR5e's Robotiq 2F-85) and
+operational-space controller (``OSC_POSE`` with delta inputs), the way a
+person teleoperating would: it reaches above the object, comes down, closes
+the gripper, lifts, carries and places, each move a minimum-jerk profile of
+the tool point, the tool held at its start orientation. From episode to
+episode the speed of every move, the pauses, the approach direction and the
+grasp point vary (drawn from the seed), and only episodes that the
+environment's own ``_check_success()`` accepts are kept.
 
 What a task asks is data, not code: :data:`TASKS` names, per robosuite
 environment, the object to pick (by its observation name, ``cube`` for
@@ -316,15 +317,62 @@ def _episode(env, task: Task, rng) -> tuple:
     return driver.rows, bool(env._check_success())
 
 
-def _env_args(task: str, horizon: int, seed: int) -> dict:
+#: robosuite's single-arm robots the recorder drives (each with its default gripper and OSC_POSE).
+RECORD_ROBOTS = ("UR5e", "Panda", "Sawyer", "IIWA", "Jaco", "Kinova3", "XArm7")
+
+
+def _check_robot(robot) -> str:
+    if robot not in RECORD_ROBOTS:
+        raise ValueError(f"robot: expected one of robosuite's single arms {list(RECORD_ROBOTS)}, got "
+                         f"{robot!r}")
+    return robot
+
+
+def _pose(env, kind: str, name: str) -> np.ndarray:
+    """A body's or site's pose (4 x 4) in robosuite's world."""
+    data, model = env.sim.data, env.sim.model
+    T = np.eye(4)
+    if kind == "body":
+        i = model.body_name2id(name)
+        T[:3, :3], T[:3, 3] = np.asarray(data.xmat[i]).reshape(3, 3), data.xpos[i]
+    else:
+        i = model.site_name2id(name)
+        T[:3, :3], T[:3, 3] = np.asarray(data.site_xmat[i]).reshape(3, 3), data.site_xpos[i]
+    return T
+
+
+def robot_frames(env) -> dict:
+    """Where the recorded arm stands and what its tool pose is: ``{"name", "base", "flange", "tool"}``.
+
+    ``base``: the arm's base body (``robot0_base``) in the world; ``tool``: the pose the observations
+    report, in the flange body (``robot0_right_hand``). robosuite 1.5 takes ``robot0_eef_pos`` from the
+    gripper's grip site and ``robot0_eef_quat`` from the end-effector *body* (its issue 298), so the
+    tool is the grip site's position with that body's orientation. With them a robot model's
+    ``fk(robot0_joint_pos)`` is the recorded tool pose (``robot_model("panda", base=..., tool=...)``;
+    docs/robots.md).
+    """
+    robot = env.robots[0]
+    gripper = robot.gripper["right"] if isinstance(robot.gripper, dict) else robot.gripper
+    site = gripper.important_sites["grip_site"]
+    eef = robot.robot_model.eef_name
+    eef = eef["right"] if isinstance(eef, dict) else eef
+    flange = np.linalg.inv(_pose(env, "body", "robot0_right_hand"))
+    tool = flange @ _pose(env, "body", eef)
+    tool[:3, 3] = (flange @ _pose(env, "site", site))[:3, 3]
+    return {"name": robot.name, "base": _pose(env, "body", "robot0_base").tolist(),
+            "flange": "right_hand", "tool": tool.tolist()}
+
+
+def _env_args(task: str, horizon: int, seed: int, robot: str = "UR5e") -> dict:
     # robosuite 1.5 draws every placement from its own generator, seeded here
     return {"env_name": task, "type": 1, "env_version": None,
-            "env_kwargs": {"robots": ["UR5e"], "control_freq": CONTROL_FREQ, "horizon": horizon, "seed": seed,
+            "env_kwargs": {"robots": [robot], "control_freq": CONTROL_FREQ, "horizon": horizon, "seed": seed,
                            "has_renderer": False, "has_offscreen_renderer": False,
                            "use_camera_obs": False, "ignore_done": True, "reward_shaping": False}}
 
 
-def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progress=None) -> dict:
+def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progress=None,
+           robot: str = "UR5e") -> dict:
     """Record ``episodes`` successful scripted demonstrations of robosuite task ``env`` into ``out``.
 
     Parameters
@@ -341,13 +389,18 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
         Episodes run at most (default ``3 * episodes``); fewer successes are an error.
     progress : callable, optional
         ``progress(kept, tried)`` after each episode.
+    robot : str, default="UR5e"
+        robosuite's arm (:data:`RECORD_ROBOTS`), with its default gripper. The file's
+        ``data.attrs["robot"]`` (JSON, :func:`robot_frames`) says where it stood and which tool
+        frame its poses are of.
 
     Returns
     -------
     dict
-        ``{"env", "episodes", "tried", "seed", "out", "samples"}``.
+        ``{"env", "episodes", "tried", "seed", "out", "samples", "robot"}``.
     """
     task = parse_env(env)
+    robot = _check_robot(robot)
     episodes = check_positive(episodes, name="episodes", integer=True)
     tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
@@ -361,10 +414,11 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
     import h5py  # core dependency; only when a file is written
 
     horizon = 1000
-    args = _env_args(task, horizon, int(seed))
+    args = _env_args(task, horizon, int(seed), robot)
     rng = np.random.default_rng(seed)
     environment = suite.make(task, **args["env_kwargs"])
     kept, tried = [], 0
+    frames = None
     try:
         while len(kept) < episodes and tried < tries:
             rows, ok = _episode(environment, TASKS[task], rng)
@@ -373,6 +427,8 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
                 kept.append(rows)
             if progress is not None:
                 progress(len(kept), tried)
+        # fixed transforms, read after the episodes: an extra reset would move robosuite's placements
+        frames = robot_frames(environment)
     finally:
         environment.close()
     if len(kept) < episodes:
@@ -383,6 +439,7 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
         with h5py.File(part, "w") as h5:
             data = h5.create_group("data")
             data.attrs["env_args"] = json.dumps(args)
+            data.attrs["robot"] = json.dumps(frames)
             total = 0
             for k, rows in enumerate(kept):
                 g = data.create_group(f"demo_{k}")
@@ -402,4 +459,4 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
         part.unlink(missing_ok=True)
         raise
     return {"env": env, "episodes": len(kept), "tried": tried, "seed": int(seed), "out": str(out),
-            "samples": int(total)}
+            "samples": int(total), "robot": robot}

@@ -157,7 +157,7 @@ OUT = ["--out", "{tmp}/out.csv"]
     (["--goal-orientation", "0,0,0,1", *OUT],
      r"no usable candidate: \d+: no 'orientation' stream for the orientation"),
     (["--robot", "ur5e", *OUT], r"robot: ur5e inverse kinematics needs an 'orientation' stream"),
-    (["--robot", "ur3", *OUT], r"robot: expected one of \['ur5e'\], got 'ur3'"),
+    (["--robot", "ur3", *OUT], r"robot: expected one of \['ur5e', 'panda'\] or a URDF / MJCF file, got 'u"),
     (["--max-joint-velocity", "1", *OUT], r"max-joint-velocity: a joint velocity limit needs joints"),
     (["--format", "csv", "--json"], r"format: --format csv needs --out FILE"),
     (["--duration", "-1", *OUT], r"duration: expected a number > 0"),

@@ -72,7 +72,7 @@ def test_the_ur5e_read_from_its_dh_urdf_is_the_analytic_model(tmp_path):
 
 @pytest.mark.parametrize("name", sorted(DESCRIPTIONS))
 def test_fk_of_every_registered_description_is_mujocos_own(name):
-    model = robot_model(name)
+    model = robot_model(name, tool="flange")  # the tool frame's body itself
     m = mujoco.MjModel.from_xml_path(model.chain.source)
     d = mujoco.MjData(m)
     body = m.body(model.chain.tool_frame).id
