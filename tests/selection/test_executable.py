@@ -201,7 +201,7 @@ def _reach(q):
     ({"limits": [1.0]}, r"limits: expected a dict"),
     ({"duration": 0.0}, r"duration: expected a number > 0"),
     ({"duration": 1.0, "t": np.linspace(0, 1, 20)}, r"duration: give a duration or a time base t, not both"),
-    ({"robot": "ur3"}, r"robot: expected one of \['ur5e'\], got 'ur3'"),
+    ({"robot": "ur3"}, r"robot: expected one of \['ur5e', 'panda'\] or a URDF / MJCF file, got 'ur3'"),
 ])
 def test_timing_errors(kwargs, match):
     task = kwargs.pop("task", Constraints(goal=GOAL))
