@@ -166,6 +166,9 @@ class RobotModel(ABC):
     #: The robot's own joint velocity (rad/s) and acceleration (rad/s^2) limits, per joint; None: none known.
     max_velocity: ClassVar[tuple[float, ...] | None] = None
     max_acceleration: ClassVar[tuple[float, ...] | None] = None
+    #: Mass (kg) of each moving link, joint 1 to the flange; None: the simulator's own table
+    #: (``skillbank.simulation.LINK_MASSES``). A model read from a description carries its own.
+    link_masses: ClassVar[tuple[float, ...] | None] = None
     #: The links' collision capsules (:class:`~skillbank.robots.Capsule`), frames as in :meth:`link_frames`.
     BODIES: ClassVar[tuple] = ()
     #: The gripper mounted unless ``gripper`` says otherwise (a name in ``GRIPPERS``), or None.
@@ -412,11 +415,7 @@ class RobotModel(ABC):
             onto none: a jump in the path), or a joint would leave its limits.
         """
         T, single = self._poses(position, quaternion)
-        seed = self.check_joints(self.home if q_seed is None else q_seed, name="q_seed")
-        if seed.shape[0] != 1:
-            raise ValueError(f"q_seed: expected one configuration of {self.n_joints} joints, got shape "
-                             f"{np.shape(q_seed)}")
-        seed = seed[0]
+        seed = self._seed(q_seed)
         b = None if branch is None else self.branch_index(branch)
         with numerical_errors(f"{self.name} inverse kinematics"):
             sols = self._ik(T)
@@ -424,6 +423,14 @@ class RobotModel(ABC):
             b = self._choose_branch(sols, seed, b)
             path = self._follow(sols, b, seed)
         return path[0] if single else path
+
+    def _seed(self, q_seed) -> np.ndarray:
+        """``q_seed`` checked as one configuration ``(n_joints,)``; :attr:`home` when None."""
+        seed = self.check_joints(self.home if q_seed is None else q_seed, name="q_seed")
+        if seed.shape[0] != 1:
+            raise ValueError(f"q_seed: expected one configuration of {self.n_joints} joints, got shape "
+                             f"{np.shape(q_seed)}")
+        return seed[0]
 
     # ------------------------------------------------------------------ following a path
 

@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core._rotations import matrix_to_quaternion
-from ..core._validation import check_array, check_positive, numerical_errors, summarise
+from ..core._validation import check_array, check_positive, numerical_errors
 from ._base import KinematicsError, RobotModel, Singularity
 
 __all__ = ["KinematicChain", "ChainModel", "rotation_error"]
@@ -331,19 +331,16 @@ class ChainModel(RobotModel):
         T, single = self._poses(position, quaternion)
         if branch is not None:
             self.branch_index(branch)
-        seed = self.check_joints(self.home if q_seed is None else q_seed, name="q_seed")
-        if seed.shape[0] != 1:
-            raise ValueError(f"q_seed: expected one configuration of {self.n_joints} joints, got shape "
-                             f"{np.shape(q_seed)}")
+        seed = self._seed(q_seed)
         m = T.shape[0]
         if q_reference is None:
-            ref = np.tile(seed[0], (m, 1))
+            ref = np.tile(seed, (m, 1))
         else:
             ref = self.check_joints(q_reference, name="q_reference")
             if ref.shape[0] != m:
                 raise ValueError(f"q_reference: expected one row per pose ({m}), got {ref.shape[0]}")
         with numerical_errors(f"{self.name} inverse kinematics"):
-            path, ep, er = self._path(T, seed[0], ref)
+            path, ep, er = self._path(T, seed, ref)
             self._check_path(path, ep, er)
         return path[0] if single else path
 
@@ -470,8 +467,3 @@ def self_collision_skip(bodies, frames_at, limits, *, samples=2000, random_state
             skip.add((a.name, b.name))
     return frozenset(skip)
 
-
-def describe_limits(chain: KinematicChain) -> str:
-    """One line per joint: name and limits (for messages and ``skillbank robot``)."""
-    return summarise(f"{n} [{lo:.4g}, {hi:.4g}]" for n, lo, hi in zip(chain.joint_names, chain.lower,
-                                                                        chain.upper, strict=True))

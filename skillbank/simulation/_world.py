@@ -161,7 +161,7 @@ def build_world(scene, model, *, press_force: float = PRESS_FORCE, grip_force: f
     ('shoulder_pan_joint', 'frame6')
     """
     # a model read from a description carries its links' masses; a built-in one's are listed here
-    masses = getattr(model, "link_masses", None) or LINK_MASSES.get(model.name)
+    masses = model.link_masses or LINK_MASSES.get(model.name)
     if masses is None:
         raise ValueError(f"robot: the simulation knows the link masses of {list(LINK_MASSES)}, got "
                          f"{model.name!r}; add its masses to skillbank.simulation.LINK_MASSES")
