@@ -328,6 +328,15 @@ def test_ros_topics_and_acceleration_limit_on_the_command_line(cli, buttons, tmp
                                                             r"\[1, 500\] Hz"),
     (["--joint-topic", "/a", *OUT], r"joint-topic: topics are for a ROS 2 bag export"),
     (["--pose-topic", "tool pose", "--out", "{tmp}/new.bag"], r"pose-topic: expected a ROS 2 topic name"),
+    (["--tool-frame", "tool0", *OUT], r"tool-frame: --tool-frame names a link of a robot's description: "
+                                      r"give --robot FILE too"),
+    (["--robot-base", "0,0,0.9", *OUT], r"robot-base: --robot-base places a robot: give --robot too"),
+    (["--robot", "ur5e", "--robot-base", "0,0", *OUT], r"robot-base: expected X,Y,Z or X,Y,Z,QX,QY,QZ,QW, "
+                                                       r"got 2 numbers"),
+    (["--robot", "ur5e", "--robot-base", "0,0,x", *OUT], r"robot-base: expected a number, got 'x'"),
+    (["--robot", "ur5e", "--tool-frame", "tool0", *OUT], r"tool frame: ur5e is a built-in model"),
+    (["--robot", "{tmp}/missing.urdf", *OUT], r"robot: .*missing.urdf is neither a registered robot nor a "
+                                              r"description file"),
     (["--duration", "1e5", "--out", "{tmp}/a.script", "--control-rate", "500"],
      r"out: the export would write 5e\+07 servoj steps \(100000 s at 500 Hz\), more than the bound of "
      r"2097152 \(set SKILLBANK_MAX_EXPORT_SAMPLES"),
