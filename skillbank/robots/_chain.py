@@ -274,21 +274,22 @@ class ChainModel(RobotModel):
             A = J @ J.transpose(0, 2, 1) + damping[:, None, None] * np.eye(6)
             X = np.linalg.solve(A, np.concatenate([e[:, :, None], J], axis=2))
             dq = np.einsum("kji,kj->ki", J, X[:, :, 0])
-            if n > 6 and it < polish:  # redundant: posture and limits in the null space (I - J+ J)
+            settling = moving & (n > 6) & (it < polish)
+            if settling.any():  # redundant: posture and limits in the null space (I - J+ J)
                 qa = q[active]
                 pull = _POSTURE_GAIN * (q_ref[active] - qa)
                 pull += _LIMIT_GAIN * (np.clip(lo + zone - qa, 0, None) - np.clip(qa - (hi - zone), 0, None))
                 N = np.eye(n) - J.transpose(0, 2, 1) @ X[:, :, 1:]
-                null = np.einsum("kij,kj->ki", N, pull)
-                # settled when the null-space step is below _POSTURE_SETTLED: the posture then lies
-                # within about _POSTURE_SETTLED / _POSTURE_GAIN of where it tends
-                moving = np.abs(null).max(axis=1) > _POSTURE_SETTLED
-                dq += null
-            else:
-                moving = np.zeros(active.size, bool)
+                dq += settling[:, None] * np.einsum("kij,kj->ki", N, pull)
             big = np.abs(dq).max(axis=1, keepdims=True)
             dq *= np.minimum(1.0, _MAX_ITERATION_STEP / np.maximum(big, 1e-300))
-            q[active] = np.clip(q[active] + dq, lo, hi)
+            before = q[active]
+            q[active] = np.clip(before + dq, lo, hi)
+            # settled when an iteration moves the joints by less than _POSTURE_SETTLED: the posture then
+            # lies within about _POSTURE_SETTLED / _POSTURE_GAIN of where it tends. From then on the
+            # sample takes pose-only steps: with the damping, the null-space pull leaks a little into the
+            # task space and would hold the pose a few micrometres off
+            moving = settling & (np.abs(q[active] - before).max(axis=1) > _POSTURE_SETTLED)
         return q, ep, er
 
     def _ik(self, T: np.ndarray) -> np.ndarray:
