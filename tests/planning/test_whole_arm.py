@@ -10,6 +10,7 @@ import pytest
 
 pytest.importorskip("mujoco")  # the extra skillbank[sim]
 
+from skillbank.io import read_npz  # noqa: E402
 from skillbank.planning import (  # noqa: E402
     _chain,  # noqa: E402
     arm_clearance,
@@ -151,3 +152,26 @@ def test_a_link_that_growing_cannot_clear_is_repaired_with_via_points(button_lib
                                          r"[\d.]+ mm for the tool path\); via points in the primitive did "
                                          r"not clear it either: .*\(moving the tool cannot clear it\)$"):
         plan_task(button_library.store, scene, robot="ur5e")
+
+
+def test_plan_on_the_panda_keeps_its_links_clear_of_the_wall(cli, button_library, tmp_path):
+    """`skillbank plan --robot panda`: the same task on a 7-joint arm read from its description, its
+    joints checked against the wall and the table link by link (issue 28). The base is turned to face the
+    buttons (they lie on its -x side)."""
+    scene = write_scene(tmp_path, wall_scene())
+    out = tmp_path / "plan.npz"
+    code, text, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "panda",
+                          "--robot-base", "0,0,0,0,0,1,0", "--out", out, "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["joint_names"] == [f"joint{i}" for i in range(1, 8)]
+    assert doc["collision"] is False and doc["clearance"] >= _chain.CLEARANCE - 1e-9
+    back = read_npz(out)
+    turned = np.diag([-1.0, -1.0, 1.0, 1.0])  # the quaternion (0, 0, 1, 0): half a turn about z
+    model = robot_model("panda", base=turned)
+    sc = scene_from_dict(wall_scene())
+    check = arm_clearance(model, sc, list(sc.obstacles), back["joints"], back.t)
+    assert check.min_distance == pytest.approx(doc["clearance"], abs=1e-6)
+    p, _ = model.fk(back["joints"])
+    assert np.linalg.norm(p - back["position"], axis=1).max() < 2e-6
+    np.testing.assert_allclose(back["position"][-1], [-0.45, 0.2, 0.03 - 0.004], atol=1e-6)

@@ -115,3 +115,30 @@ def test_record_names_robosuites_arms_when_the_robot_is_unknown(tmp_path):
 
     with pytest.raises(ValueError, match=r"robot: expected one of robosuite's single arms \['UR5e', 'Panda'"):
         record("robosuite:Lift", episodes=1, out=tmp_path / "x.h5", robot="Kuka")
+
+
+def test_edit_on_the_panda_writes_joints_whose_fk_is_the_edited_path(cli, tmp_path):
+    """`skillbank edit --robot panda`: the edited pose path and its joints agree to the IK's tolerance."""
+    import skillbank
+    from skillbank.io import write_npz
+
+    model = robot_model("panda")
+    s = np.linspace(0.0, 1.0, 400)[:, None]
+    q = np.asarray(model.home) + 0.3 * np.sin(np.pi * s * np.arange(1, 8) / 4)
+    position, quaternion = model.fk(q)
+    demo = skillbank.Demonstration(4.0 * s[:, 0], {"position": position, "orientation": quaternion})
+    path = write_npz(demo, tmp_path / "demo.npz")
+    goal = position[-1] + [0.03, -0.02, 0.01]
+    code, _, err = cli("edit", path, "--robot", "panda", "--goal", ",".join(f"{v:.6f}" for v in goal),
+                       "--out", tmp_path / "edited.npz")
+    assert code == 0, err
+    back = read_npz(tmp_path / "edited.npz")
+    assert back.metadata["robot"] == "panda"
+    np.testing.assert_allclose(back["position"][-1], goal, atol=1e-6)
+    p, quat = model.fk(back["joints"])
+    assert np.linalg.norm(p - back["position"], axis=1).max() < 2e-6
+    assert np.degrees(quaternion_angle(quat, back["orientation"])).max() < 1e-3
+    assert np.abs(np.diff(back["joints"], axis=0)).max() < model.max_step
+    # the joints keep the limits the description gives
+    assert (back["joints"] >= np.asarray(model.lower) - 1e-9).all()
+    assert (back["joints"] <= np.asarray(model.upper) + 1e-9).all()
