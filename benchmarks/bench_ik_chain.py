@@ -92,12 +92,9 @@ class MinkPanda:
         import mink
         import mujoco
 
-        from skillbank.robots._registry import DESCRIPTIONS, _package_file
-
-        entry = DESCRIPTIONS["panda"]
-        spec = mujoco.MjSpec.from_file(str(_package_file(entry.package, entry.path)))
-        hand = spec.body(entry.tool_frame)
-        hand.add_site(name="bench_tool", pos=list(entry.tool))
+        # the file, tool frame and tool offset the model itself was read with
+        spec = mujoco.MjSpec.from_file(robot.chain.source)
+        spec.body(robot.chain.tool_frame).add_site(name="bench_tool", pos=robot.tool[:3, 3].tolist())
         self.mink, self.model = mink, spec.compile()
         self.robot = robot
         self.frame = mink.FrameTask("bench_tool", "site", position_cost=1.0, orientation_cost=1.0)
@@ -133,6 +130,7 @@ def run(sizes, seeds, repeats: int, peer_max: int) -> list[dict]:
     rows = []
     for n in sizes:
         row = {"n": n}
+        paths = [path(n, seed) for seed in seeds]  # drawn once: every solver gets the same poses
         for name, solve in (
             ("vectorised", lambda P, Q, q0: robot.ik(P, Q, q_seed=q0)),
             ("loop", lambda P, Q, q0: robot.ik_loop(P, Q, q_seed=q0)),
@@ -142,8 +140,7 @@ def run(sizes, seeds, repeats: int, peer_max: int) -> list[dict]:
                 continue
             times, worst = [], {"success": 1.0, "max_position_error": 0.0, "max_orientation_error": 0.0,
                                 "max_joint_step": 0.0, "max_from_drawn": 0.0}
-            for seed in seeds:
-                P, Q, q = path(n, seed)
+            for P, Q, q in paths:
                 t, sol = best_of(lambda f=solve, P=P, Q=Q, q0=q[0]: f(P, Q, q0), repeats)
                 times.append(t)
                 e = errors(robot, sol, P, Q, q)
