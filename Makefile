@@ -54,6 +54,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_editing.py
 	$(PY) benchmarks/bench_ik.py
 	$(PY) benchmarks/bench_ik_chain.py
+	$(PY) benchmarks/bench_panda_redundancy.py
 	$(PY) benchmarks/bench_reuse_robot.py
 	$(PY) benchmarks/bench_planning.py
 	$(PY) benchmarks/bench_ingest.py
