@@ -106,7 +106,8 @@ def test_the_panda_has_its_hand_and_two_jaws_that_slide_along_its_axis_and_close
     panda = robot_model("panda")
     world = build_world(scene(), panda)
     M, d = _compiled(world)
-    assert world.fingers == ("finger_left_joint", "finger_right_joint") and world.stroke == pytest.approx(0.08)
+    assert world.fingers == ("finger_left_joint", "finger_right_joint")
+    assert world.stroke == pytest.approx(0.08)
     assert world.owner["hand"] == ("robot", "hand")
     # the hand's mass is robosuite's (hand, fingers, pads: 0.52 kg) on the last link with its own 1 kg
     assert GRIPPER_MASSES["panda_hand"] == pytest.approx(0.52)
