@@ -145,7 +145,7 @@ def test_edit_on_the_panda_writes_joints_whose_fk_is_the_edited_path(cli, tmp_pa
 
 
 def test_the_recorded_lift_is_clear_of_itself_with_the_hand(recording):
-    """robosuite's Panda did not hit itself lifting the cube; its envelopes with the Franka hand do not either."""
+    """robosuite's Panda did not hit itself lifting the cube; its envelopes with the hand do not either."""
     from skillbank.robots import clearance
 
     model = _model(recording)
