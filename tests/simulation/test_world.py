@@ -142,3 +142,13 @@ def test_the_panda_has_its_hand_and_two_jaws_that_slide_along_its_axis_and_close
     for m_, s in zip(moved, (-1.0, 1.0), strict=True):  # each moved along the axis only, towards the middle
         assert m_ @ axis == pytest.approx(s * 0.04, abs=2e-3)
         assert np.linalg.norm(m_ - (m_ @ axis) * axis) < 2e-3
+
+
+@pytest.mark.parametrize("axis", [(0.0, 0.0, 1.0), (1.0, 1.0, 0.0), (float("nan"), 0.0, 0.0)])
+def test_a_gripper_axis_that_is_not_a_unit_vector_across_the_flanges_z_is_refused(axis):
+    from skillbank.robots import ROBOTIQ_2F85, UR5e
+
+    model = UR5e(gripper=ROBOTIQ_2F85._replace(name="tilted", axis=axis))
+    with pytest.raises(ValueError, match=r"^gripper tilted: axis: expected a unit vector perpendicular to "
+                                         r"the flange's z \(the jaws slide across the approach\), got \["):
+        build_world(scene(), model)
