@@ -21,7 +21,7 @@ Examples
 """
 
 from ._base import KinematicsError, RobotModel, Singularity
-from ._bodies import GRIPPERS, ROBOTIQ_2F85, Capsule, Gripper
+from ._bodies import GRIPPERS, PANDA_HAND, ROBOTIQ_2F85, Capsule, Gripper
 from ._chain import ChainModel, KinematicChain
 from ._clearance import Clearance, clearance
 from ._clearing import CLEARANCE, clearing_move
@@ -32,5 +32,5 @@ from ._ur5e import UR5E_DH, UR5e
 __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "DESCRIPTIONS",
            "robot_model", "ChainModel", "KinematicChain", "load_description", "check_description_files",
            "enclosing_capsule",
-           "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "Clearance", "clearance",
+           "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "PANDA_HAND", "Clearance", "clearance",
            "CLEARANCE", "clearing_move"]

@@ -9,11 +9,12 @@ the flange frame and its tool centre point (TCP). Collision checks
 this one description.
 
 Every capsule is the smallest-volume capsule that contains the convex hull
-of one collision mesh of robosuite 1.5.2's UR5e and Robotiq 85 models (MIT;
-``robosuite/models/assets/robots/ur5e`` and ``grippers/robotiq_gripper_85.xml``)
+of one collision mesh of robosuite 1.5.2's UR5e, Robotiq 85 and Panda hand
+models (MIT; ``robosuite/models/assets/robots/ur5e``,
+``grippers/robotiq_gripper_85.xml`` and ``grippers/panda_gripper.xml``)
 expressed in our frames, rounded to the millimetre and grown by 1 to 2 mm for
 robosuite's kinematic constants, which differ from the manufacturer's DH
-table by up to 1.5 mm. MuJoCo collides a mesh as its convex hull, and a
+table by up to 1.5 mm (the Panda hand's: for the rounding). MuJoCo collides a mesh as its convex hull, and a
 capsule (convex) contains a hull exactly when it contains the mesh's
 vertices, which ``tests/robots/test_bodies.py`` checks at random
 configurations (docs/robots.md, "Bodies and clearance").
@@ -25,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85"]
+__all__ = ["Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "PANDA_HAND"]
 
 
 class Capsule(NamedTuple):
@@ -65,6 +66,11 @@ class Gripper(NamedTuple):
         Where the dimensions come from.
     fingers : tuple of str
         The names of the capsules that touch what the gripper presses or grasps.
+    axis : tuple of 3 float
+        The unit vector in the flange frame (perpendicular to its z) along which the simulator's
+        jaws slide: ``finger_left`` opens towards ``+axis``, ``finger_right`` towards ``-axis``.
+        Default the flange's x, the simulator's jaws before grippers named their own (the
+        2F-85 keeps it, although its fingers close along the flange's y: docs/robots.md).
 
     Examples
     --------
@@ -78,6 +84,7 @@ class Gripper(NamedTuple):
     stroke: float
     source: str
     fingers: tuple = ()
+    axis: tuple = (1.0, 0.0, 0.0)
 
     def tool(self) -> np.ndarray:
         """The TCP as a flange-to-tool transform (a translation along the flange's axes)."""
@@ -109,5 +116,30 @@ ROBOTIQ_2F85 = Gripper(
     fingers=("finger_left", "finger_right"),
 )
 
+#: The Franka hand as robosuite 1.5.2 mounts it on the Panda (``grippers/panda_gripper.xml``): its
+#: ``right_gripper`` body in the arm's ``right_hand`` (the flange) turned by -90 degrees about z, its hand
+#: mesh and finger bodies each turned back by +90 degrees, so the hand mesh lies in the flange's axes and the
+#: fingers slide along the flange's y (``finger_left``, robosuite's ``leftfinger``, 0 to 0.04 m towards
+#: +y; ``finger_right`` towards -y: stroke 0.08 m). The capsules are the smallest-volume ones containing
+#: the convex hulls of the hand mesh and of each finger's mesh and pad box swept over its whole slide,
+#: rounded to the millimetre and grown by about 1.5 mm. The TCP is where the closed fingertips meet: the
+#: ends of the finger meshes, 0.106 m along the flange's z, in the plane between them (robosuite's grip
+#: site, the Panda's registered tool point, is 0.097 m: 9 mm above it).
+PANDA_HAND = Gripper(
+    name="panda_hand",
+    capsules=(
+        # hand.stl: x +-31.6 mm, y -104 to 100.4 mm, z -25.9 to 66 mm
+        Capsule("hand", -1, (0.0, -0.076, 0.021), (0.0, 0.060, 0.031), 0.051),
+        # finger.stl and its pad box, x +-10.5 mm, y -0.5 to 66.4 mm over the slide, z 52.5 to 106.2 mm
+        Capsule("finger_left", -1, (0.0, 0.011, 0.079), (0.0, 0.053, 0.077), 0.031),
+        Capsule("finger_right", -1, (0.0, -0.011, 0.079), (0.0, -0.053, 0.077), 0.031),
+    ),
+    tcp=(0.0, 0.0, 0.106),
+    stroke=0.08,
+    source="robosuite 1.5.2 panda_gripper.xml and meshes (MIT), fitted in tests/robots/test_panda_hand.py",
+    fingers=("finger_left", "finger_right"),
+    axis=(0.0, 1.0, 0.0),
+)
+
 #: Gripper name -> description.
-GRIPPERS = {"robotiq_2f85": ROBOTIQ_2F85}
+GRIPPERS = {"robotiq_2f85": ROBOTIQ_2F85, "panda_hand": PANDA_HAND}

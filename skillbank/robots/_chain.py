@@ -71,6 +71,9 @@ class KinematicChain(NamedTuple):
         Where the description came from (a path, a registered name).
     tool_frame : str
         The body or site of the description that is the flange.
+    gripper : str or None
+        The gripper mounted on the flange unless the model is told otherwise (a name in
+        :data:`~skillbank.robots.GRIPPERS`; the registry sets the Panda's hand), or None.
     """
 
     name: str
@@ -84,6 +87,7 @@ class KinematicChain(NamedTuple):
     self_collision_skip: frozenset = frozenset()
     source: str = ""
     tool_frame: str = ""
+    gripper: str | None = None
 
 
 def _rz(q: np.ndarray) -> np.ndarray:
@@ -119,9 +123,13 @@ class ChainModel(RobotModel):
     ----------
     chain : KinematicChain
         Usually from :func:`~skillbank.robots.load_description` (``robot_model(path)`` does both).
-    base, tool, singularity_thresholds, max_step, gripper
-        As :class:`~skillbank.robots.RobotModel`; no gripper is mounted unless ``gripper`` names one
-        (the description carries its own end effector, if any, beyond the tool frame).
+    base, tool, singularity_thresholds, max_step
+        As :class:`~skillbank.robots.RobotModel`.
+    gripper : str or Gripper, default="default"
+        As :class:`~skillbank.robots.RobotModel`; ``"default"`` is the chain's own ``gripper`` (the
+        registered Panda's hand), none for a description file (its end effector, if any, lies beyond
+        the tool frame). With a gripper, its capsules join the self-collision rule
+        (:func:`self_collision_skip`) like the links'.
     tolerance : float, default=1e-6
         Position error (m) at which a pose counts as reached; the orientation's is
         ``tolerance / length_`` radians (Notes).
@@ -152,7 +160,7 @@ class ChainModel(RobotModel):
                                              "divided by the arm's reach", 0.01)}
 
     def __init__(self, chain: KinematicChain, *, base=None, tool=None, singularity_thresholds=None,
-                 max_step=0.5, gripper="none", tolerance=1e-6, max_iterations=100):
+                 max_step=0.5, gripper="default", tolerance=1e-6, max_iterations=100):
         if not isinstance(chain, KinematicChain):
             raise ValueError(f"chain: expected a KinematicChain (robot_model(path) reads one from a "
                              f"description), got {type(chain).__name__}")
@@ -169,6 +177,7 @@ class ChainModel(RobotModel):
         home = np.asarray(chain.home if len(chain.home) else np.zeros(n), float)
         self.home = tuple(np.clip(home, self.lower, self.upper))
         self.BODIES = tuple(chain.bodies)
+        self.DEFAULT_GRIPPER = chain.gripper
         self.SELF_COLLISION_SKIP = frozenset(chain.self_collision_skip)
         self.link_masses = tuple(chain.masses[1:]) if len(chain.masses) == n + 1 else None
         self._origin = frames[0]
@@ -182,6 +191,9 @@ class ChainModel(RobotModel):
         self.max_iterations = int(max_iterations)
         super().__init__(base=base, tool=tool, singularity_thresholds=singularity_thresholds,
                          max_step=max_step, gripper=gripper)
+        if self.gripper_ is not None:  # the gripper's pairs by the links' rule, on the same samples
+            self.SELF_COLLISION_SKIP = self.SELF_COLLISION_SKIP | _gripper_skip(
+                self.bodies, self._frames, self.limits, self.gripper_.name)
 
     def __repr__(self) -> str:
         return f"ChainModel({self.name!r}, {self.n_joints} joints, tool frame {self.chain.tool_frame!r})"
@@ -433,6 +445,20 @@ class ChainModel(RobotModel):
     def branch_of(self, q) -> np.ndarray:
         """Every configuration is on the one branch a numerical solver has (0)."""
         return np.zeros(self.check_joints(q).shape[0], dtype=int)
+
+
+def _gripper_skip(bodies, frames_at, limits, gripper: str) -> frozenset:
+    """:func:`self_collision_skip` over the links and the mounted gripper, remembered per arm and gripper.
+
+    The same samples as the links' own rule; the pairs between links come out as the chain's.
+    """
+    key = (tuple(bodies), limits.tobytes(), gripper, frames_at(np.zeros((1, limits.shape[0]))).tobytes())
+    if key not in _GRIPPER_SKIP:
+        _GRIPPER_SKIP[key] = self_collision_skip(bodies, frames_at, limits)
+    return _GRIPPER_SKIP[key]
+
+
+_GRIPPER_SKIP: dict = {}
 
 
 def self_collision_skip(bodies, frames_at, limits, *, samples=2000, random_state=0) -> frozenset:

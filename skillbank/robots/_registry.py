@@ -37,6 +37,8 @@ class RegisteredDescription(NamedTuple):
     source : str
     tool : tuple of 3 float
         The default tool point in the flange frame (metres): where the arm's usual gripper works.
+    gripper : str or None
+        The gripper mounted by default (a name in :data:`~skillbank.robots.GRIPPERS`), or None.
     """
 
     package: str
@@ -47,19 +49,21 @@ class RegisteredDescription(NamedTuple):
     max_acceleration: tuple | None = None
     source: str = ""
     tool: tuple = (0.0, 0.0, 0.0)
+    gripper: str | None = None
 
 
 #: Registered descriptions. Panda: robosuite 1.5.2's MJCF (MIT), its ``init_qpos`` as home, Franka's
 #: published joint velocity and acceleration limits (Franka Control Interface documentation, "Robot and
-#: interface specifications"), and as tool point robosuite's Panda gripper's grip site, 0.097 m along the
-#: flange's z (``grippers/panda_gripper.xml``, body ``eef``): where robosuite records the Panda's pose.
+#: interface specifications"), as tool point robosuite's Panda gripper's grip site, 0.097 m along the
+#: flange's z (``grippers/panda_gripper.xml``, body ``eef``): where robosuite records the Panda's pose,
+#: and the Franka hand (``PANDA_HAND``, robosuite's same file) mounted on the flange.
 DESCRIPTIONS: dict[str, RegisteredDescription] = {
     "panda": RegisteredDescription(
         "robosuite", "models/assets/robots/panda/robot.xml", "right_hand",
         (0.0, np.pi / 16.0, 0.0, -np.pi / 2.0 - np.pi / 3.0, 0.0, np.pi - 0.2, np.pi / 4),
         (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61), (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0),
         "robosuite 1.5.2 models/assets/robots/panda (MIT); limits: Franka Control Interface specifications",
-        (0.0, 0.0, 0.097)),
+        (0.0, 0.0, 0.097), "panda_hand"),
 }
 
 #: Robot name (as on the command line) -> a built-in model class. Descriptions are in DESCRIPTIONS.
@@ -82,7 +86,7 @@ def _described(path, *, tool_frame=None, name=None, registered=None, **params) -
 
     chain = load_description(path, tool_frame=tool_frame, name=name)
     if registered is not None:
-        chain = chain._replace(home=registered.home)
+        chain = chain._replace(home=registered.home, gripper=registered.gripper)
         if params.get("tool") is None and any(registered.tool):
             params["tool"] = np.eye(4)
             params["tool"][:3, 3] = registered.tool

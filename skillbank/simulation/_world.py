@@ -27,8 +27,10 @@ __all__ = ["World", "build_world", "LINK_MASSES", "GRIPPER_MASSES", "PRESS_FORCE
 #: Link masses (kg) of each arm's moving links, joint 1 to the flange: UR's published physical
 #: parameters (ur_description, config/ur5e/physical_parameters.yaml, BSD-3-Clause).
 LINK_MASSES = {"ur5e": (3.761, 8.058, 2.846, 1.37, 1.3, 0.365)}
-#: Gripper masses (kg): Robotiq's 2F-85 specification (0.925 kg), of which each simulated finger 0.05 kg.
-GRIPPER_MASSES = {"robotiq_2f85": 0.925}
+#: Gripper masses (kg), of which each simulated finger 0.05 kg: Robotiq's 2F-85 specification (0.925 kg);
+#: the Franka hand's bodies in robosuite 1.5.2's ``panda_gripper.xml`` (hand 0.3, each finger 0.1 and its
+#: pad 0.01: 0.52 kg).
+GRIPPER_MASSES = {"robotiq_2f85": 0.925, "panda_hand": 0.52}
 _FINGER_MASS = 0.05
 #: Force (N) a button takes at half its travel, where it counts as pressed (a push button's 5-10 N).
 PRESS_FORCE = 7.0
@@ -414,17 +416,37 @@ def _self_collision_excludes(model, already) -> list[str]:
     return out
 
 
+def _jaw_axes(gripper) -> np.ndarray:
+    """The jaws' frame in the flange frame: x the gripper's ``axis`` (checked), z the flange's z."""
+    axis = np.asarray(gripper.axis, float)
+    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or abs(np.linalg.norm(axis) - 1) > 1e-6 \
+            or abs(axis[2]) > 1e-6:
+        raise ValueError(f"gripper {gripper.name}: axis: expected a unit vector perpendicular to the "
+                         f"flange's z (the jaws slide across the approach), got "
+                         f"{np.ravel(gripper.axis).tolist()}")
+    return np.column_stack([axis, np.cross([0.0, 0.0, 1.0], axis), [0.0, 0.0, 1.0]])
+
+
 def _fingers(pad, flange, gripper, caps_by_frame, world, model, grip_force) -> list[str]:
-    """Two jaws in the flange frame that slide along its x axis; their pads end at the TCP."""
+    """Two jaws in the flange frame that slide along the gripper's ``axis``; their pads end at the TCP.
+
+    ``finger_left`` opens towards ``+axis``, ``finger_right`` towards ``-axis``; each pad is thin along the
+    axis. The flange's x (the default) writes the same document as before grippers named their axis.
+    """
     tcp = np.asarray(gripper.tcp, float)
+    R = _jaw_axes(gripper)
+    along_x = np.array_equal(R, np.eye(3))
     out = []
     for side, sign in (("left", 1.0), ("right", -1.0)):
         T = flange.copy()
+        centre = tcp + R @ [sign * _PAD[0], 0.0, -_PAD[2]]
+        slide = f"{sign!r} 0 0" if along_x else _f(sign * R[:, 0])
+        turn = "" if along_x else f' quat="{_f(_quat(R))}"'
         out += [f'{pad}<body name="finger_{side}" {_pose(T)} gravcomp="1">',
-                f'{pad}  <joint name="finger_{side}_joint" type="slide" axis="{sign!r} 0 0" '
+                f'{pad}  <joint name="finger_{side}_joint" type="slide" axis="{slide}" '
                 f'range="0 {gripper.stroke / 2!r}" damping="5"/>',
                 f'{pad}  <geom name="finger_{side}" type="box" size="{_f(_PAD)}" '
-                f'pos="{_f(tcp + [sign * _PAD[0], 0.0, -_PAD[2]])}" mass="{_FINGER_MASS!r}" '
+                f'pos="{_f(centre)}"{turn} mass="{_FINGER_MASS!r}" '
                 'rgba="0.15 0.15 0.15 1"/>',
                 f'{pad}</body>']
         world.owner[f"finger_{side}"] = ("robot", f"finger_{side}")

@@ -18,7 +18,7 @@ from skillbank.planning import (  # noqa: E402
     scene_from_dict,
 )
 from skillbank.robots import robot_model  # noqa: E402
-from skillbank.simulation import simulate  # noqa: E402
+from skillbank.simulation import PRESS_FORCE, simulate  # noqa: E402
 
 from .conftest import write_scene  # noqa: E402
 
@@ -175,3 +175,35 @@ def test_plan_on_the_panda_keeps_its_links_clear_of_the_wall(cli, button_library
     p, _ = model.fk(back["joints"])
     assert np.linalg.norm(p - back["position"], axis=1).max() < 2e-6
     np.testing.assert_allclose(back["position"][-1], [-0.45, 0.2, 0.03 - 0.004], atol=1e-6)
+
+
+def test_plan_simulate_on_the_panda_presses_the_button_with_its_hand(cli, button_library, tmp_path):
+    """`plan --robot panda --simulate`: the Franka hand is checked and simulated, and its fingers press b2.
+
+    The Panda's default tool point is robosuite's grip site, 9 mm above the fingertips (its recordings
+    report that point): the plan takes the grip site 4 mm into the button, one travel, so the fingertips
+    would go 9 mm past the bottomed cap. The servos push the arm against it: pressed, hard, the arm held
+    millimetres short of its command (docs/robots.md, "The Panda's hand").
+    """
+    scene = write_scene(tmp_path, wall_scene())
+    code, text, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "panda",
+                          "--robot-base", "0,0,0,0,0,1,0", "--simulate", "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["collision"] is False and doc["clearance"] >= _chain.CLEARANCE - 1e-9
+    sim = doc["simulation"]
+    assert doc["facts"] == {"(pressed b2)": {"planned": True, "achieved": True}}, sim
+    assert sim["buttons"]["b2"]["pressed"] and not sim["buttons"]["b1"]["pressed"]
+    assert sim["contacts"] == []  # the hand touched neither the wall, the table nor b1
+    assert sim["buttons"]["b2"]["peak_force"] > 5 * PRESS_FORCE and sim["tracking"]["tool_max"] > 2e-3
+
+
+def test_the_panda_planned_for_its_fingertips_presses_gently(button_library):
+    """With the hand's TCP as the tool point the fingertips go one travel in: a button's force, tracked."""
+    scene = scene_from_dict(wall_scene())
+    model = robot_model("panda", base=np.diag([-1.0, -1.0, 1.0, 1.0]), tool="tcp")
+    res = plan_task(button_library.store, scene, robot=model)
+    assert res.clearance >= _chain.CLEARANCE - 1e-9
+    sim = simulate(res.trajectory, scene, robot=model, targets=res.targets())
+    assert sim.facts == {"(pressed b2)": True} and sim.contacts == []
+    assert sim.buttons["b2"]["peak_force"] < 2 * PRESS_FORCE and sim.tool_max < 1e-3

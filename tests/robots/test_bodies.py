@@ -211,8 +211,9 @@ def test_tool_names_give_the_gripper_tcp_which_is_the_default():
     ({"tool": "tcp", "gripper": "none"}, r"tool: 'tcp' is the mounted gripper's tool centre point, but no "
                                          r"gripper is mounted"),
     ({"tool": "hand"}, r"tool: expected a 4 x 4 transform, 'flange', 'tcp' or a gripper's name among "
-                       r"\['robotiq_2f85'\], got 'hand'"),
-    ({"gripper": "2f85"}, r"gripper: expected 'default', 'none' or one of \['robotiq_2f85'\], got '2f85'"),
+                       r"\['robotiq_2f85', 'panda_hand'\], got 'hand'"),
+    ({"gripper": "2f85"}, r"gripper: expected 'default', 'none' or one of \['robotiq_2f85', 'panda_hand'\], "
+                          r"got '2f85'"),
 ])
 def test_bad_tool_or_gripper(params, match):
     with pytest.raises(ValueError, match=match):

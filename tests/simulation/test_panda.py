@@ -142,3 +142,16 @@ def test_edit_on_the_panda_writes_joints_whose_fk_is_the_edited_path(cli, tmp_pa
     # the joints keep the limits the description gives
     assert (back["joints"] >= np.asarray(model.lower) - 1e-9).all()
     assert (back["joints"] <= np.asarray(model.upper) + 1e-9).all()
+
+
+def test_the_recorded_lift_is_clear_of_itself_with_the_hand(recording):
+    """robosuite's Panda did not hit itself lifting the cube; its envelopes with the hand do not either."""
+    from skillbank.robots import clearance
+
+    model = _model(recording)
+    assert model.gripper_.name == "panda_hand"
+    for demo in recording["demos"]:
+        result = clearance(model, demo["robot0_joint_pos"])
+        assert result.min_distance > 0 and result.first_contact() is None
+        hand = [v for k, v in result.per_pair.items() if {"hand", "finger_left", "finger_right"} & set(k)]
+        assert min(hand) > 0

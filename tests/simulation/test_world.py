@@ -6,7 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
+from skillbank.robots import robot_model
 from skillbank.simulation import LINK_MASSES, PRESS_FORCE, build_world
+from skillbank.simulation._world import GRIPPER_MASSES
 
 from .conftest import TABLE, button, scene
 
@@ -87,3 +89,66 @@ def test_base_and_table_do_not_collide(ur5e):
 def test_bad_objects_are_refused(ur5e, obj, match):
     with pytest.raises(ValueError, match=match):
         build_world(scene([obj]), ur5e)
+
+
+def test_the_ur5e_jaws_still_slide_along_the_flanges_x(ur5e):
+    """The 2F-85 keeps the jaws' axis of before (its Gripper.axis default): the flange's x."""
+    assert ur5e.gripper_.axis == (1.0, 0.0, 0.0)
+    M, d = _compiled(build_world(scene(), ur5e))
+    d.qpos[:6] = ur5e.home
+    mujoco.mj_kinematics(M, d)
+    x = ur5e.link_frames(np.asarray(ur5e.home))[0, -1, :3, 0]
+    np.testing.assert_allclose(d.xaxis[M.joint("finger_left_joint").id], x, atol=1e-9)
+    np.testing.assert_allclose(d.xaxis[M.joint("finger_right_joint").id], -x, atol=1e-9)
+
+
+def test_the_panda_has_its_hand_and_two_jaws_that_slide_along_its_axis_and_close_on_command():
+    panda = robot_model("panda")
+    world = build_world(scene(), panda)
+    M, d = _compiled(world)
+    assert world.fingers == ("finger_left_joint", "finger_right_joint")
+    assert world.stroke == pytest.approx(0.08)
+    assert world.owner["hand"] == ("robot", "hand")
+    # the hand's mass is robosuite's (hand, fingers, pads: 0.52 kg) on the last link with its own 1 kg
+    assert GRIPPER_MASSES["panda_hand"] == pytest.approx(0.52)
+    last = M.body_subtreemass[M.body("link7").id]
+    assert last == pytest.approx(panda.link_masses[-1] + 0.52)
+    q = np.asarray(panda.home)
+    arm = [M.jnt_qposadr[M.joint(j).id] for j in world.joints]
+    jaws = [M.jnt_qposadr[M.joint(j).id] for j in world.fingers]
+    grip = [M.actuator(f"grip_{side}").id for side in ("left", "right")]
+    d.qpos[arm], d.qpos[jaws] = q, 0.04  # fully open
+    mujoco.mj_forward(M, d)
+    flange = panda.link_frames(q)[0, -1]
+    axis = flange[:3, :3] @ np.asarray(panda.gripper_.axis)  # the flange's y in the world
+    np.testing.assert_allclose(axis, flange[:3, 1], atol=1e-12)
+    for joint, sign in zip(world.fingers, (1.0, -1.0), strict=True):
+        np.testing.assert_allclose(d.xaxis[M.joint(joint).id], sign * axis, atol=1e-9)
+    pads = [d.geom_xpos[M.geom(f"finger_{side}").id].copy() for side in ("left", "right")]
+    # open: the pads' inner faces the stroke apart, across the TCP along the axis
+    tcp = (flange @ panda.gripper_.tool())[:3, 3]
+    inner = [(p - tcp) @ axis - s * 0.004 for p, s in zip(pads, (1.0, -1.0), strict=True)]
+    np.testing.assert_allclose(inner, [0.04, -0.04], atol=1e-9)
+    # closing on command: hold the arm, the jaws' targets 0; they meet at the TCP
+    d.ctrl[:] = 0.0
+    for j, name in enumerate(world.joints):
+        d.ctrl[M.actuator(f"servo_{name}").id] = q[j]
+    d.ctrl[grip] = 0.0
+    for _ in range(500):
+        mujoco.mj_step(M, d)
+    assert np.abs(d.qpos[jaws]).max() < 1e-3
+    closed = [d.geom_xpos[M.geom(f"finger_{side}").id] for side in ("left", "right")]
+    moved = [c - p for c, p in zip(closed, pads, strict=True)]
+    for m_, s in zip(moved, (-1.0, 1.0), strict=True):  # each moved along the axis only, towards the middle
+        assert m_ @ axis == pytest.approx(s * 0.04, abs=2e-3)
+        assert np.linalg.norm(m_ - (m_ @ axis) * axis) < 2e-3
+
+
+@pytest.mark.parametrize("axis", [(0.0, 0.0, 1.0), (1.0, 1.0, 0.0), (float("nan"), 0.0, 0.0)])
+def test_a_gripper_axis_that_is_not_a_unit_vector_across_the_flanges_z_is_refused(axis):
+    from skillbank.robots import ROBOTIQ_2F85, UR5e
+
+    model = UR5e(gripper=ROBOTIQ_2F85._replace(name="tilted", axis=axis))
+    with pytest.raises(ValueError, match=r"^gripper tilted: axis: expected a unit vector perpendicular to "
+                                         r"the flange's z \(the jaws slide across the approach\), got \["):
+        build_world(scene(), model)
