@@ -18,10 +18,16 @@ ROBOT_HELP = ("a registered robot (ur5e, with its Robotiq 2F-85; panda) or a URD
 
 
 def add_tool_frame_option(p) -> None:
-    """``--tool-frame LINK`` (the flange of a robot read from a description file) and ``--robot-base``."""
+    """``--tool-frame LINK`` (the flange of a robot read from a description file), ``--tool`` and
+    ``--robot-base``."""
     p.add_argument("--tool-frame", default=None, metavar="LINK",
                    help="with --robot FILE: the link (or site) of the description that is the tool frame "
                         "(default: the last link of its longest chain of joints)")
+    p.add_argument("--tool", default=None, metavar="tcp|flange|GRIPPER|X,Y,Z",
+                   help="the point of the robot the poses are of: 'tcp' the mounted gripper's tool centre "
+                        "point (where its closed fingertips meet), 'flange', a gripper's name (its TCP), or "
+                        "an offset in the flange frame (metres); default: the robot's own (the UR5e's "
+                        "2F-85 TCP; the Panda's robosuite grip site, 9 mm above its fingertips)")
     p.add_argument("--robot-base", default=None, metavar="X,Y,Z[,QX,QY,QZ,QW]",
                    help="where the robot's base stands in the frame of the poses (metres, and a "
                         "scalar-last quaternion; default: the poses are in the base frame)")
@@ -53,6 +59,34 @@ def robot_base(text):
     return T
 
 
+def robot_tool(text):
+    """``--tool``: a name the robot model takes (``tcp``, ``flange``, a gripper's) or ``X,Y,Z`` as a 4 x 4
+    translation in the flange frame (None: not given).
+
+    Examples
+    --------
+    >>> robot_tool("0,0,0.1")[:3, 3].tolist()
+    [0.0, 0.0, 0.1]
+    >>> robot_tool("tcp")
+    'tcp'
+    """
+    if text is None:
+        return None
+    if not any(c.isdigit() for c in text):
+        return text  # a name: the model checks it against its gripper and GRIPPERS
+    import numpy as np  # core dependency, when an offset is given
+
+    from ._options import _numbers  # the one parser of comma-separated numbers
+
+    values = _numbers(text, "tool", text)
+    if len(values) != 3:
+        raise ValueError(f"tool: expected 'tcp', 'flange', a gripper's name or X,Y,Z in the flange frame "
+                         f"(metres), got {len(values)} numbers in {text!r}")
+    T = np.eye(4)
+    T[:3, 3] = values
+    return T
+
+
 def cli_robot(args):
     """The model of ``--robot`` (a name or a description file) and ``--tool-frame``, built once per command.
 
@@ -66,13 +100,16 @@ def cli_robot(args):
                              "FILE too")
         if getattr(args, "robot_base", None) is not None:
             raise ValueError("robot-base: --robot-base places a robot: give --robot too")
+        if getattr(args, "tool", None) is not None:
+            raise ValueError("tool: --tool names a point of a robot: give --robot too")
         return None
     model = getattr(args, "_robot_model", None)
     if model is None:
         from ..robots import robot_model  # numpy only (mujoco when a description file is read)
 
         base = robot_base(getattr(args, "robot_base", None))
-        model = robot_model(str(name), tool_frame=tool_frame, base=base)
+        model = robot_model(str(name), tool_frame=tool_frame, base=base,
+                            tool=robot_tool(getattr(args, "tool", None)))
         args._robot_model = model
     return model
 

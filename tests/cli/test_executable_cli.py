@@ -335,6 +335,11 @@ def test_ros_topics_and_acceleration_limit_on_the_command_line(cli, buttons, tmp
                                                        r"got 2 numbers"),
     (["--robot", "ur5e", "--robot-base", "0,0,x", *OUT], r"robot-base: expected a number, got 'x'"),
     (["--robot", "ur5e", "--tool-frame", "tool0", *OUT], r"tool frame: ur5e is a built-in model"),
+    (["--tool", "tcp", *OUT], r"tool: --tool names a point of a robot: give --robot too"),
+    (["--robot", "ur5e", "--tool", "wrist", *OUT], r"tool: expected a 4 x 4 transform, 'flange', 'tcp' or a "
+                                                    r"gripper's name"),
+    (["--robot", "ur5e", "--tool", "0,0.1", *OUT], r"tool: expected 'tcp', 'flange', a gripper's name or "
+                                                   r"X,Y,Z in the flange frame \(metres\), got 2 numbers"),
     (["--robot", "{tmp}/missing.urdf", *OUT], r"robot: .*missing.urdf is neither a registered robot nor a "
                                               r"description file"),
     (["--duration", "1e5", "--out", "{tmp}/a.script", "--control-rate", "500"],

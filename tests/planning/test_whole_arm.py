@@ -207,3 +207,21 @@ def test_the_panda_planned_for_its_fingertips_presses_gently(button_library):
     sim = simulate(res.trajectory, scene, robot=model, targets=res.targets())
     assert sim.facts == {"(pressed b2)": True} and sim.contacts == []
     assert sim.buttons["b2"]["peak_force"] < 2 * PRESS_FORCE and sim.tool_max < 1e-3
+
+
+def test_plan_simulate_on_the_panda_for_its_fingertips_from_the_command_line(cli, button_library, tmp_path):
+    """`plan --robot panda --tool tcp --simulate`: planned for where the fingertips meet, b2 takes a button's
+    force and the tool is tracked, as the API's ``tool="tcp"`` does; the written joints' FK is the TCP."""
+    scene = write_scene(tmp_path, wall_scene())
+    out = tmp_path / "press.npz"
+    code, text, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "panda",
+                          "--robot-base", "0,0,0,0,0,1,0", "--tool", "tcp", "--simulate", "--out", str(out),
+                          "--json")
+    assert code == 0, err
+    sim = json.loads(text)["simulation"]
+    assert sim["buttons"]["b2"]["pressed"] and not sim["buttons"]["b1"]["pressed"] and sim["contacts"] == []
+    assert sim["buttons"]["b2"]["peak_force"] < 2 * PRESS_FORCE and sim["tracking"]["tool_max"] < 1e-3
+    back = read_npz(out)
+    model = robot_model("panda", base=np.diag([-1.0, -1.0, 1.0, 1.0]), tool="tcp")
+    p, _ = model.fk(back["joints"])
+    assert np.linalg.norm(p - back["position"], axis=1).max() < 2e-6
