@@ -633,7 +633,8 @@ def _transit(episode, position, quat) -> float:
     line at most :data:`TRANSIT_SPEED` (the wrist turning on the way across); returns the distance moved.
 
     Rising first takes the arm out of what it has just reached into (a bin's far corner: its forearm
-    lies over the bin's wall) before it swings back.
+    lies over the bin's wall) before it swings back; the path keeps the arm's reach margin
+    (:class:`~skillbank.simulation._reach.Reach`), so the rise does not straighten the elbow.
     """
     here_p = np.array(episode.obs["robot0_eef_pos"], float)
     here_q = np.array(episode.obs["robot0_eef_quat"], float)
@@ -643,17 +644,22 @@ def _transit(episode, position, quat) -> float:
     z = max(here_p[2], position[2]) + TRANSIT_RISE
     corners = [here_p, np.r_[here_p[:2], z], np.r_[position[:2], z], np.asarray(position, float)]
     turns = [here_q, here_q, quat, quat]
+    P, Q = [], []
     for a, b, qa, qb in zip(corners[:-1], corners[1:], turns[:-1], turns[1:], strict=True):
         length = float(np.linalg.norm(b - a))
         # a minimum-jerk profile peaks at 1.875 times its mean speed
         n = max(CONTROL_FREQ // 2, int(np.ceil(1.875 * length / TRANSIT_SPEED * CONTROL_FREQ)))
         u = _min_jerk_at(np.linspace(0.0, 1.0, n + 1)[1:])
-        qs = slerp([0.0, 1.0], np.stack([qa, qb]), u)
-        for k in range(n):
-            if episode.over:
-                return round(distance, 4)
-            episode.step(a + u[k] * (b - a), qs[k])
-    episode.settle(np.asarray(position, float), quat)
+        P.append(a + u[:, None] * (b - a))
+        Q.append(slerp([0.0, 1.0], np.stack([qa, qb]), u))
+    # rising straight up from a bin's far side stretches the arm: the path keeps its reach margin
+    Q = np.concatenate(Q)
+    P = episode.reach.keep(np.concatenate(P), Q, episode.obs["robot0_joint_pos"])
+    for p, q in zip(P, Q, strict=True):
+        if episode.over:
+            return round(distance, 4)
+        episode.step(p, q)
+    episode.settle(P[-1], quat)
     return round(distance, 4)
 
 
