@@ -56,6 +56,7 @@ from ._evaluate import (
     _widen,
     binomial_interval,
 )
+from ._reach import Reach
 from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite
 from ._stack3 import CUBES, stack3_class
 
@@ -489,7 +490,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
         raise ValueError(f"disturb.object: the scene has no object {disturb['object']!r}; it has "
                          f"{world.objects}")
     # each segment also leaves as its demonstration did: a composed scene stands beside what it picks up
-    episode = _Episode(env, obs, 10 ** 9, trace=paths, leave=True)
+    episode = _Episode(env, obs, 10 ** 9, trace=paths, leave=True, reach=Reach(env))
     episode.rest(world.objects)
     episode.fingers = _fingers(env, episode.obs)
     facts = world.facts(episode.obs)
@@ -654,7 +655,9 @@ def _transit(episode, position, quat) -> float:
         Q.append(slerp([0.0, 1.0], np.stack([qa, qb]), u))
     # rising straight up from a bin's far side stretches the arm: the path keeps its reach margin
     Q = np.concatenate(Q)
-    P = episode.reach.keep(np.concatenate(P), Q, episode.obs["robot0_joint_pos"])
+    P = np.concatenate(P)
+    if episode.reach is not None:
+        P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
     for p, q in zip(P, Q, strict=True):
         if episode.over:
             return round(distance, 4)

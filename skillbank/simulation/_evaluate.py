@@ -41,7 +41,6 @@ from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
-from ._reach import Reach
 from ._robosuite import CONTROL_FREQ, _Driver, _min_jerk_at, _objects, _pads, _turn, _yaw, import_robosuite
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
@@ -335,14 +334,16 @@ class _Contacts:
 
 
 class _Episode:
-    def __init__(self, env, obs, horizon, trace=False, leave=False):
-        """``leave``: adapted segments also leave as their demonstrations did (:func:`_path_adapted`)."""
+    def __init__(self, env, obs, horizon, trace=False, leave=False, reach=None):
+        """``leave``: adapted segments also leave as their demonstrations did (:func:`_path_adapted`);
+        ``reach``: a :class:`~skillbank.simulation._reach.Reach` that keeps commanded paths within the
+        arm's reach margin (a composed task, whose arm goes on from where each step leaves it)."""
         self.env, self.horizon, self.leave = env, horizon, leave
         self.path = [] if trace else None
         self.driver = _Driver(env, obs, keep=False)
         self.steps, self.success, self.contact, self.segment = 0, False, None, 0
         self.contacts = _Contacts(env)
-        self.reach = Reach(env)  # commanded paths stay within the arm's reach margin (_reach.py)
+        self.reach = reach
 
     @property
     def obs(self):
@@ -592,7 +593,8 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                                             leave=episode.leave)
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
-            P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
+            if episode.reach is not None:
+                P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
             timings["adapt"] += time.perf_counter() - tic
             steps0 = episode.steps
             for p, q, g in zip(P, Q, G, strict=True):

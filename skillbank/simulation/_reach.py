@@ -13,8 +13,12 @@ bin's wall (docs/benchmarks.md, "Composed tasks in physics").
 :func:`~skillbank.simulation.robot_frames`) and pulls a path's poses towards the arm's base axis,
 horizontally, just enough that inverse kinematics on the arm's current branch keeps the elbow bent
 by at least :data:`REACH_MARGIN` (the sine of the elbow angle), spreading each pull over the
-neighbouring poses so the path eases in and out of it. A path that stays within the margin is
-returned unchanged. An arm without a registered model is not changed.
+neighbouring poses so the path eases in and out of it; the path's last pose, where the task needs the
+tool, is kept, the pull easing out over the half second before it. A path that stays within the
+margin is returned unchanged. An arm without a registered model is not changed. Composed tasks use it
+(:func:`~skillbank.simulation.execute_plan`: the arm goes on from where each step leaves it); ``sim
+evaluate`` does not (docs/benchmarks.md: a nut carried over its peg at the edge of the workspace is
+placed worse when its way there is pulled in).
 """
 
 from __future__ import annotations
@@ -135,6 +139,9 @@ class Reach:
         kernel = np.hanning(2 * _SPREAD + 3)[1:-1]
         eased = np.convolve(np.pad(window, _SPREAD, mode="edge"), kernel / kernel.sum(), mode="valid")
         pull = np.maximum(eased, pull)
+        # the path's end is where the task needs the tool (a nut over its peg): the pull eases out before it
+        pull *= np.clip((len(P) - 1 - np.arange(len(P))) / _SPREAD, 0.0, 1.0)
         out = P.copy()
-        out[:, :2] = axis + (1.0 - pull)[:, None] * (P[:, :2] - axis)
+        moved = pull > 0.0  # the others exactly as they were
+        out[moved, :2] = axis + (1.0 - pull[moved])[:, None] * (P[moved, :2] - axis)
         return out
