@@ -27,6 +27,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..robots import robot_model
+from ._robosuite import robot_frames
+
 __all__ = ["Reach", "REACH_MODELS", "REACH_MARGIN"]
 
 
@@ -81,9 +84,6 @@ class Reach:
     """
 
     def __init__(self, env, *, margin: float = REACH_MARGIN):
-        from ..robots import robot_model  # numpy only
-        from ._robosuite import robot_frames
-
         self.margin = margin
         frames = robot_frames(env)
         entry = REACH_MODELS.get(frames["name"])
