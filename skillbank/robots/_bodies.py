@@ -69,8 +69,8 @@ class Gripper(NamedTuple):
     axis : tuple of 3 float
         The unit vector in the flange frame (perpendicular to its z) along which the simulator's
         jaws slide: ``finger_left`` opens towards ``+axis``, ``finger_right`` towards ``-axis``.
-        Default the flange's x, the simulator's jaws before grippers named their own (the
-        2F-85 keeps it, although its fingers close along the flange's y: docs/robots.md).
+        Default the flange's x; the 2F-85's fingers close along the flange's y (its left finger
+        towards -y), the Franka hand's along its y (left towards +y).
 
     Examples
     --------
@@ -114,6 +114,7 @@ ROBOTIQ_2F85 = Gripper(
     stroke=0.085,
     source="robosuite 1.5.2 robotiq_gripper_85.xml and meshes (MIT), fitted in tests/robots/test_bodies.py",
     fingers=("finger_left", "finger_right"),
+    axis=(0.0, -1.0, 0.0),  # robosuite's left finger opens towards the flange's -y, as its capsule lies
 )
 
 #: The Franka hand as robosuite 1.5.2 mounts it on the Panda (``grippers/panda_gripper.xml``): its

@@ -91,15 +91,18 @@ def test_bad_objects_are_refused(ur5e, obj, match):
         build_world(scene([obj]), ur5e)
 
 
-def test_the_ur5e_jaws_still_slide_along_the_flanges_x(ur5e):
-    """The 2F-85 keeps the jaws' axis of before (its Gripper.axis default): the flange's x."""
-    assert ur5e.gripper_.axis == (1.0, 0.0, 0.0)
+def test_the_ur5e_jaws_slide_where_the_2f85s_fingers_are(ur5e):
+    """The 2F-85's simulated jaws slide along the flange's y, each towards the side its finger's capsule
+    lies on (robosuite's left finger on -y): the simulation's fingers are where the clearance check's are."""
+    assert ur5e.gripper_.axis == (0.0, -1.0, 0.0)
+    caps = {c.name: c for c in ur5e.gripper_.capsules}
+    assert caps["finger_left"].a[1] < 0 < caps["finger_right"].a[1]
     M, d = _compiled(build_world(scene(), ur5e))
     d.qpos[:6] = ur5e.home
     mujoco.mj_kinematics(M, d)
-    x = ur5e.link_frames(np.asarray(ur5e.home))[0, -1, :3, 0]
-    np.testing.assert_allclose(d.xaxis[M.joint("finger_left_joint").id], x, atol=1e-9)
-    np.testing.assert_allclose(d.xaxis[M.joint("finger_right_joint").id], -x, atol=1e-9)
+    y = ur5e.link_frames(np.asarray(ur5e.home))[0, -1, :3, 1]
+    np.testing.assert_allclose(d.xaxis[M.joint("finger_left_joint").id], -y, atol=1e-9)
+    np.testing.assert_allclose(d.xaxis[M.joint("finger_right_joint").id], y, atol=1e-9)
 
 
 def test_the_panda_has_its_hand_and_two_jaws_that_slide_along_its_axis_and_close_on_command():
