@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skillbank.core import quaternion_to_matrix
+from skillbank.core import quaternion_to_matrix, slerp
 from skillbank.robots import robot_model
 from skillbank.robots._chain import rotation_error
 
@@ -52,22 +52,16 @@ KP_NULL = 10.0  # robosuite's nullspace_torques default gain
 SUBSTEPS = 10
 
 
-def _poses(P, Q):
-    T = np.tile(np.eye(4), (len(P), 1, 1))
-    T[:, :3, :3] = quaternion_to_matrix(Q)
-    T[:, :3, 3] = P
-    return T
-
-
-def _project(model, q_hat, T, W, start=None, iterations=30):
-    """The joints on pose T nearest q_hat in the metric W (Newton steps on the linearised pose from start)."""
+def _project(model, q_hat, p, quat, W, start=None, iterations=30):
+    """The joints at the tool pose ``p``, ``quat`` nearest q_hat in the metric W (Newton steps on the
+    linearised pose, from start)."""
     q = (q_hat if start is None else start).copy()
     W_inv = np.linalg.inv(W)
+    R = quaternion_to_matrix(quat)
     for _ in range(iterations):
-        F = model.base @ model._frames(q[None])
-        tool = F[0, -1] @ model.tool
-        J = model._jacobian(np.concatenate([F[:, :-1], tool[None, None]], axis=1))[0]
-        e = np.concatenate([T[:3, 3] - tool[:3, 3], rotation_error(T[:3, :3], tool[:3, :3])])
+        p_now, quat_now = model.fk(q)
+        J = model.jacobian(q)[0]
+        e = np.concatenate([p - p_now, rotation_error(R, quaternion_to_matrix(quat_now))])
         r = q - q_hat
         delta = -r + W_inv @ J.T @ np.linalg.solve(J @ W_inv @ J.T, e + J @ r)
         q = q + delta
@@ -76,29 +70,25 @@ def _project(model, q_hat, T, W, start=None, iterations=30):
     return q
 
 
-def _interpolated(T0, T1, s):
-    from scipy.spatial.transform import Rotation, Slerp
-
-    out = np.eye(4)
-    out[:3, :3] = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([T0[:3, :3], T1[:3, :3]])))(s).as_matrix()
-    out[:3, 3] = T0[:3, 3] + s * (T1[:3, 3] - T0[:3, 3])
-    return out
-
-
-def _rules(model, mass, q, T, dt):
+def _rules(model, mass, q, P, Q, dt):
     q0 = q[0]
     quasi = [q0]
-    for k in range(1, len(T)):
-        quasi.append(_project(model, q0, T[k], mass(quasi[-1]), start=quasi[-1]))
+    for k in range(1, len(P)):
+        quasi.append(_project(model, q0, P[k], Q[k], mass(quasi[-1]), start=quasi[-1]))
     kv = 2.0 * np.sqrt(KP_NULL)
     qk, vk, dynamic = q0.copy(), np.zeros_like(q0), [q0]
     h = dt / SUBSTEPS
-    for k in range(len(T) - 1):
-        for s in range(1, SUBSTEPS + 1):
-            q_hat = qk + h * vk + h * h * (KP_NULL * (q0 - qk) - kv * vk)
-            qn = _project(model, q_hat, _interpolated(T[k], T[k + 1], s / SUBSTEPS), mass(qk))
-            vk, qk = (qn - qk) / h, qn
-        dynamic.append(qk.copy())
+    # the recorded poses at every substep: positions along straight lines, orientations by SLERP
+    t = np.arange(len(P)) * dt
+    t_sub = np.arange(1, (len(P) - 1) * SUBSTEPS + 1) * h
+    P_sub = np.column_stack([np.interp(t_sub, t, P[:, i]) for i in range(3)])
+    Q_sub = slerp(t, Q, t_sub)
+    for j in range(len(t_sub)):
+        q_hat = qk + h * vk + h * h * (KP_NULL * (q0 - qk) - kv * vk)
+        qn = _project(model, q_hat, P_sub[j], Q_sub[j], mass(qk))
+        vk, qk = (qn - qk) / h, qn
+        if (j + 1) % SUBSTEPS == 0:
+            dynamic.append(qk.copy())
     return np.array(quasi), np.array(dynamic)
 
 
@@ -153,9 +143,9 @@ def main(argv=None) -> int:
                     for i in range(len(h5["data"])):
                         g = h5[f"data/demo_{i}"]
                         q = g["obs/robot0_joint_pos"][:]
-                        T = _poses(g["obs/robot0_eef_pos"][:], g["obs/robot0_eef_quat"][:])
-                        seeded = model.ik(T[:, :3, 3], g["obs/robot0_eef_quat"][:], q_seed=q[0])
-                        quasi, dynamic = _rules(model, mass, q, T, 1.0 / 20)
+                        P, Q = g["obs/robot0_eef_pos"][:], g["obs/robot0_eef_quat"][:]
+                        seeded = model.ik(P, Q, q_seed=q[0])
+                        quasi, dynamic = _rules(model, mass, q, P, Q, 1.0 / 20)
                         # replay with the torques logged: which control steps asked beyond the motors
                         env.sim.set_state_from_flattened(g["states"][0])
                         env.sim.forward()

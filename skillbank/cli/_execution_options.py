@@ -69,11 +69,14 @@ def robot_tool(text):
     [0.0, 0.0, 0.1]
     >>> robot_tool("tcp")
     'tcp'
+    >>> robot_tool("robotiq_2f85")
+    'robotiq_2f85'
     """
     if text is None:
         return None
-    if not any(c.isdigit() for c in text):
-        return text  # a name: the model checks it against its gripper and GRIPPERS
+    if "," not in text:
+        # a name (gripper names may hold digits): the model checks it against its gripper and GRIPPERS
+        return text
     import numpy as np  # core dependency, when an offset is given
 
     from ._options import _numbers  # the one parser of comma-separated numbers

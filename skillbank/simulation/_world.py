@@ -431,17 +431,16 @@ def _fingers(pad, flange, gripper, caps_by_frame, world, model, grip_force) -> l
     """Two jaws in the flange frame that slide along the gripper's ``axis``; their pads end at the TCP.
 
     ``finger_left`` opens towards ``+axis``, ``finger_right`` towards ``-axis``; each pad is thin along the
-    axis. The flange's x (the default) writes the same document as before grippers named their axis.
+    axis.
     """
     tcp = np.asarray(gripper.tcp, float)
     R = _jaw_axes(gripper)
-    along_x = np.array_equal(R, np.eye(3))
+    turn = f' quat="{_f(_quat(R))}"'
     out = []
     for side, sign in (("left", 1.0), ("right", -1.0)):
         T = flange.copy()
         centre = tcp + R @ [sign * _PAD[0], 0.0, -_PAD[2]]
-        slide = f"{sign!r} 0 0" if along_x else _f(sign * R[:, 0])
-        turn = "" if along_x else f' quat="{_f(_quat(R))}"'
+        slide = _f(sign * R[:, 0])
         out += [f'{pad}<body name="finger_{side}" {_pose(T)} gravcomp="1">',
                 f'{pad}  <joint name="finger_{side}_joint" type="slide" axis="{slide}" '
                 f'range="0 {gripper.stroke / 2!r}" damping="5"/>',
