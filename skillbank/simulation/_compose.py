@@ -49,6 +49,7 @@ from ._evaluate import (
     _cost,
     _Episode,
     _fingers,
+    _goal,
     _make,
     _reseed,
     _run_segments,
@@ -158,6 +159,17 @@ class _World:
         if not held:
             facts.add(("handempty", ()))
         return facts
+
+    def top(self, obj) -> float:
+        """The height (m) of the object's highest point as it lies now, from its collision geoms' boxes."""
+        sim = self.env.sim
+        tops = []
+        for name in self.models[obj].contact_geoms:
+            i = sim.model.geom_name2id(name)
+            turn = np.asarray(sim.data.geom_xmat[i], float).reshape(3, 3)
+            box = np.asarray(sim.model.geom_aabb[i], float)  # centre and half sizes, in the geom's frame
+            tops.append(float(sim.data.geom_xpos[i][2] + turn[2] @ box[:3] + np.abs(turn[2]) @ box[3:]))
+        return max(tops)
 
     def pose(self, obs, obj) -> dict:
         return {"position": [round(float(v), 4) for v in obs[f"{obj}_pos"]],
@@ -342,6 +354,51 @@ def _apply(state, effects):
     return state
 
 
+def _holds(state, action, args) -> bool:
+    """Whether the action's precondition, bound to ``args``, holds in ``state`` (a set of atoms)."""
+    value = dict(zip([p for p, _ in action.parameters], args, strict=True))
+    literals = atoms_of(action.precondition, f"action {action.name} precondition")
+    return all(((pred, tuple(value.get(a, a) for a in atom_args)) in state) != neg
+               for neg, pred, atom_args in literals)
+
+
+def _schedule(domain, state, first, rest, atoms):
+    """``first`` then ``rest``, each next the earliest step of ``rest`` whose precondition holds, if that
+    reaches the goal ``atoms`` from ``state``; else None."""
+    if not _holds(state, domain.actions[first[0]], first[1]):
+        return None
+    state, order, rest = _apply(state, _effects(domain.actions[first[0]], first[1])), [first], list(rest)
+    while rest:
+        k = next((k for k, (a, args) in enumerate(rest) if _holds(state, domain.actions[a], args)), None)
+        if k is None:
+            return None
+        act, args = rest.pop(k)
+        state = _apply(state, _effects(domain.actions[act], args))
+        order.append((act, args))
+    return order if all(a in state for a in atoms) else None
+
+
+def _highest_first(domain, state, queue, atoms, world):
+    """The plan ``queue`` with the step to take next first: of the steps like its first (the same action)
+    that could go first with the rest still reaching the goal, the one on the highest-standing object.
+
+    The planner leaves free the order of moves the goal does not order (which object of a bin comes out
+    first); the world does not. Fingers closing on an object brush what stands beside it, and a tall
+    object tips where a low one does not: taking the tallest first (bin picking's top-first rule) leaves
+    low neighbours for last, which the fingers clear. Ties keep the planner's order.
+    """
+    head = queue[0][0]
+    options = []
+    for k, (act, args) in enumerate(queue):
+        if act != head:
+            continue
+        order = _schedule(domain, state, queue[k], queue[:k] + queue[k + 1:], atoms) if k else queue
+        if order is not None:
+            height = max((world.top(a) for a in args if a in world.models), default=-np.inf)
+            options.append((-height, k, order))
+    return min(options, key=lambda o: o[:2])[2] if len(options) > 1 else queue
+
+
 def _lacking(expected, observed, predicates):
     """Facts of the observed predicates that the plan expects and the scene does not show."""
     return sorted(a for a in expected if a[0] in OBSERVED and a[0] in predicates and a not in observed)
@@ -510,6 +567,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
     expected, failure, starts = set(facts), None, []
     queue = list(plan)
     while queue and failure is None and not episode.success:
+        queue = _highest_first(domain, expected, queue, atoms, world)
         act, args = queue.pop(0)
         action = domain.actions[act]
         number = len(row["steps"]) + 1
@@ -578,7 +636,8 @@ def _run_step(episode, world, step, action, args, effects, binding, phases, meth
                                                         f"that can be bound to {list(args)}")
         return
     bound = [(ph, [replace(seg, names=names) for seg in ph.segments]) for ph, names in options]
-    phase, segments = min(bound, key=lambda b: _cost(b[1], episode.obs, episode.fingers))
+    phase, segments = min(bound, key=lambda b: (_beyond(episode, b[1]),
+                                                _cost(b[1], episode.obs, episode.fingers)))
     step["source"] = phase.source.id
     step["primitives"] = [seg.primitive.id for seg in segments]
     episode.horizon = episode.steps + horizon
@@ -626,6 +685,22 @@ def _run_step(episode, world, step, action, args, effects, binding, phases, meth
                      f"it{landed}")
         return
     step["ok"] = True
+
+
+def _beyond(episode, segments) -> int:
+    """How many of the segments' goals lie beyond the arm's reach margin from where it is now.
+
+    The demonstrations of a step let go of an object at spots a few centimetres apart (each a spot the
+    task accepts); at the edge of the workspace, one of them can need a straight elbow where another
+    does not. A step is carried out by the least adapted phase among those whose goals the arm reaches
+    with its elbow bent.
+    """
+    if episode.reach is None:
+        return 0
+    goals = [_goal(seg, episode.obs, episode.fingers) for seg in segments]
+    P = np.array([p for p, _ in goals])
+    Q = np.array([episode.obs["robot0_eef_quat"] if q is None else q for _, q in goals], float)
+    return int((~episode.reach.reaches(P, Q, episode.obs["robot0_joint_pos"])).sum())
 
 
 def _transit(episode, position, quat) -> float:

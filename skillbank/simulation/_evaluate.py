@@ -571,6 +571,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
     """Run ``segments`` (of one source, whose recorded ``actions`` replay uses); ``(index, reason, detail)``
     of the first failure, or None. With a list ``misses``, a tool that stops short of a segment's goal is
     noted there instead of being a failure."""
+    let_go = False  # whether the last segment opened the gripper: what follows only leaves
     for i, seg in enumerate(segments):
         if episode.over:
             break
@@ -594,7 +595,9 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
             if episode.reach is not None:
-                P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
+                P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"],
+                                       need=episode.reach.needed(G, let_go=let_go))
+            let_go = bool(G[-1] <= 0 < G.max())
             timings["adapt"] += time.perf_counter() - tic
             steps0 = episode.steps
             for p, q, g in zip(P, Q, G, strict=True):

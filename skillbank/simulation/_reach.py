@@ -92,6 +92,34 @@ class Reach:
             entry.name, base=np.array(frames["base"]) @ np.reshape(entry.turn, (4, 4)),
             tool=np.array(frames["tool"]))
 
+    @staticmethod
+    def needed(grip, *, let_go: bool = False) -> int:
+        """The index of the pose a path of gripper commands ``grip`` needs where it is: its last change of
+        command (the first pose with the new command), or its end when the command never changes; -1
+        (none) for a path that keeps the gripper open right after one that let go (``let_go``): it only
+        leaves what it let go of, and a retreat straight up from the edge of the workspace straightens
+        the elbow.
+
+        Examples
+        --------
+        >>> Reach.needed([-1, -1, 1, 1, 1]), Reach.needed([1, 1, 1]), Reach.needed([-1, -1], let_go=True)
+        (2, 2, -1)
+        """
+        grip = np.asarray(grip, float)
+        changes = np.flatnonzero(np.diff(np.sign(grip)) != 0)
+        if len(changes):
+            return int(changes[-1] + 1)
+        return -1 if let_go and (grip <= 0).all() else len(grip) - 1
+
+    def reaches(self, P, Q, joints) -> np.ndarray:
+        """Whether each pose of ``P (n, 3)``, ``Q (n, 4)`` is within the margin on ``joints``' branch (all
+        of them for an arm without a model)."""
+        P = np.atleast_2d(np.asarray(P, float))
+        if self.model_ is None:
+            return np.ones(len(P), bool)
+        branch = int(self.model_.branch_of(np.asarray(joints, float))[0])
+        return self._measure(P, np.atleast_2d(np.asarray(Q, float)), branch) >= self.margin
+
     def _measure(self, P, Q, branch) -> np.ndarray:
         """The reach measure of each pose on ``branch`` (0 where the branch does not reach it)."""
         joints = self.model_.ik_all(P, Q)[:, branch]
@@ -101,8 +129,13 @@ class Reach:
             m[ok] = self.model_.singularity(joints[ok])[self.kind_]
         return m
 
-    def keep(self, P, Q, joints) -> np.ndarray:
+    def keep(self, P, Q, joints, *, need=None) -> np.ndarray:
         """The path ``P (n, 3)`` (orientations ``Q (n, 4)``) pulled within the margin from ``joints``' branch.
+
+        ``need``: the index of the pose the task needs where it is (where the gripper closes on an
+        object or lets it go; default the last), which the pull eases out to and in from: a tool that
+        moves on after letting go at the edge of the workspace is pulled in, not left with a straight
+        elbow for the next step to start from.
 
         Examples
         --------
@@ -139,8 +172,10 @@ class Reach:
         kernel = np.hanning(2 * _SPREAD + 3)[1:-1]
         eased = np.convolve(np.pad(window, _SPREAD, mode="edge"), kernel / kernel.sum(), mode="valid")
         pull = np.maximum(eased, pull)
-        # the path's end is where the task needs the tool (a nut over its peg): the pull eases out before it
-        pull *= np.clip((len(P) - 1 - np.arange(len(P))) / _SPREAD, 0.0, 1.0)
+        # where the task needs the tool (a nut over its peg, a can let go over its place) the pose is kept:
+        # the pull eases out before it and back in after it
+        need = len(P) - 1 if need is None else int(need)
+        pull *= np.clip(np.abs(np.arange(len(P)) - need) / _SPREAD, 0.0, 1.0)
         out = P.copy()
         moved = pull > 0.0  # the others exactly as they were
         out[moved, :2] = axis + (1.0 - pull[moved])[:, None] * (P[moved, :2] - axis)

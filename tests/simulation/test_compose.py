@@ -15,11 +15,12 @@ import pytest
 from skillbank.cli import main
 from skillbank.experiments._composition import PICK, PLACE, _label_one_each
 from skillbank.pipeline import Library
+from skillbank.planning import parse_domain
 
 pytest.importorskip("robosuite", reason="needs the sim extra (pip install 'skillbank[sim]')")
 
 from skillbank.simulation import COMPOSED, STEP_REASONS, execute_plan, record  # noqa: E402
-from skillbank.simulation._compose import _phases  # noqa: E402
+from skillbank.simulation._compose import _highest_first, _phases  # noqa: E402
 from skillbank.simulation._evaluate import _sources  # noqa: E402
 
 AWAY = [-0.15, -0.15, 0.83]  # m: on the table, outside where robosuite's sampler puts the cubes
@@ -147,3 +148,57 @@ def test_a_library_without_descriptions_or_labelled_phases_is_refused(library, t
 def test_the_tasks_and_reasons_are_documented():
     assert set(COMPOSED) == {"PickPlace", "Stack3"}
     assert {"world changed", "not held", "misplaced", "no plan"} <= set(STEP_REASONS)
+
+
+DOMAIN = parse_domain("""(define (domain skillbank) (:requirements :strips :typing)
+  (:predicates (clear ?x0 - object) (handempty) (holding ?x0 - object) (loose ?x0 - object)
+               (on ?x0 - object ?x1 - object))
+  (:action pick :parameters (?o - object) :precondition (and (handempty) (clear ?o) (loose ?o))
+    :effect (and (holding ?o) (not (handempty)) (not (loose ?o))))
+  (:action place :parameters (?o - object ?t - object) :precondition (and (holding ?o) (clear ?t))
+    :effect (and (on ?o ?t) (handempty) (not (holding ?o)) (not (clear ?t)))))""")
+
+
+class _Tops:
+    """A scene's objects standing this high (m): what ``_highest_first`` reads of the world."""
+
+    def __init__(self, tops):
+        self.models, self.tops = dict.fromkeys(tops), tops
+
+    def top(self, obj):
+        return self.tops[obj]
+
+
+def _loose(objects, places=()):
+    return {("handempty", ())} | {("loose", (o,)) for o in objects} | \
+        {("clear", (x,)) for x in [*objects, *places]}
+
+
+def test_of_the_moves_the_goal_leaves_unordered_the_tallest_object_goes_first():
+    """A bin of three: the planner's order is alphabetical, the world's the tallest first; each pick is
+    followed by its own place, the rest in the planner's order, and the goal is still reached."""
+    objects = ["Bread", "Cereal", "Milk"]
+    world = _Tops({"Bread": 0.87, "Cereal": 0.975, "Milk": 0.968})
+    goal = [("on", (o, f"{o}_place")) for o in objects]
+    plan = [s for o in objects for s in [("pick", (o,)), ("place", (o, f"{o}_place"))]]
+    state = _loose(objects, [f"{o}_place" for o in objects])
+    first = _highest_first(DOMAIN, state, plan, goal, world)
+    assert first == [("pick", ("Cereal",)), ("place", ("Cereal", "Cereal_place")),
+                     ("pick", ("Bread",)), ("place", ("Bread", "Bread_place")),
+                     ("pick", ("Milk",)), ("place", ("Milk", "Milk_place"))]
+    # holding the cereal, only its place can come next
+    held = (state - {("handempty", ()), ("loose", ("Cereal",))}) | {("holding", ("Cereal",))}
+    assert _highest_first(DOMAIN, held, first[1:], goal, world) == first[1:]
+    # equal heights keep the planner's order
+    assert _highest_first(DOMAIN, state, plan, goal, _Tops(dict.fromkeys(objects, 0.9))) == plan
+
+
+def test_a_tower_keeps_the_order_its_goal_forces_however_tall_the_top_cube():
+    """A on B on C: A cannot go first (B must be on C before A is put on B, and nothing picks a cube that
+    something stands on), so the planner's order stands even with A the tallest."""
+    cubes = ["cubeA", "cubeB", "cubeC"]
+    plan = [("pick", ("cubeB",)), ("place", ("cubeB", "cubeC")), ("pick", ("cubeA",)),
+            ("place", ("cubeA", "cubeB"))]
+    goal = [("on", ("cubeA", "cubeB")), ("on", ("cubeB", "cubeC"))]
+    world = _Tops({"cubeA": 0.95, "cubeB": 0.85, "cubeC": 0.84})
+    assert _highest_first(DOMAIN, _loose(cubes), plan, goal, world) == plan

@@ -84,3 +84,31 @@ def test_an_arm_without_a_registered_model_is_left_as_it_is():
                                                  obs["robot0_joint_pos"]), P)
     finally:
         env.close()
+
+
+def test_a_retreat_after_letting_go_keeps_no_pose_and_is_pulled_in_from_where_it_starts(pickplace):
+    """The same rise, as the segment that leaves a can let go over its place: nothing needs the tool at
+    its end, so every pose keeps the margin but the first, where the tool is, which the pull eases in
+    from; a pose the task needs in the middle (where the gripper acts) is kept where it is."""
+    env, obs, reach = pickplace
+    joints = np.asarray(obs["robot0_joint_pos"], float)
+    place = np.asarray(env.target_bin_placements[env.object_to_id["can"]], float) + [0.0, 0.0, 0.18]
+    Q = np.tile(obs["robot0_eef_quat"], (40, 1))
+    P = place + np.clip(np.linspace(0.0, 1.5, 40), 0, 1)[:, None] * [0.0, 0.0, 0.12]
+    leaving = reach.keep(P, Q, joints, need=Reach.needed(-np.ones(40), let_go=True))
+    np.testing.assert_allclose(leaving[0], P[0], atol=0.01)  # eased in from where the tool is
+    assert _elbow(reach, leaving[_SPREAD:], Q[_SPREAD:], joints).min() >= REACH_MARGIN - 1e-9
+    middle = reach.keep(P, Q, joints, need=20)
+    np.testing.assert_array_equal(middle[20], P[20])
+    assert _elbow(reach, middle[20 + _SPREAD:], Q[20 + _SPREAD:], joints).min() >= REACH_MARGIN - 1e-9
+
+
+@pytest.mark.parametrize(("grip", "let_go", "need"), [
+    ([-1, -1, 1, 1], False, 2),  # closes: the pose where it closes
+    ([1, 1, -1], True, 2),  # lets go: where it opens
+    ([1, 1, 1], False, 2),  # carries: where the carry ends
+    ([-1, -1, -1], False, 2),  # reaches: where the reach ends
+    ([-1, -1, -1], True, -1),  # leaves what it let go of: none
+])
+def test_the_pose_a_path_needs_is_where_its_gripper_acts(grip, let_go, need):
+    assert Reach.needed(grip, let_go=let_go) == need
