@@ -9,7 +9,9 @@ nobody demonstrated, and carried out in physics. Here
    that hold (:func:`observe`: which object the gripper holds, which stands on
    which or in which place, which are clear);
 2. the planner (:func:`skillbank.planning.solve`) finds the actions that make
-   the goal true, over the library's described skills;
+   the goal true, over the library's described skills; the order of the
+   moves the goal leaves free is the world's, chosen before each step: the
+   object that stands highest first (:func:`_highest_first`);
 3. each action is carried out by a *phase* of a demonstration: the primitives
    that reach for an object, or that carry it and let it go (cut where the
    tool starts and stops carrying, from :func:`~skillbank.selection.acted_on`)
@@ -286,6 +288,30 @@ def _agreeing(phases) -> list:
     return [ph for ph in phases if ph.label is not None and ph.kind == major[ph.label]]
 
 
+def _described(every, labelled, domain) -> list:
+    """The phases no label names, each named by the one described skill it does, if exactly one.
+
+    Clustering can put one skill's primitives in two clusters (the reaches down to a low bread and a
+    can apart from those to a tall milk and cereal box); a label given to one names that cluster only.
+    The skills' descriptions still tell the rest: a phase of the kind (reach, or carry) the skill's
+    labelled phases are, acting on an object, whose recorded gripper does what the skill's holding
+    facts say (:func:`_gripper_fits`: open at the start and closed at the end of a pick), does that
+    skill. A phase two skills fit is left unnamed: an ambiguity is not a guess.
+    """
+    kinds = {}
+    for ph in labelled:
+        kinds.setdefault(ph.label.lower(), set()).add(ph.kind)
+    out = []
+    for ph in every:
+        if ph.label is not None or ph.object is None:
+            continue
+        fits = [a for a, action in domain.actions.items()
+                if ph.kind in kinds.get(a, ()) and _gripper_fits(ph, action)]
+        if len(fits) == 1:
+            out.append(replace(ph, label=fits[0]))
+    return out
+
+
 def _bound(phase, action, args, binding):
     """``{source object: scene object}`` binding the phase to the step's arguments, or None if it cannot."""
     params = [p for p, _ in action.parameters]
@@ -492,7 +518,9 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
             store.close()
     bindings = {a: check_binding(bindings.get(a), domain.actions[a].parameters, name=f"binding of {a!r}")
                 for a in domain.actions}
-    phases = _agreeing([ph for src in sources for ph in _phases(src)])
+    every = [ph for src in sources for ph in _phases(src)]
+    phases = _agreeing(every)
+    phases += _described(every, phases, domain)
     named = sorted({ph.label for ph in phases if ph.label})
     missing = [a for a in domain.actions if not any(ph.label and ph.label.lower() == a for ph in phases)]
     if missing:

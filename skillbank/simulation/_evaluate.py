@@ -559,6 +559,10 @@ def _check(seg, before, episode):
         travel = np.linalg.norm(obs[f"{obj}_pos"] - before[f"{obj}_pos"])
         if abs(gap1 - gap0) > CARRIED + ARRIVED:
             if travel < 0.01:
+                if seg.primitive.demo["actions"][0, 6] <= 0:
+                    # an open gripper leaves what it let go of: a retreat whose demonstration dragged the
+                    # object up a little while the fingers opened is not a grasp to miss
+                    return None
                 return "missed grasp", f"{obj} stayed where it was ({gap1:.3f} m from the tool)"
             # a segment that ends with the gripper open lets the object go: where it went is for the
             # task's check (or a plan step's effect) to judge, not a drop

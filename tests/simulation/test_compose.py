@@ -20,7 +20,7 @@ from skillbank.planning import parse_domain
 pytest.importorskip("robosuite", reason="needs the sim extra (pip install 'skillbank[sim]')")
 
 from skillbank.simulation import COMPOSED, STEP_REASONS, execute_plan, record  # noqa: E402
-from skillbank.simulation._compose import _highest_first, _phases  # noqa: E402
+from skillbank.simulation._compose import _described, _highest_first, _Phase, _phases  # noqa: E402
 from skillbank.simulation._evaluate import _sources  # noqa: E402
 
 AWAY = [-0.15, -0.15, 0.83]  # m: on the table, outside where robosuite's sampler puts the cubes
@@ -202,3 +202,32 @@ def test_a_tower_keeps_the_order_its_goal_forces_however_tall_the_top_cube():
     goal = [("on", ("cubeA", "cubeB")), ("on", ("cubeB", "cubeC"))]
     world = _Tops({"cubeA": 0.95, "cubeB": 0.85, "cubeC": 0.84})
     assert _highest_first(DOMAIN, _loose(cubes), plan, goal, world) == plan
+
+
+def _phase(kind, obj, label, grip):
+    """A phase of one segment whose recorded gripper command goes ``grip`` = (first, last)."""
+    from types import SimpleNamespace
+
+    actions = np.zeros((2, 7))
+    actions[:, 6] = grip
+    source = SimpleNamespace(actions=actions)
+    segment = SimpleNamespace(primitive=SimpleNamespace(start=0, stop=2))
+    return _Phase(source, [segment], kind, obj, None, label)
+
+
+def test_a_phase_no_label_names_is_named_by_the_one_described_skill_it_does():
+    """The milk's reach is labelled pick and its carry place; the bread's reach fell in another cluster.
+    It reaches and closes on the bread, which only pick describes: it is a pick. A reach that never
+    closes, a phase on no object, and one two skills fit stay unnamed."""
+    labelled = [_phase("reach", "Milk", "pick", (-1, 1)), _phase("carry", "Milk", "place", (1, -1))]
+    bread = _phase("reach", "Bread", None, (-1, 1))
+    open_hand = _phase("reach", "Bread", None, (-1, -1))
+    nothing = _phase("reach", None, None, (-1, 1))
+    named = _described([*labelled, bread, open_hand, nothing], labelled, DOMAIN)
+    assert [(ph.object, ph.label) for ph in named] == [("Bread", "pick")]
+    assert bread.label is None  # the library's phase is not changed: a copy is named
+    twins = parse_domain(DOMAIN.text.replace("(:action pick", "(:action take :parameters (?o - object) "
+                                             ":precondition (and (handempty)) :effect (and (holding ?o)))"
+                                             "(:action pick"))
+    both = [_phase("reach", "Milk", "pick", (-1, 1)), _phase("reach", "Can", "take", (-1, 1))]
+    assert _described([*both, bread], both, twins) == []

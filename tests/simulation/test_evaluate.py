@@ -173,3 +173,26 @@ def test_what_each_primitive_acts_on_is_listed_and_travels_with_the_library(lift
     capsys.readouterr()
     assert main(["library", "list", str(tmp_path / "copy.db"), "--json"]) == 0
     assert [p["acts_on"] for p in json.loads(capsys.readouterr().out)["primitives"]] == acts
+
+
+def _segment(grip_at_start):
+    from types import SimpleNamespace
+
+    demo = {"actions": np.array([[0.0] * 6 + [grip_at_start], [0.0] * 6 + [-1.0]])}
+    relation = SimpleNamespace(object="milk", moves_with=True)
+    return SimpleNamespace(primitive=SimpleNamespace(demo=demo), relation=relation, scene=lambda name: "Milk")
+
+
+@pytest.mark.parametrize(("grip", "reason"), [(1.0, "missed grasp"), (-1.0, None)])
+def test_an_object_left_behind_is_a_missed_grasp_only_when_the_gripper_held_it(grip, reason):
+    """A segment whose demonstration carried the milk (it moved with the tool) and whose tool rose 0.1 m
+    without it: a missed grasp when the segment began with the gripper closed; nothing when it began
+    open, a retreat whose demonstration dragged the milk up while the fingers opened."""
+    from types import SimpleNamespace
+
+    from skillbank.simulation._evaluate import _check
+
+    before = {"Milk_pos": np.array([0.0, 0.15, 0.885]), "robot0_eef_pos": np.array([0.0, 0.15, 0.915])}
+    after = {"Milk_pos": before["Milk_pos"], "robot0_eef_pos": before["robot0_eef_pos"] + [0.0, 0.0, 0.1]}
+    found = _check(_segment(grip), before, SimpleNamespace(obs=after))
+    assert (found if found is None else found[0]) == reason
