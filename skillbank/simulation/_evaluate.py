@@ -47,7 +47,8 @@ __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
 
 #: Why an episode failed, judged at the end of the segment that failed.
 REASONS = {
-    "missed grasp": "a segment that carries an object ended without it: it never left its place",
+    "missed grasp": "a segment that carries an object from a closed gripper ended without it: it never "
+                    "left its place",
     "dropped": "a segment that carries an object lost it on the way",
     "collision": "an arm link (not the gripper) touched the table, a fixture or an object in or before the "
                  "segment that failed (a touch in an episode that succeeds is reported as arm_contact)",
@@ -416,8 +417,9 @@ def _source_frame(demo, relation, frame):
 
 
 def _goal_orientations(seg, obs):
-    """The tool's goal orientations: the source's end orientation kept relative to the segment's turn frame,
-    and its symmetric turns, nearest to the tool's orientation now first."""
+    """The tool's goal orientations ``[(q, angle)]``: the source's end orientation kept relative to the
+    segment's turn frame, and its symmetric turns (by ``angle`` about the vertical), nearest to the tool's
+    orientation now first."""
     demo, relation = seg.primitive.demo, seg.relation
     here = np.asarray(obs["robot0_eef_quat"], float)
     q = np.asarray(demo["orientation"][-1], float)
@@ -425,12 +427,14 @@ def _goal_orientations(seg, obs):
     if ref is not None:
         now = here if seg.turn == "held" else _frame_pose(obs, seg, seg.turn)[1]
         q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
-    options = [_turn(q, 2 * math.pi * m / seg.symmetry) for m in range(seg.symmetry)]
-    return sorted(options, key=lambda o: float(quaternion_angle(o, here)))
+    options = [(_turn(q, 2 * math.pi * m / seg.symmetry), 2 * math.pi * m / seg.symmetry)
+               for m in range(seg.symmetry)]
+    return sorted(options, key=lambda o: float(quaternion_angle(o[0], here)))
 
 
-def _goal_position(seg, obs, q):
-    """The tool's goal position in the scene ``obs`` shows, with the tool at orientation ``q``."""
+def _goal_position(seg, obs, q, angle=0.0):
+    """The tool's goal position in the scene ``obs`` shows, with the tool at orientation ``q``, the
+    source's end orientation turned by ``angle`` about the vertical (a symmetric turn)."""
     demo, relation = seg.primitive.demo, seg.relation
     if relation is not None and relation.moves_with:
         # the carried object goes where it went in the source, relative to the frame; the tool holds it
@@ -448,7 +452,14 @@ def _goal_position(seg, obs, q):
     if seg.frame == ("world",):
         return np.asarray(demo["position"][-1], float)
     p_obj, q_obj = _frame_pose(obs, seg, seg.frame)
-    return compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
+    p = compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
+    if angle and seg.turn == seg.frame:
+        # the tool turned with the object's symmetry grasps the object from the other side: where it is
+        # relative to the object turns with it (else a grasp a centimetre off the centre on one side
+        # is two centimetres off on the other, the clearance a finger has beside a thin box)
+        c, s = math.cos(angle), math.sin(angle)
+        p = p_obj + np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ (p - p_obj)
+    return p
 
 
 def _goal(seg, obs, fingers=None):
@@ -458,7 +469,7 @@ def _goal(seg, obs, fingers=None):
     tool's frame and half the opening, m) stay :data:`NEIGHBOUR` metres from every object the segment
     does not act on; else the one that keeps them farthest.
     """
-    options = [(q, _goal_position(seg, obs, q)) for q in _goal_orientations(seg, obs)]
+    options = [(q, _goal_position(seg, obs, q, angle)) for q, angle in _goal_orientations(seg, obs)]
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
     mine = set() if seg.relation is None else {seg.scene(seg.relation.object),
@@ -513,6 +524,11 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
         off = quaternion_to_matrix(quaternion_multiply(here_q, quaternion_conjugate(demo["orientation"][0])))
         at = [np.array([np.interp(u, u_src, P_src[:, j]) for j in range(3)]) for u in LEAVE]
         via = [ViaPoint(here_p + off @ (a - P_src[0]), phase=u) for a, u in zip(at, LEAVE, strict=True)] + via
+    # a primitive of a few samples puts two phases on one sample (or on its start or end): one pin each
+    pins = {}
+    for v in via:
+        pins.setdefault(v.sample(len(demo.t)), v)
+    via = [v for k, v in pins.items() if 0 < k < len(demo.t) - 1]
     constraints = Constraints(start=np.asarray(obs["robot0_eef_pos"], float), goal=goal_p, via=via,
                               start_orientation=np.asarray(obs["robot0_eef_quat"], float),
                               goal_orientation=goal_q)

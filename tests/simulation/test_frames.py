@@ -86,3 +86,42 @@ def test_the_parts_of_a_task_run_in_the_order_named():
         _order(groups, ["Milk", "Can"])
     with pytest.raises(ValueError, match=r"order: expected a list of object names"):
         _order(groups, "Milk")
+
+
+@pytest.mark.parametrize(("heading", "side"), [(0.0, 1.0), (math.pi, -1.0)])
+def test_a_grasp_turned_by_the_objects_symmetry_is_made_from_the_other_side(heading, side):
+    """A thin box grasped 1 cm off its centre along its y, the wrist at the box's heading; its grasps
+    agree up to a half turn. A tool that is turned half round now takes the half-turned grasp, and its
+    goal is 1 cm off the centre on the other side, as the demonstration's grasp is on the turned box
+    (kept on the same side, it would be 2 cm from where the demonstration put the finger)."""
+    from skillbank.simulation._evaluate import _goal
+
+    box = np.array([0.1, -0.3, 0.9])
+    n = 20
+    tool = box + [0.0, 0.01, 0.02] + np.linspace(0.1, 0.0, n)[:, None] * [0.0, 0.0, 1.0]
+    prim = _primitive(tool, np.tile(box, (n, 1)), 0.0, 0.0, 0)
+    seg = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 2)
+    here = _yawed(DOWN, heading + 0.1)
+    obs = {"robot0_eef_quat": here, "robot0_eef_pos": box + [0, 0, 0.2], "cube_pos": box,
+           "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
+    p, q = _goal(seg, obs)
+    np.testing.assert_allclose(p, box + [0.0, 0.01 * side, 0.02], atol=1e-9)
+    assert abs(abs(float(np.dot(q, _yawed(DOWN, heading)))) - 1.0) < 1e-9
+
+
+def test_a_primitive_of_a_few_samples_is_adapted_with_one_pin_per_sample():
+    """Six samples: the leaving and closing-in phases (0.125 ... 0.875) fall two to a sample and on the
+    start; the path is still adapted, from where the tool is to the goal."""
+    from skillbank.simulation._evaluate import _path_adapted
+
+    box = np.array([0.1, -0.3, 0.9])
+    n = 6
+    tool = box + [0.0, 0.0, 0.02] + np.linspace(0.1, 0.0, n)[:, None] * [0.0, 0.0, 1.0]
+    prim = _primitive(tool, np.tile(box, (n, 1)), 0.0, 0.0, 0)
+    seg = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 1)
+    here = box + [0.05, 0.0, 0.15]
+    obs = {"robot0_eef_quat": DOWN, "robot0_eef_pos": here, "cube_pos": box + [0.02, 0.0, 0.0],
+           "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
+    P, Q, G = _path_adapted(seg, obs, "lte", 0, leave=True)
+    np.testing.assert_allclose(P[0], here, atol=1e-6)
+    np.testing.assert_allclose(P[-1], box + [0.02, 0.0, 0.02], atol=1e-6)
