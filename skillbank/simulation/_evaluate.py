@@ -96,6 +96,9 @@ class _Segment:
     frame: tuple  # where the goal position is kept: ("world",) or (object, "start" | "end" | "target")
     turn: object = "held"  # where the goal orientation is kept: "held" (the tool's at the start) or a frame
     symmetry: int = 1  # quarter turns (4), half turns (2) or only whole turns (1) give the same goal
+    #: whether a symmetric turn of the goal orientation turns the tool's place on the object too (the
+    #: object's symmetry: its grasps turn with it) or not (the gripper's: the same handle either way)
+    turns_with: bool = False
     #: the scene's object for each of the source's (a skill bound to other objects); absent: the same name
     names: dict = field(default_factory=dict)
 
@@ -216,8 +219,36 @@ def _choose_frames(sources):
                     concentration = round(float(abs(np.exp(1j * k * theta).mean())), 2)
                     if concentration > score:
                         choice, score = (turn, k), concentration
+        turns_with = choice[1] > 1 and choice[0] == best and _turns_with(members, best, choice[1])
         for m in members:
-            m.frame, (m.turn, m.symmetry) = best, choice
+            m.frame, (m.turn, m.symmetry), m.turns_with = best, choice, turns_with
+
+
+def _turns_with(members, frame, k) -> bool:
+    """Whether the members' ends in ``frame`` agree better turned back by their own symmetric turn.
+
+    A heading that repeats every ``2 pi / k`` is the object's symmetry when the tool's place on the
+    object turns with it (a box taken from either side: its ends, turned back, agree), the gripper's
+    when it does not (a nut's handle taken with the fingers either way round: its ends agree as they
+    are).
+    """
+    raw, back = [], []
+    for m in members:
+        end = _in_frame(m.primitive.demo, m.relation, frame)
+        if end is None:
+            continue
+        angle = 2 * math.pi / k * round(k * _end_heading(m.primitive.demo, m.relation, frame) / (2 * math.pi))
+        c, s = math.cos(-angle), math.sin(-angle)
+        raw.append(end)
+        back.append([c * end[0] - s * end[1], s * end[0] + c * end[1], end[2]])
+    if len(raw) < 2:
+        return False
+
+    def spread(ends):
+        ends = np.asarray(ends, float)
+        return float(np.sqrt(((ends - ends.mean(0)) ** 2).sum(1).mean()))
+
+    return spread(back) < spread(raw)
 
 
 def _sources(store):
@@ -453,7 +484,7 @@ def _goal_position(seg, obs, q, angle=0.0):
         return np.asarray(demo["position"][-1], float)
     p_obj, q_obj = _frame_pose(obs, seg, seg.frame)
     p = compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
-    if angle and seg.turn == seg.frame:
+    if angle and seg.turns_with:
         # the tool turned with the object's symmetry grasps the object from the other side: where it is
         # relative to the object turns with it (else a grasp a centimetre off the centre on one side
         # is two centimetres off on the other, the clearance a finger has beside a thin box)

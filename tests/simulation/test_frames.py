@@ -88,19 +88,21 @@ def test_the_parts_of_a_task_run_in_the_order_named():
         _order(groups, "Milk")
 
 
-@pytest.mark.parametrize(("heading", "side"), [(0.0, 1.0), (math.pi, -1.0)])
-def test_a_grasp_turned_by_the_objects_symmetry_is_made_from_the_other_side(heading, side):
+@pytest.mark.parametrize(("heading", "turns_with", "side"), [(0.0, True, 1.0), (math.pi, True, -1.0),
+                                                            (math.pi, False, 1.0)])
+def test_a_grasp_turned_by_the_objects_symmetry_is_made_from_the_other_side(heading, turns_with, side):
     """A thin box grasped 1 cm off its centre along its y, the wrist at the box's heading; its grasps
-    agree up to a half turn. A tool that is turned half round now takes the half-turned grasp, and its
-    goal is 1 cm off the centre on the other side, as the demonstration's grasp is on the turned box
-    (kept on the same side, it would be 2 cm from where the demonstration put the finger)."""
+    agree up to a half turn. A tool that is turned half round now takes the half-turned grasp: when the
+    symmetry is the object's, its goal is 1 cm off the centre on the other side, as the demonstration's
+    grasp is on the turned box; when it is the gripper's (a handle taken either way round), the same
+    place."""
     from skillbank.simulation._evaluate import _goal
 
     box = np.array([0.1, -0.3, 0.9])
     n = 20
     tool = box + [0.0, 0.01, 0.02] + np.linspace(0.1, 0.0, n)[:, None] * [0.0, 0.0, 1.0]
     prim = _primitive(tool, np.tile(box, (n, 1)), 0.0, 0.0, 0)
-    seg = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 2)
+    seg = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 2, turns_with)
     here = _yawed(DOWN, heading + 0.1)
     obs = {"robot0_eef_quat": here, "robot0_eef_pos": box + [0, 0, 0.2], "cube_pos": box,
            "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
@@ -125,3 +127,33 @@ def test_a_primitive_of_a_few_samples_is_adapted_with_one_pin_per_sample():
     P, Q, G = _path_adapted(seg, obs, "lte", 0, leave=True)
     np.testing.assert_allclose(P[0], here, atol=1e-6)
     np.testing.assert_allclose(P[-1], box + [0.02, 0.0, 0.02], atol=1e-6)
+
+
+@pytest.mark.parametrize(("offset_turns", "expected"), [(True, True), (False, False)])
+def test_whether_a_symmetric_grasp_turns_with_the_object_is_read_from_the_demonstrations(offset_turns,
+                                                                                         expected):
+    """Eight grasps, each from one of two sides (a half turn) of an object placed at its own heading:
+    where the tool's place on the object turns with the side (a box), the symmetry is the object's; where
+    it stays (a nut's handle, taken with the fingers either way round), the gripper's."""
+    rng = np.random.default_rng(3)
+    sources = []
+    for k in range(8):
+        cube = np.r_[rng.uniform(-0.1, 0.1, 2), 0.82]
+        cube_yaw = rng.uniform(-math.pi, math.pi)
+        side = int(rng.integers(0, 2)) if k > 1 else k  # both sides among them
+        local = np.array([0.06, 0.0, 0.02])
+        if offset_turns and side:
+            local = local * [-1, -1, 1]
+        c, s = math.cos(cube_yaw), math.sin(cube_yaw)
+        end = cube + np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]]) @ local
+        n = 20
+        tool = end + np.linspace(0.1, 0.0, n)[:, None] * [0.0, 0.0, 1.0]
+        prim = _primitive(tool, np.tile(cube, (n, 1)), cube_yaw + side * math.pi + rng.normal(0, 0.01),
+                          cube_yaw, 0, from_yaw=0.0)
+        src = _Source(k, {"cube": cube}, None)
+        src.segments.append(_Segment(prim, acted_on(prim.demo), ("world",)))
+        sources.append(src)
+    _choose_frames(sources)
+    seg = sources[0].segments[0]
+    assert (seg.frame, seg.turn, seg.symmetry) == (("cube", "end"), ("cube", "end"), 2)
+    assert all(src.segments[0].turns_with is expected for src in sources)
