@@ -67,7 +67,7 @@ LEVER = 0.1  # m per radian: how far a turn of the wrist moves its fingertips (a
 #: demonstration did (an approach from above stays one), the first is adapted from where the robot is.
 CLOSE_IN = (0.5, 0.625, 0.75, 0.875)
 LEAVE = (0.125, 0.25)  # and, where asked, the first quarter leaves as the demonstration did
-TURNS_WITH = 0.5  # a symmetric grasp's place turns with the object when its ends agree twice as well turned
+TURNS_WITH = 0.5  # a symmetric grasp's place stays when its ends agree twice as well as they are as turned
 SYMMETRIES = (1, 2, 4)  # whole, half and quarter turns about the vertical: a goal's heading may repeat
 NEIGHBOUR = 0.06  # m: a fingertip nearer another object's centre than this may touch it (a 4-10 cm object)
 HELD = 0.01  # m: how far a held object may shift in the tool's frame and still be where the tool holds it
@@ -226,14 +226,16 @@ def _choose_frames(sources):
 
 
 def _turns_with(members, frame, k) -> bool:
-    """Whether the members' ends in ``frame`` agree clearly better turned back by their own symmetric turn.
+    """Whether a symmetric turn of the members' grasp turns the tool's place on the object with it.
 
-    A heading that repeats every ``2 pi / k`` is the object's symmetry when the tool's place on the
-    object turns with it (a box taken from either side: its ends, turned back, agree), the gripper's
-    when it does not (a nut's handle taken with the fingers either way round: its ends agree as they
-    are, 5 mm against 6 cm turned back). Where the two spreads are alike (grasps at the object's centre,
-    whose offsets are the demonstrator's noise, a few millimetres) the demonstrations do not say, and
-    the tool's place is kept as the source had it: the spread turned back must be under half of it.
+    A heading that repeats every ``2 pi / k`` is the gripper's symmetry when the members' ends in
+    ``frame`` agree clearly better as they are than turned back by each one's own turn (a square nut's
+    handle taken with the fingers either way round: 5 mm as they are, 6 cm turned back): the place
+    stays. Otherwise it is the object's (a box taken from either side), and a turned grasp is the
+    demonstration's grasp of the turned object, its approach included: the approach is turned with the
+    tool, so the place turns with it. Where the ends are at the demonstrator's noise (grasps at the
+    centre, a few millimetres apart) they cannot tell the two apart, and the place turns with the
+    approach (measured: 14/20 kept, 17/20 turned, on each of two unloading libraries).
     """
     raw, back = [], []
     for m in members:
@@ -251,7 +253,7 @@ def _turns_with(members, frame, k) -> bool:
         ends = np.asarray(ends, float)
         return float(np.sqrt(((ends - ends.mean(0)) ** 2).sum(1).mean()))
 
-    return spread(back) < TURNS_WITH * spread(raw)
+    return not spread(raw) < TURNS_WITH * spread(back)
 
 
 def _sources(store):
