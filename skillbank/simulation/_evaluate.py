@@ -235,7 +235,7 @@ def _turns_with(members, frame, k) -> bool:
     demonstration's grasp of the turned object, its approach included: the approach is turned with the
     tool, so the place turns with it. Where the ends are at the demonstrator's noise (grasps at the
     centre, a few millimetres apart) they cannot tell the two apart, and the place turns with the
-    approach (measured: 14/20 kept, 17/20 turned, on each of two unloading libraries).
+    approach (measured: kept, 14/20 on each of two unloading libraries; turned, 17/20 and 18/20).
     """
     raw, back = [], []
     for m in members:
