@@ -362,11 +362,17 @@ def _candidates(phases, action, args, binding):
     return same or options
 
 
-def _effects(action, args):
-    """The action's effect bound to ``args``: ``[(negated, (predicate, args))]``."""
+def _grounded(action, part, args):
+    """The action's ``part`` (``"precondition"`` or ``"effect"``) bound to ``args``:
+    ``[(negated, (predicate, args))]``."""
     value = dict(zip([p for p, _ in action.parameters], args, strict=True))
     return [(neg, (pred, tuple(value.get(a, a) for a in atom_args)))
-            for neg, pred, atom_args in atoms_of(action.effect, f"action {action.name} effect")]
+            for neg, pred, atom_args in atoms_of(getattr(action, part), f"action {action.name} {part}")]
+
+
+def _effects(action, args):
+    """The action's effect bound to ``args``: ``[(negated, (predicate, args))]``."""
+    return _grounded(action, "effect", args)
 
 
 def _apply(state, effects):
@@ -382,10 +388,7 @@ def _apply(state, effects):
 
 def _holds(state, action, args) -> bool:
     """Whether the action's precondition, bound to ``args``, holds in ``state`` (a set of atoms)."""
-    value = dict(zip([p for p, _ in action.parameters], args, strict=True))
-    literals = atoms_of(action.precondition, f"action {action.name} precondition")
-    return all(((pred, tuple(value.get(a, a) for a in atom_args)) in state) != neg
-               for neg, pred, atom_args in literals)
+    return all((atom in state) != neg for neg, atom in _grounded(action, "precondition", args))
 
 
 def _schedule(domain, state, first, rest, atoms):

@@ -243,9 +243,8 @@ def _turns_with(members, frame, k) -> bool:
         if end is None:
             continue
         angle = 2 * math.pi / k * round(k * _end_heading(m.primitive.demo, m.relation, frame) / (2 * math.pi))
-        c, s = math.cos(-angle), math.sin(-angle)
         raw.append(end)
-        back.append([c * end[0] - s * end[1], s * end[0] + c * end[1], end[2]])
+        back.append(_about_vertical(end, -angle))
     if len(raw) < 2:
         return False
 
@@ -493,9 +492,13 @@ def _goal_position(seg, obs, q, angle=0.0):
         # the tool turned with the object's symmetry grasps the object from the other side: where it is
         # relative to the object turns with it (else a grasp a centimetre off the centre on one side
         # is two centimetres off on the other, the clearance a finger has beside a thin box)
-        c, s = math.cos(angle), math.sin(angle)
-        p = p_obj + np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ (p - p_obj)
+        p = p_obj + _about_vertical(p - p_obj, angle)
     return p
+
+
+def _about_vertical(v, angle) -> np.ndarray:
+    """The vector ``v`` turned by ``angle`` about the vertical, as :func:`_turn` turns an orientation."""
+    return quaternion_to_matrix(_turn([0.0, 0.0, 0.0, 1.0], angle)) @ np.asarray(v, float)
 
 
 def _goal(seg, obs, fingers=None):

@@ -13,9 +13,10 @@ bin's wall (docs/benchmarks.md, "Composed tasks in physics").
 :func:`~skillbank.simulation.robot_frames`) and pulls a path's poses towards the arm's base axis,
 horizontally, just enough that inverse kinematics on the arm's current branch keeps the elbow bent
 by at least :data:`REACH_MARGIN` (the sine of the elbow angle), spreading each pull over the
-neighbouring poses so the path eases in and out of it; the path's last pose, where the task needs the
-tool, is kept, the pull easing out over the half second before it. A path that stays within the
-margin is returned unchanged. An arm without a registered model is not changed. Composed tasks use it
+neighbouring poses so the path eases in and out of it; the pose the task needs where it is (where the
+gripper closes or opens, :meth:`Reach.needed`; else the path's last) is kept, the pull easing out over
+the half second before it and in again after it. A path that stays within the margin is returned
+unchanged. An arm without a registered model is not changed. Composed tasks use it
 (:func:`~skillbank.simulation.execute_plan`: the arm goes on from where each step leaves it); ``sim
 evaluate`` does not (docs/benchmarks.md: a nut carried over its peg at the edge of the workspace is
 placed worse when its way there is pulled in).
