@@ -40,8 +40,10 @@ browser:
 		else echo "make: $(CHROMIUM) is missing and apt-get is not here: install Chromium" >&2; fi; \
 	fi
 
+# One worker per core (pytest-xdist): every test stands alone, each worker starts its own PostgreSQL and
+# Dask cluster in its own temporary folder.
 test: $(TEST_STAMP) lint browser
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto
 
 bench: $(TEST_STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'

@@ -658,12 +658,15 @@ def test_duplicate_joint_names_are_refused(tmp_path):
 
 
 def _flip_until_the_reader_asserts(path):
-    """Flip one byte at a time of a ROS 1 bag until rosbags' own reader fails an assert on it."""
+    """Flip one byte at a time of a ROS 1 bag until rosbags' own reader fails an assert on it.
+
+    Every 5th byte: the fields the reader checks against each other (an index entry's time against its
+    message's) are 8 of every 12 bytes, so a stride finds one as surely, in a fifth of the reads."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
     data = path.read_bytes()
-    for i in range(len(data) // 8, len(data)):  # past the header: an index or record field
+    for i in range(len(data) // 8, len(data), 5):  # past the header: an index or record field
         flipped = bytearray(data)
         flipped[i] ^= 0xFF
         path.write_bytes(bytes(flipped))
