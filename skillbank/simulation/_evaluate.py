@@ -662,6 +662,11 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             for p, q, g in zip(P, Q, G, strict=True):
                 if episode.over:
                     break
+                if g != episode.driver.grip:
+                    # the gripper acts where the path says, once the tool is there: the controller trails
+                    # its commands by centimetres on a fast descent, and fingers closed on time but short
+                    # of the can push it away instead of holding it
+                    episode.settle(p, q)
                 episode.step(p, q, g)
             episode.settle(P[-1], Q[-1])
             goal = P[-1]

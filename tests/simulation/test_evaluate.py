@@ -196,3 +196,24 @@ def test_an_object_left_behind_is_a_missed_grasp_only_when_the_gripper_held_it(g
     after = {"Milk_pos": before["Milk_pos"], "robot0_eef_pos": before["robot0_eef_pos"] + [0.0, 0.0, 0.1]}
     found = _check(_segment(grip), before, SimpleNamespace(obs=after))
     assert (found if found is None else found[0]) == reason
+
+
+def test_the_gripper_acts_once_the_tool_is_where_the_path_says(lift, monkeypatch):
+    """On a fast descent the controller trails its commands by centimetres: fingers closed on the path's
+    time but short of the cube would push it. Every change of the gripper's command is given with the
+    tool within ARRIVE of the pose it belongs to (2.2 cm short here when the path's time decided)."""
+    from skillbank.simulation import _evaluate
+
+    changes = []
+    step = _evaluate._Episode.step
+
+    def watched(self, target, quat=None, grip=None):
+        if grip is not None and grip != self.driver.grip:
+            changes.append(float(np.linalg.norm(np.asarray(target) - self.obs["robot0_eef_pos"])))
+        step(self, target, quat, grip)
+
+    monkeypatch.setattr(_evaluate._Episode, "step", watched)
+    db, _ = lift
+    report = evaluate(db, "robosuite:Lift", episodes=1, seed=500, placement=0.12)
+    assert report["successes"] == 1 and changes, report["per_episode"]
+    assert max(changes) < _evaluate.ARRIVE, changes
