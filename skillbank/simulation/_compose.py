@@ -60,7 +60,7 @@ from ._evaluate import (
     binomial_interval,
 )
 from ._reach import Reach
-from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite
+from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite
 from ._stack3 import CUBES, stack3_class
 
 __all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
@@ -164,14 +164,7 @@ class _World:
 
     def top(self, obj) -> float:
         """The height (m) of the object's highest point as it lies now, from its collision geoms' boxes."""
-        sim = self.env.sim
-        tops = []
-        for name in self.models[obj].contact_geoms:
-            i = sim.model.geom_name2id(name)
-            turn = np.asarray(sim.data.geom_xmat[i], float).reshape(3, 3)
-            box = np.asarray(sim.model.geom_aabb[i], float)  # centre and half sizes, in the geom's frame
-            tops.append(float(sim.data.geom_xpos[i][2] + turn[2] @ box[:3] + np.abs(turn[2]) @ box[3:]))
-        return max(tops)
+        return float(_box(self.env.sim, self.models[obj].contact_geoms)[1][2])
 
     def pose(self, obs, obj) -> dict:
         return {"position": [round(float(v), 4) for v in obs[f"{obj}_pos"]],

@@ -41,7 +41,18 @@ from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
-from ._robosuite import CONTROL_FREQ, _Driver, _min_jerk_at, _objects, _pads, _turn, _yaw, import_robosuite
+from ._robosuite import (
+    CONTROL_FREQ,
+    _box,
+    _Driver,
+    _gripper,
+    _min_jerk_at,
+    _objects,
+    _pads,
+    _turn,
+    _yaw,
+    import_robosuite,
+)
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
 
@@ -72,6 +83,7 @@ SYMMETRIES = (1, 2, 4)  # whole, half and quarter turns about the vertical: a go
 NEIGHBOUR = 0.06  # m: a fingertip nearer another object's centre than this may touch it (a 4-10 cm object)
 HELD = 0.01  # m: how far a held object may shift in the tool's frame and still be where the tool holds it
 CARRIED = 0.02  # m: how much a carried object's distance to the tool may change before it is lost
+OVER = 0.01  # m: how far above an object's top the fingertips pass while an approach travels
 
 
 def binomial_interval(successes: int, n: int) -> tuple:
@@ -584,6 +596,54 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
     return P, Q, grip
 
 
+def _over_tops(P, G, env, obs):
+    """The path ``P`` with its travel lifted over the objects' tops: an open hand does not sweep through
+    what stands in the scene.
+
+    The first half of an adapted segment (before :data:`CLOSE_IN`, where the demonstration's own close-in
+    is pinned) is the representation's, from where the robot is, and knows nothing of the scene: from the
+    robot's start it can cross a tall box at the height of its top and knock it over before coming down
+    on it. There, while the gripper is open, a sample within the hand's horizontal reach of an object's
+    box is raised so that the fingertips pass :data:`OVER` above the object's top (the boxes, the hand's
+    reach and the fingertips' depth below the tool point are MuJoCo's collision geoms as they lie now);
+    the raise is widened and smoothed over a quarter second, so the hand rises before it comes over the
+    object. An object the tool starts within reach of is left as the demonstration leaves it (a retreat
+    from what was just let go of).
+    """
+    travel = (np.arange(len(P)) < CLOSE_IN[0] * (len(P) - 1)) & (np.asarray(G) <= 0)
+    if not travel.any():
+        return P
+    sim = env.sim
+    tool = np.asarray(obs["robot0_eef_pos"], float)
+    hand_lo, hand_hi = _box(sim, _gripper(env).contact_geoms)
+    depth = tool[2] - hand_lo[2]
+    reach = float(np.abs(np.r_[hand_lo[:2] - tool[:2], hand_hi[:2] - tool[:2]]).max())
+    floor = np.full(len(P), -np.inf)
+    for model in env.model.mujoco_objects:
+        if f"{model.name}_pos" not in obs or not model.contact_geoms:
+            continue
+        lo, hi = _box(sim, model.contact_geoms)
+
+        def gap(xy, lo=lo, hi=hi):  # horizontal distance to the object's box
+            return np.linalg.norm(np.maximum(0.0, np.maximum(lo[:2] - xy, xy - hi[:2])), axis=-1)
+
+        if gap(tool[:2]) < reach:
+            continue
+        over = travel & (gap(P[:, :2]) < reach)
+        floor[over] = np.maximum(floor[over], hi[2] + depth + OVER)
+    lift = np.where(np.isfinite(floor), np.maximum(0.0, floor - P[:, 2]), 0.0)
+    if not lift.any():
+        return P
+    w = CONTROL_FREQ // 4
+    # a running maximum, then a running mean no wider: never below the raise asked for, and smooth
+    widened = np.array([lift[max(0, k - w):k + w + 1].max() for k in range(len(lift))])
+    kernel = np.ones(2 * w + 1) / (2 * w + 1)
+    smooth = np.convolve(np.pad(widened, w, mode="edge"), kernel, mode="valid")
+    out = np.array(P, float)
+    out[:, 2] += np.maximum(smooth, lift)
+    return out
+
+
 def _oriented(seg, obs, u, goal):
     """The tool's orientation at phases ``u``: the source's rotation profile turned to end at ``goal``,
     the robot's start orientation blended into it over the first half (minimum jerk).
@@ -651,6 +711,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 else:
                     P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
                                             leave=episode.leave)
+                    P = _over_tops(P, G, episode.env, episode.obs)
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
             if episode.reach is not None:

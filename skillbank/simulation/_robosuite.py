@@ -185,12 +185,33 @@ def _yaw(q) -> float:
 
 def _pads(env) -> np.ndarray:
     """The left finger pad's centre less the right's (m, world frame), from robosuite's pad geoms."""
-    gripper = env.robots[0].gripper
-    gripper = gripper["right"] if isinstance(gripper, dict) else gripper
-    geoms = gripper.important_geoms
+    geoms = _gripper(env).important_geoms
     pad = {side: np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
                           for n in geoms[f"{side}_fingerpad"]], axis=0) for side in ("left", "right")}
     return pad["left"] - pad["right"]
+
+
+def _gripper(env):
+    """The robot's gripper model (robosuite keeps one per arm, by side, for some robots)."""
+    gripper = env.robots[0].gripper
+    return gripper["right"] if isinstance(gripper, dict) else gripper
+
+
+def _box(sim, geoms) -> tuple:
+    """``(lo, hi)``: the world-aligned box (m) around the collision geoms ``geoms`` as they lie now.
+
+    MuJoCo keeps each geom's box in the geom's own frame (``geom_aabb``: centre and half sizes); turned
+    into the world, a box's half sizes along the world's axes are the absolute rotation times its own.
+    """
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for name in geoms:
+        i = sim.model.geom_name2id(name)
+        turn = np.asarray(sim.data.geom_xmat[i], float).reshape(3, 3)
+        box = np.asarray(sim.model.geom_aabb[i], float)
+        centre = np.asarray(sim.data.geom_xpos[i], float) + turn @ box[:3]
+        half = np.abs(turn) @ box[3:]
+        lo, hi = np.minimum(lo, centre - half), np.maximum(hi, centre + half)
+    return lo, hi
 
 
 def _closing_axis(env) -> np.ndarray:
