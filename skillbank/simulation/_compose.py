@@ -46,6 +46,7 @@ from ..selection import METHODS
 from ..store import open_store
 from ._evaluate import (
     BASELINES,
+    NEIGHBOUR,
     REASONS,
     SETTLE,
     _cost,
@@ -53,7 +54,9 @@ from ._evaluate import (
     _fingers,
     _goal,
     _make,
+    _others,
     _reseed,
+    _room,
     _run_segments,
     _sources,
     _widen,
@@ -400,14 +403,18 @@ def _schedule(domain, state, first, rest, atoms):
     return order if all(a in state for a in atoms) else None
 
 
-def _highest_first(domain, state, queue, atoms, world):
+def _highest_first(domain, state, queue, atoms, world, room=None):
     """The plan ``queue`` with the step to take next first: of the steps like its first (the same action)
-    that could go first with the rest still reaching the goal, the one on the highest-standing object.
+    that could go first with the rest still reaching the goal, the one on the highest-standing object
+    among those whose grasp has room.
 
     The planner leaves free the order of moves the goal does not order (which object of a bin comes out
     first); the world does not. Fingers closing on an object brush what stands beside it, and a tall
     object tips where a low one does not: taking the tallest first (bin picking's top-first rule) leaves
-    low neighbours for last, which the fingers clear. Ties keep the planner's order.
+    low neighbours for last, which the fingers clear. But a grasp whose fingers would come within
+    :data:`~skillbank.simulation._evaluate.NEIGHBOUR` of another object (``room(action, args)``, m: a box
+    standing against a carton, its symmetric turns all closing towards it) waits until a step whose
+    grasp has room has been taken, which may be that neighbour's. Ties keep the planner's order.
     """
     head = queue[0][0]
     options = []
@@ -417,8 +424,9 @@ def _highest_first(domain, state, queue, atoms, world):
         order = _schedule(domain, state, queue[k], queue[:k] + queue[k + 1:], atoms) if k else queue
         if order is not None:
             height = max((world.top(a) for a in args if a in world.models), default=-np.inf)
-            options.append((-height, k, order))
-    return min(options, key=lambda o: o[:2])[2] if len(options) > 1 else queue
+            crowded = room is not None and room(act, args) < NEIGHBOUR
+            options.append((crowded, -height, k, order))
+    return min(options, key=lambda o: o[:3])[3] if len(options) > 1 else queue
 
 
 def _lacking(expected, observed, predicates):
@@ -591,7 +599,9 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
     expected, failure, starts = set(facts), None, []
     queue = list(plan)
     while queue and failure is None and not episode.success:
-        queue = _highest_first(domain, expected, queue, atoms, world)
+        queue = _highest_first(domain, expected, queue, atoms, world,
+                               room=lambda act, args: _grasp_room(episode, phases, domain.actions[act], args,
+                                                                  bindings[act]))
         act, args = queue.pop(0)
         action = domain.actions[act]
         number = len(row["steps"]) + 1
@@ -654,14 +664,12 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
 def _run_step(episode, world, step, action, args, effects, binding, phases, method, horizon, random_state,
               timings):
     """Carry out one plan step by the nearest phase bound to its arguments; fill ``step``'s facts."""
-    options = _candidates(phases, action, args, binding)
-    if not options:
+    chosen = _chosen(episode, phases, action, args, binding)
+    if chosen is None:
         step.update(ok=False, reason="no skill", detail=f"no phase labelled {action.name!r} acts on objects "
                                                         f"that can be bound to {list(args)}")
         return
-    bound = [(ph, [replace(seg, names=names) for seg in ph.segments]) for ph, names in options]
-    phase, segments = min(bound, key=lambda b: (_beyond(episode, b[1]),
-                                                _cost(b[1], episode.obs, episode.fingers)))
+    phase, segments = chosen
     step["source"] = phase.source.id
     step["primitives"] = [seg.primitive.id for seg in segments]
     episode.horizon = episode.steps + horizon
@@ -709,6 +717,29 @@ def _run_step(episode, world, step, action, args, effects, binding, phases, meth
                      f"it{landed}")
         return
     step["ok"] = True
+
+
+def _chosen(episode, phases, action, args, binding):
+    """``(phase, segments)`` that carry out ``action`` on ``args`` from here: of the phases bound to the
+    arguments, the least adapted among those whose goals the arm reaches; None if no phase is bound."""
+    options = _candidates(phases, action, args, binding)
+    if not options:
+        return None
+    bound = [(ph, [replace(seg, names=names) for seg in ph.segments]) for ph, names in options]
+    return min(bound, key=lambda b: (_beyond(episode, b[1]), _cost(b[1], episode.obs, episode.fingers)))
+
+
+def _grasp_room(episode, phases, action, args, binding) -> float:
+    """How far (m) the fingertips come from the nearest other object where the step's phase closes the
+    gripper on its object (infinite for a step that grasps nothing or has no phase)."""
+    chosen = _chosen(episode, phases, action, args, binding)
+    room = np.inf
+    for seg in [] if chosen is None else chosen[1]:
+        grip = seg.primitive.demo["actions"][:, 6]
+        if grip[0] <= 0 < grip[-1]:  # the fingers close on what it reaches
+            p, q = _goal(seg, episode.obs, episode.fingers)
+            room = min(room, _room(p, q, episode.fingers, _others(seg, episode.obs)))
+    return room
 
 
 def _beyond(episode, segments) -> int:

@@ -523,21 +523,26 @@ def _goal(seg, obs, fingers=None):
     options = [(q, _goal_position(seg, obs, q, angle)) for q, angle in _goal_orientations(seg, obs)]
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
-    mine = set() if seg.relation is None else {seg.scene(seg.relation.object),
-                                               seg.scene(seg.relation.target)}
-    others = [np.asarray(obs[f"{o}_pos"], float) for o in _objects(obs) if o not in mine]
+    others = _others(seg, obs)
     if not others:
         return options[0][1], options[0][0]
-    axis, half = fingers
-
-    def room(option):
-        q, p = option
-        tips = p + np.outer([-half, half], quaternion_to_matrix(q) @ axis)
-        return min(float(np.linalg.norm(tip - o)) for tip in tips for o in others)
-
-    clear = [o for o in options if room(o) >= NEIGHBOUR]
-    q, p = clear[0] if clear else max(options, key=room)
+    clear = [o for o in options if _room(o[1], o[0], fingers, others) >= NEIGHBOUR]
+    q, p = clear[0] if clear else max(options, key=lambda o: _room(o[1], o[0], fingers, others))
     return p, q
+
+
+def _others(seg, obs) -> list:
+    """The centres of the objects the segment does not act on."""
+    mine = set() if seg.relation is None else {seg.scene(seg.relation.object),
+                                               seg.scene(seg.relation.target)}
+    return [np.asarray(obs[f"{o}_pos"], float) for o in _objects(obs) if o not in mine]
+
+
+def _room(p, q, fingers, others) -> float:
+    """How far (m) the fingertips of the tool at ``p``, ``q`` are from the nearest of ``others``."""
+    axis, half = fingers
+    tips = p + np.outer([-half, half], quaternion_to_matrix(q) @ axis)
+    return min((float(np.linalg.norm(tip - o)) for tip in tips for o in others), default=math.inf)
 
 
 def _path_rigid(seg, obs):

@@ -193,6 +193,31 @@ def test_of_the_moves_the_goal_leaves_unordered_the_tallest_object_goes_first():
     assert _highest_first(DOMAIN, state, plan, goal, _Tops(dict.fromkeys(objects, 0.9))) == plan
 
 
+def test_a_grasp_with_no_room_waits_for_one_that_has_room():
+    """The cereal box stands against the milk carton: its grasp's fingers, on either of its symmetric
+    turns, close 3 cm from the carton (under NEIGHBOUR), while the milk's turn clears the box. The milk
+    goes first though the box is taller; among grasps with room, the tallest still goes first."""
+    objects = ["Bread", "Cereal", "Milk"]
+    world = _Tops({"Bread": 0.87, "Cereal": 0.975, "Milk": 0.968})
+    goal = [("on", (o, f"{o}_place")) for o in objects]
+    plan = [s for o in objects for s in [("pick", (o,)), ("place", (o, f"{o}_place"))]]
+    state = _loose(objects, [f"{o}_place" for o in objects])
+    rooms = {"Bread": 0.12, "Cereal": 0.03, "Milk": 0.08}
+
+    def room(act, args):
+        return rooms[args[0]] if act == "pick" else np.inf
+
+    first = _highest_first(DOMAIN, state, plan, goal, world, room=room)
+    assert first[:2] == [("pick", ("Milk",)), ("place", ("Milk", "Milk_place"))]
+    # the milk gone, the box has room: the tallest first again
+    rooms["Cereal"] = 0.2
+    later = _highest_first(DOMAIN, state, plan, goal, world, room=room)
+    assert later[0] == ("pick", ("Cereal",))
+    # every grasp crowded: as if none were
+    assert _highest_first(DOMAIN, state, plan, goal, world, room=lambda act, args: 0.0)[0] == \
+        ("pick", ("Cereal",))
+
+
 def test_a_tower_keeps_the_order_its_goal_forces_however_tall_the_top_cube():
     """A on B on C: A cannot go first (B must be on C before A is put on B, and nothing picks a cube that
     something stands on), so the planner's order stands even with A the tallest."""
