@@ -418,15 +418,22 @@ def _highest_first(domain, state, queue, atoms, world, room=None):
     """
     head = queue[0][0]
     options = []
-    for k, (act, args) in enumerate(queue):
+    for k, (act, _) in enumerate(queue):
         if act != head:
             continue
         order = _schedule(domain, state, queue[k], queue[:k] + queue[k + 1:], atoms) if k else queue
         if order is not None:
-            height = max((world.top(a) for a in args if a in world.models), default=-np.inf)
-            crowded = room is not None and room(act, args) < NEIGHBOUR
-            options.append((crowded, -height, k, order))
-    return min(options, key=lambda o: o[:3])[3] if len(options) > 1 else queue
+            options.append((k, order))
+    if len(options) < 2:
+        return queue
+
+    def rank(option):  # a grasp's room is asked only where there is a choice: it adapts the step's phase
+        k, _ = option
+        act, args = queue[k]
+        height = max((world.top(a) for a in args if a in world.models), default=-np.inf)
+        return room is not None and room(act, args) < NEIGHBOUR, -height, k
+
+    return min(options, key=rank)[1]
 
 
 def _lacking(expected, observed, predicates):

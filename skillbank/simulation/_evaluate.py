@@ -639,11 +639,11 @@ def _over_tops(P, G, env, obs):
     lift = np.where(np.isfinite(floor), np.maximum(0.0, floor - P[:, 2]), 0.0)
     if not lift.any():
         return P
-    w = CONTROL_FREQ // 4
+    from scipy.ndimage import maximum_filter1d, uniform_filter1d  # only a path that needs a raise
+
+    width = 2 * (CONTROL_FREQ // 4) + 1
     # a running maximum, then a running mean no wider: never below the raise asked for, and smooth
-    widened = np.array([lift[max(0, k - w):k + w + 1].max() for k in range(len(lift))])
-    kernel = np.ones(2 * w + 1) / (2 * w + 1)
-    smooth = np.convolve(np.pad(widened, w, mode="edge"), kernel, mode="valid")
+    smooth = uniform_filter1d(maximum_filter1d(lift, width, mode="nearest"), width, mode="nearest")
     out = np.array(P, float)
     out[:, 2] += np.maximum(smooth, lift)
     return out
