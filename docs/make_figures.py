@@ -42,18 +42,22 @@ from skillbank import Constraints  # noqa: E402
 from skillbank.core import exp_map  # noqa: E402
 from skillbank.pipeline import Library  # noqa: E402
 from skillbank.plotting import plot_executable  # noqa: E402
+from skillbank.robots import robot_model, to_tool  # noqa: E402
 
 with tempfile.TemporaryDirectory() as tmp, Library(Path(tmp) / "lib.sqlite", create=True) as lib:
     lib.add(demo)  # segmented with the defaults: gripper, three presses, gripper
     prims = sorted(lib.primitives(), key=lambda p: p.start)
     for p in prims[1:4]:  # the three segments that end at a press
         lib.label("press", primitive=p.id)
-    first = prims[1].demo
+    ur5e = robot_model("ur5e")
+    # the recording's poses are the flange's; the UR5e's tool is the 2F-85's TCP, where the constraints are
+    presses = [to_tool(p.demo, ur5e)[0] for p in prims[1:4]]
+    first = presses[0]
     task = Constraints(start=first["position"][0], goal=first["position"][-1] + [0.05, -0.03, 0.0],
                        start_orientation=first["orientation"][0],
                        goal_orientation=exp_map([0.0, 0.0, 0.1745], reference=first["orientation"][-1]))
     res = lib.reuse("press", task, method="ja", robot="ur5e", limits={"joint_velocity": 0.5})
-    plot_executable(res.trajectory, here / "three_button_reuse_ur5e.png", demos=[p.demo for p in prims[1:4]],
+    plot_executable(res.trajectory, here / "three_button_reuse_ur5e.png", demos=presses,
                     constraints=task, title="a press reused on the UR5e: the button moved by (5, -3, 0) cm, "
                     "the goal turned 10 deg about the tool axis")
     peak = res.to_dict().get("peak_joint_velocity")

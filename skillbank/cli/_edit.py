@@ -10,6 +10,7 @@ from ._library import check_robot, output_format, print_execution
 from ._options import (
     add_constraint_options,
     add_execution_options,
+    add_pose_of_option,
     add_repair_option,
     constraints_from_args,
     execution_params,
@@ -51,6 +52,7 @@ def add_parser(sub):
                    help="also compare the result with the demonstration (Fréchet, DTW, swept area, ...); "
                         "Fréchet and DTW take time proportional to the product of the lengths")
     add_execution_options(p)
+    add_pose_of_option(p)
     p.add_argument("--out", type=Path, default=None,
                    help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
     add_repair_option(p)
@@ -92,7 +94,15 @@ def run(args) -> int:
         from ..plotting import figure_path  # matplotlib only when a figure is asked for
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
-    read = load_positions(args.input, repair_time=args.repair_time, every_stream=True)
+    read = load_positions(args.input, repair_time=args.repair_time, every_stream=True, pose_of=args.pose_of)
+    converted = []
+    if execution["robot"] is not None:
+        from ..robots import to_tool  # numpy only
+
+        # the constraints are the robot tool's: each file's poses become its tool's before the edit
+        for k, (d, p) in enumerate(zip(read, args.input, strict=True)):
+            read[k], more = to_tool(d, execution["robot"], what=f"file {str(p)!r}")
+            converted += [n for n in more if n not in converted]
     sources = [retime(d, execution["duration"]) for d in read]
     demos = [Demonstration(d.t, {"position": d["position"]}, {"source": str(p)})
              for d, p in zip(sources, args.input, strict=True)]
@@ -116,6 +126,7 @@ def run(args) -> int:
             raise ValueError(f"edit: {kept.reason}; nothing was written")
         (collision, notes, done), constraints = kept.result, kept.constraints
         notes = notes + kept.notes
+    done.notes[:0] = converted
     traj = done.trajectory
     Y, t = traj["position"], traj.t
     error = constraints.position_error(Y)

@@ -300,6 +300,14 @@ def _list(args) -> int:
         print(json.dumps(doc))
         return 0
     print(f"{args.db}: {doc['n_demonstrations']} demonstration(s), {len(doc['primitives'])} primitive(s)")
+    points = {}
+    for d in doc["demonstrations"]:
+        points.setdefault(d["pose_of"], []).append(d["id"])
+    for point, ids in points.items():
+        shown = ", ".join(map(str, ids[:20])) + (", ..." if len(ids) > 20 else "")
+        said = (f"the {point}" if point is not None else
+                "an unknown point (library add --pose-of says which; a robot needs it)")
+        print(f"poses of {said}: demonstration(s) {shown}")
     print("skills:" if doc["skills"] else "skills: none (run 'skillbank library cluster')")
     for s in doc["skills"]:
         how = f" ({s['label_source']})" if s["label"] and s.get("label_source") else ""

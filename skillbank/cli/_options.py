@@ -28,7 +28,8 @@ from ._execution_options import (
 __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
-    "add_repair_option", "add_reader_options", "reader_options", "show_progress", "check_folder",
+    "add_repair_option", "add_reader_options", "reader_options",
+    "add_pose_of_option", "show_progress", "check_folder",
     "add_execution_options",
     "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE", "add_robot_options",
     "robot_params", "add_export_options", "export_params",
@@ -194,8 +195,26 @@ def add_repair_option(p) -> None:
                         "the repeating samples (keeping the first) and records how many in the metadata")
 
 
+#: ``--pose-of``'s help: the one text for every command that reads demonstrations.
+POSE_OF_HELP = ("which point of the robot the file's poses are of, where the file does not say (a UR "
+                "recording's transform is the flange's, robosuite's the gripper's grip site): 'flange', a "
+                "gripper's TCP "
+                "(robotiq_2f85, panda_hand or GRIPPER:tcp), its grip site (GRIPPER:grip_site), or an offset "
+                "X,Y,Z[,QX,QY,QZ,QW] in the flange frame (metres); stored with each demonstration, and "
+                "converted to the robot's tool by --robot (reuse, edit, plan)")
+
+
+def add_pose_of_option(p) -> None:
+    """``--pose-of``: the point of the robot the poses of the files read are of."""
+    p.add_argument("--pose-of", default=None, metavar="POINT", help=POSE_OF_HELP)
+
+
 def add_reader_options(p) -> None:
-    """Options of the recording readers (ROS bags, MCAP, LeRobot, robomimic); other formats ignore them."""
+    """Options of the recording readers (ROS bags, MCAP, LeRobot, robomimic); other formats ignore them.
+
+    With them ``--pose-of``, which every format takes.
+    """
+    add_pose_of_option(p)
     g = p.add_argument_group("recordings (ROS 1/2 bags, MCAP, LeRobot, robomimic)")
     g.add_argument("--topic", action="append", default=None, metavar="TOPIC=STREAM", dest="topics",
                    help="read TOPIC as STREAM (repeatable): joints, pose (position + orientation), wrench "
@@ -223,7 +242,7 @@ def add_reader_options(p) -> None:
 def reader_options(args) -> dict:
     """The reader options given on the command line, for :func:`skillbank.io.load_all`."""
     names = ("topics", "reference", "rate", "max_gap", "parent_frame", "child_frame", "split", "episodes",
-             "features")
+             "features", "pose_of")
     return {name: getattr(args, name) for name in names if getattr(args, name, None) is not None}
 
 

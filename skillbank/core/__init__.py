@@ -20,6 +20,7 @@ from ._constraints import Constraints, ViaPoint
 from ._demonstration import Demonstration
 from ._obstacles import OBSTACLES, Box, Obstacle, Sphere, parse_obstacle
 from ._paths import laplacian_matrix, neighbour_weights, resample, resample_many
+from ._pose_point import POSE_OF, check_pose_of, state_pose_of
 from ._rotations import (
     check_quaternions,
     continuous_quaternions,
@@ -36,5 +37,5 @@ __all__ = [
     "Demonstration", "Constraints", "ViaPoint", "Obstacle", "Sphere", "Box", "OBSTACLES", "parse_obstacle",
     "resample", "resample_many", "laplacian_matrix", "neighbour_weights", "__version__",
     "check_quaternions", "continuous_quaternions", "slerp", "log_map", "exp_map", "quaternion_angle",
-    "quaternion_to_matrix", "matrix_to_quaternion",
+    "quaternion_to_matrix", "matrix_to_quaternion", "POSE_OF", "check_pose_of", "state_pose_of",
 ]

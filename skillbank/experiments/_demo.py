@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Demonstration
+from ..core import POSE_OF, Demonstration
 from ..io import load_lasa, write_json
 from ..plotting import plot_keypoint_probability, plot_segmentation_summary, plot_segments
-from ..robots import robot_model
+from ..robots import robot_model, tool_point
 from ..segmentation import segment
 
 __all__ = ["run_segmentation_demo", "synthetic_multistream", "synthetic_ur5e"]
@@ -67,7 +67,7 @@ UR5E_WAYPOINTS = np.array([
 
 
 def synthetic_ur5e(*, n_steps: int = 900, random_state=0) -> Demonstration:
-    """A kinesthetic-teaching-like UR5e recording: joints, flange pose and gripper, consistent by FK.
+    """A kinesthetic-teaching-like UR5e recording: joints, the 2F-85 TCP's pose and gripper, consistent by FK.
 
     Three minimum-jerk moves through :data:`UR5E_WAYPOINTS` (slightly
     perturbed with ``random_state``) at about 125 Hz; the flange pose is the
@@ -99,7 +99,7 @@ def synthetic_ur5e(*, n_steps: int = 900, random_state=0) -> Demonstration:
     return Demonstration(t, {"joints": joints, "position": position, "orientation": orientation,
                              "gripper": gripper},
                          {"source": "synthetic-ur5e", "joint_names": list(robot.joint_names),
-                          "true_keypoints": bounds[1:-1].tolist()})
+                          "true_keypoints": bounds[1:-1].tolist(), POSE_OF: tool_point(robot)})
 
 
 def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:

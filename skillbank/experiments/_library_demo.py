@@ -16,6 +16,7 @@ from ..pipeline import Library
 from ..plotting import plot_executable, plot_reuse, plot_skills
 from ..plotting._view import write_view
 from ..plotting._view_result import reuse_page
+from ..robots import robot_model, to_tool
 from ._demo import fresh_library, run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._planning_demo import run_planning_demo, simulated
 
@@ -272,7 +273,10 @@ def _executable(lib, out: Path, data, random_state) -> dict:
     else:
         skill = "press-button"
     prims = sorted(lib.primitives(label=skill), key=lambda p: p.id)
-    first = prims[0].demo
+    # the task is the UR5e tool's (the 2F-85's TCP): the recorded poses as that point's, wherever they were
+    ur5e = robot_model("ur5e")
+    demos = [to_tool(p.demo, ur5e)[0] for p in prims]
+    first = demos[0]
     # the turn about the tool's own z axis: a rotation vector in the end orientation's frame
     goal_orientation = exp_map([0.0, 0.0, EXECUTABLE_TURN], reference=first["orientation"][-1])
     task = Constraints(start=first["position"][0], goal=first["position"][-1] + EXECUTABLE_OFFSET,
@@ -280,7 +284,7 @@ def _executable(lib, out: Path, data, random_state) -> dict:
     res = lib.reuse(skill, task, method="ja", robot="ur5e", limits={"joint_velocity": 1.0},
                     random_state=random_state)
     csv = write_trajectory(res.trajectory, out / "reach_ur5e.csv")
-    figure = plot_executable(res.trajectory, out / "reach_ur5e.png", demos=[p.demo for p in prims],
+    figure = plot_executable(res.trajectory, out / "reach_ur5e.png", demos=demos,
                              constraints=task, title=f"'{skill}' reused on a UR5e: goal moved by "
                              f"{EXECUTABLE_OFFSET.tolist()} m and turned 10 deg about the tool axis")
     d = res.to_dict()

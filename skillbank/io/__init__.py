@@ -29,7 +29,7 @@ from ._handwriting_h5 import read_handwriting_h5
 from ._lasa import lasa_shapes, load_lasa
 from ._lerobot import read_lerobot, select_episodes
 from ._rail import load_rail, read_rail_file
-from ._robomimic import read_robomimic
+from ._robomimic import ROBOSUITE_POSE_OF, read_robomimic
 from ._robot_h5 import read_robot_h5
 from ._ros import read_rosbag
 from ._ros_messages import parse_topics
@@ -54,7 +54,7 @@ __all__ = [
     "read_rosbag",
     "parse_topics",
     "read_lerobot",
-    "read_robomimic",
+    "read_robomimic", "ROBOSUITE_POSE_OF",
     "select_episodes",
     "read_rail_file",
     "load_rail",

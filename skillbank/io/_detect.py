@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Demonstration
+from ..core import Demonstration, check_pose_of, state_pose_of
 from ._errors import (
     HDF5_MAGIC,
     MAT5_MAGIC,
@@ -180,7 +180,11 @@ def load_all(path, *, group: str = "normalized", repair_time=None,
         :func:`read_lerobot`, :func:`read_robomimic`), for example
         ``{"topics": ["/joint_states=joints"], "episodes": "0:10"}``. Each
         reader takes the ones it knows, so one set serves a mixed list of
-        files; a name no reader knows is a ValueError.
+        files; a name no reader knows is a ValueError. ``"pose_of"`` (every
+        format) says which point of the robot the poses are of where the
+        file does not (``metadata["pose_of"]``; see
+        :func:`skillbank.core.check_pose_of`); a file that states another
+        point is an error.
 
     Returns
     -------
@@ -196,21 +200,28 @@ def load_all(path, *, group: str = "normalized", repair_time=None,
     >>> len(load_all("seed/r_shape.h5", group="smoothed"))  # doctest: +SKIP
     5
     """
+    options = dict(reader_options or {})
+    # every format: which point of the robot the poses are of, where the file does not say
+    pose_of = options.pop("pose_of", None)
+    if pose_of is not None:
+        check_pose_of(pose_of)  # a malformed point fails before the file is read
     fmt = detect_format(path)
-    options = _recording_options(fmt, reader_options)
+    options = _recording_options(fmt, options)
     if fmt in _RECORDINGS:
         if fmt not in ("lerobot", "robomimic-h5"):  # the bag reader checks its clocks like the others
             options.setdefault("repair_time", repair_time)
-        return _RECORDINGS[fmt](path, **options)
-    if fmt == "robot-h5":
-        return [read_robot_h5(path, repair_time=repair_time)]
-    if fmt == "handwriting-h5":
-        return read_handwriting_h5(path, group=group, repair_time=repair_time)
-    if fmt == "rail-mat":
-        return read_rail_file(path, repair_time=repair_time)
-    if fmt == "npz":
-        return [read_npz(path)]
-    return [read_csv(path)]
+        demos = _RECORDINGS[fmt](path, **options)
+    elif fmt == "robot-h5":
+        demos = [read_robot_h5(path, repair_time=repair_time)]
+    elif fmt == "handwriting-h5":
+        demos = read_handwriting_h5(path, group=group, repair_time=repair_time)
+    elif fmt == "rail-mat":
+        demos = read_rail_file(path, repair_time=repair_time)
+    elif fmt == "npz":
+        demos = [read_npz(path)]
+    else:
+        demos = [read_csv(path)]
+    return state_pose_of(demos, pose_of, source=str(path))
 
 
 def load(path, *, index=None, group: str = "normalized", repair_time=None,

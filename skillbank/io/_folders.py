@@ -43,7 +43,8 @@ def load_folder(folder, *, progress: bool = True, repair_time=None):
     return [f.name for f in files], [load(f, repair_time=repair_time) for f in bar]
 
 
-def load_positions(paths, *, repair_time=None, every_stream: bool = False) -> list[Demonstration]:
+def load_positions(paths, *, repair_time=None, every_stream: bool = False,
+                   pose_of=None) -> list[Demonstration]:
     """Load each file as a Demonstration whose ``"position"`` stream is the one to work on.
 
     The file's ``position`` stream is taken, or its only stream (renamed
@@ -57,6 +58,9 @@ def load_positions(paths, *, repair_time=None, every_stream: bool = False) -> li
         Keep the file's other streams (orientation, gripper, ...) and its
         metadata too, as an edit that carries them along needs; otherwise the
         result holds ``position`` alone and ``{"source": path}``.
+    pose_of : str, optional
+        The point of the robot the poses are of, where a file does not say
+        (:func:`~skillbank.io.load_all`'s ``reader_options["pose_of"]``).
 
     Raises
     ------
@@ -75,7 +79,8 @@ def load_positions(paths, *, repair_time=None, every_stream: bool = False) -> li
         if not path.exists():
             raise ValueError(f"input: no such file: {str(path)!r}")
         check_input_file(path, name="input")  # a FIFO or a device would block the reader
-        demo = load(path, repair_time=repair_time)
+        demo = load(path, repair_time=repair_time,
+                    reader_options=None if pose_of is None else {"pose_of": pose_of})
         if "position" in demo.streams:
             name = "position"
         elif len(demo.streams) == 1:

@@ -7,14 +7,14 @@ import re
 
 import numpy as np
 
-from ..core import Demonstration
+from ..core import POSE_OF, Demonstration, check_pose_of, matrix_to_quaternion
 from ..core._validation import check_positive, summarise
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
 from ._h5 import open_h5
 from ._lerobot import select_episodes
 
-__all__ = ["read_robomimic", "ROBOMIMIC_GROUP", "is_robomimic", "DEFAULT_CONTROL_FREQ"]
+__all__ = ["read_robomimic", "ROBOMIMIC_GROUP", "is_robomimic", "DEFAULT_CONTROL_FREQ", "ROBOSUITE_POSE_OF"]
 
 #: The group that holds the demonstrations.
 ROBOMIMIC_GROUP = "data"
@@ -36,6 +36,40 @@ def _env_args(path, data) -> dict:
     with reading(path, "invalid JSON in data.attrs['env_args']"):
         args = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
     return args if isinstance(args, dict) else {}
+
+
+#: The point robosuite reports as ``robot0_eef_pos`` for an arm with its default gripper: the gripper's
+#: grip site (robosuite 1.5 takes ``robot0_eef_quat`` from the flange body, whose axes the grip site shares
+#: on these arms; tests/simulation/test_panda.py reads both with robosuite).
+ROBOSUITE_POSE_OF = {"panda": "panda_hand:grip_site", "ur5e": "robotiq_2f85:grip_site"}
+
+
+def _pose_of(path, data, env_args):
+    """Which point the file's ``robot0_eef_*`` poses are of, as the file states it, else None.
+
+    skillbank's recorder writes ``data.attrs["robot"]`` (``pose_of``, and ``tool``: the point's pose in the
+    flange body); robosuite's own collections name the robot in ``env_args``, whose default gripper's grip
+    site is the point (another gripper: unknown).
+    """
+    raw = data.attrs.get("robot")
+    if raw is not None:
+        with reading(path, "invalid JSON in data.attrs['robot']"):
+            robot = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
+        if isinstance(robot, dict) and isinstance(robot.get("pose_of"), str):
+            return check_pose_of(robot["pose_of"], name=f"{path}: data.attrs['robot']['pose_of']")
+        tool = np.asarray(robot.get("tool"), float) if isinstance(robot, dict) and "tool" in robot else None
+        if tool is not None and tool.shape == (4, 4) and np.isfinite(tool).all():
+            q = matrix_to_quaternion(tool[:3, :3])
+            return check_pose_of(",".join(repr(float(v)) for v in (*tool[:3, 3], *q)),
+                                 name=f"{path}: data.attrs['robot']['tool']")
+    kwargs = env_args.get("env_kwargs") or {}
+    robots = kwargs.get("robots")
+    robots = [robots] if isinstance(robots, str) else robots
+    grippers = kwargs.get("gripper_types", "default")
+    if isinstance(robots, list) and len(robots) == 1 and isinstance(robots[0], str) and grippers in (
+            "default", ["default"], None):
+        return ROBOSUITE_POSE_OF.get(robots[0].lower())
+    return None
 
 
 def _rate(path, control_freq, env_args) -> tuple[float, str]:
@@ -85,7 +119,11 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         ``t = arange(n) / rate``. Metadata: ``source``,
         ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
         ``episode`` (``N``), ``label`` (the environment's name, when
-        recorded), ``rate_hz``, ``rate_from`` and ``skipped_obs``.
+        recorded), ``rate_hz``, ``rate_from``, ``skipped_obs`` and
+        ``pose_of``, the point of the robot the poses are of, where the file
+        says it (``data.attrs["robot"]`` of skillbank's recorder; else the
+        default gripper's grip site of the one robosuite arm ``env_args``
+        names, :data:`ROBOSUITE_POSE_OF`).
 
     Raises
     ------
@@ -126,6 +164,9 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         common = {"source": str(p), "format": "robomimic-h5", "rate_hz": hz, "rate_from": rate_from}
         if env_args.get("env_name"):
             common["label"] = str(env_args["env_name"])
+        pose_of = _pose_of(p, data, env_args)
+        if pose_of is not None:
+            common[POSE_OF] = pose_of
         return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import Demonstration
+from ..core import POSE_OF, Demonstration
 from ..core._validation import summarise
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, check_clock, check_repair_time, reading, real_array
@@ -119,8 +119,9 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None, scalar_first: boo
         that store ``(w, x, y, z)``), ``force``, ``torque`` and ``gripper``; the
         last four only when their group exists. ``t`` starts at 0; metadata
         holds ``source``, ``format`` (``"robot-h5"``), ``t0``, the absolute
-        start time in seconds, and ``joint_names``, the names of the
-        ``joints`` columns.
+        start time in seconds, ``joint_names``, the names of the
+        ``joints`` columns, and ``pose_of``: ``"flange"``, since the layout's
+        ``transform_info`` is the pose of the flange (UR's ``tool0``).
 
         The joints come in kinematic-chain order (base to flange). A UR
         arm's six joints (a UR driver publishes them alphabetically: elbow,
@@ -170,7 +171,10 @@ def read_robot_h5(path, *, repair_time=None, joint_names=None, scalar_first: boo
         # Joint angles are stored wrapped to (-pi, pi]; a jump of 2 pi is not motion.
         clocked[name] = (t_k, np.unwrap(data, axis=0) if name == "joints" else data)
 
-    metadata = {"source": str(p), "format": "robot-h5", "t0": s0 + start, "joint_names": names}
+    # the layout's transform_info is the UR recorder's TF lookup of tool0, the flange (data README; forward
+    # kinematics of the joints meets it within 0.8 mm): the poses say so, and no robot's TCP is assumed
+    metadata = {"source": str(p), "format": "robot-h5", "t0": s0 + start, "joint_names": names,
+                POSE_OF: "flange"}
     # Only the reference clock's drops change the number of samples.
     if dropped["joints"]:
         metadata["dropped_samples"] = dropped["joints"]

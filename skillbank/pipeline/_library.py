@@ -7,7 +7,7 @@ from sklearn.decomposition import PCA
 from tqdm import tqdm
 
 from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
-from ..core import Demonstration
+from ..core import POSE_OF, Demonstration
 from ..core._validation import check_id, check_positive
 from ..planning import TIME_LIMIT, describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
@@ -326,8 +326,9 @@ class Library(Adding):
             ``{"n_demonstrations": int, "version": int or None,
             "skills": [{"cluster", "label", "label_source", "count"}],
             "unassigned": {"count": int, "ids": [primitive ids]},
+            "demonstrations": [{"id", "pose_of"}],
             "primitives": [{"id", "demonstration", "cluster", "label", "label_source", "n_steps",
-            "acts_on"}]}``;
+            "acts_on", "pose_of"}]}``;
             skills are the clusters (0..k-1) of the current clustering
             ``version``; ``unassigned`` the primitives in none of them (an
             add with ``assign="none"``, a primitive that could not join, or
@@ -338,7 +339,8 @@ class Library(Adding):
             ``acts_on`` is what the primitive acts on, found when it was added
             (:class:`~skillbank.selection.Relation` as a dict: the object, whether it was carried,
             its target, the tool's end pose in their frames), or None (no object poses recorded, or
-            a move in free space).
+            a move in free space). ``pose_of`` is the point of the robot the poses are of
+            (``metadata["pose_of"]``, :func:`skillbank.core.check_pose_of`), or None when unknown.
         """
         version = self.store.current_version()
         skills = []
@@ -359,11 +361,14 @@ class Library(Adding):
             k = rank[p.demonstration_id] = rank.get(p.demonstration_id, -1) + 1
             known = acts.get(p.demonstration_id)
             relation[p.id] = known[k] if isinstance(known, list) and k < len(known) else None
+        meta = self.store.demonstration_metadata()
+        pose_of = {d: meta.get(d, {}).get(POSE_OF) for d in ids}
         return {"n_demonstrations": len(ids), "version": version, "skills": skills,
                 "unassigned": {"count": len(unassigned), "ids": unassigned},
+                "demonstrations": [{"id": d, "pose_of": pose_of[d]} for d in ids],
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
                                 "label": p.label, "label_source": p.label_source, "n_steps": p.n_steps,
-                                "acts_on": relation[p.id]}
+                                "acts_on": relation[p.id], "pose_of": pose_of.get(p.demonstration_id)}
                                for p in prims]}
 
     def check(self) -> str:

@@ -26,7 +26,7 @@ from ..core import (
     slerp,
 )
 from ..core._validation import check_positive, summarise
-from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model
+from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model, tool_point
 from ..selection import reuse, shift_near
 from ..selection._execution import check_limits, peak_rates, robot_limits
 
@@ -890,7 +890,7 @@ def _join(pieces, model, notes) -> Demonstration:
                for name in names}
     metadata = {"steps": len(pieces)}
     if model is not None:
-        metadata.update(joint_names=list(model.joint_names), robot=model.name)
+        metadata.update(joint_names=list(model.joint_names), robot=model.name, pose_of=tool_point(model))
     demo = Demonstration(np.concatenate(times), streams, metadata)
     demo.metadata["peaks"] = peak_rates(demo)
     return demo

@@ -66,6 +66,9 @@ class Gripper(NamedTuple):
         Where the dimensions come from.
     fingers : tuple of str
         The names of the capsules that touch what the gripper presses or grasps.
+    grip_site : tuple of 3 float or None
+        robosuite's ``grip_site`` of the gripper in the flange frame (metres): between the pads, the
+        point robosuite's observations report as ``robot0_eef_pos``; None when unknown.
     axis : tuple of 3 float
         The unit vector in the flange frame (perpendicular to its z) along which the simulator's
         jaws slide: ``finger_left`` opens towards ``+axis``, ``finger_right`` towards ``-axis``.
@@ -85,11 +88,19 @@ class Gripper(NamedTuple):
     source: str
     fingers: tuple = ()
     axis: tuple = (1.0, 0.0, 0.0)
+    grip_site: tuple | None = None
 
-    def tool(self) -> np.ndarray:
-        """The TCP as a flange-to-tool transform (a translation along the flange's axes)."""
+    def tool(self, point: str = "tcp") -> np.ndarray:
+        """A point of the gripper as a flange-to-point transform (a translation along the flange's axes).
+
+        ``point`` is ``"tcp"`` (default) or ``"grip_site"``.
+        """
+        offset = self.tcp if point == "tcp" else self.grip_site if point == "grip_site" else None
+        if offset is None:
+            raise ValueError(f"pose_of: the {self.name}'s {point!r} is not known; its points are "
+                             f"{[k for k in ('tcp', 'grip_site') if getattr(self, k) is not None]}")
         T = np.eye(4)
-        T[:3, 3] = self.tcp
+        T[:3, 3] = offset
         return T
 
 
@@ -115,6 +126,7 @@ ROBOTIQ_2F85 = Gripper(
     source="robosuite 1.5.2 robotiq_gripper_85.xml and meshes (MIT), fitted in tests/robots/test_bodies.py",
     fingers=("finger_left", "finger_right"),
     axis=(0.0, -1.0, 0.0),  # robosuite's left finger opens towards the flange's -y, as its capsule lies
+    grip_site=(0.0, 0.0, 0.145),  # robotiq_gripper_85.xml's grip_site, read with robosuite's UR5e in a test
 )
 
 #: The Franka hand as robosuite 1.5.2 mounts it on the Panda (``grippers/panda_gripper.xml``): its
@@ -140,6 +152,7 @@ PANDA_HAND = Gripper(
     source="robosuite 1.5.2 panda_gripper.xml and meshes (MIT), fitted in tests/robots/test_panda_hand.py",
     fingers=("finger_left", "finger_right"),
     axis=(0.0, 1.0, 0.0),
+    grip_site=(0.0, 0.0, 0.097),  # panda_gripper.xml's grip_site, read with robosuite's Panda in a test
 )
 
 #: Gripper name -> description.

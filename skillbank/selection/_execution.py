@@ -32,11 +32,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Demonstration, continuous_quaternions, slerp
+from ..core import POSE_OF, Demonstration, check_pose_of, continuous_quaternions, slerp
 from ..core._rotations import _exp, _log, quaternion_conjugate, quaternion_multiply
 from ..core._validation import numerical_errors
 from ..editing import edit_orientation, relative_rotations
-from ..robots import KinematicsError, RobotModel, robot_model
+from ..robots import KinematicsError, RobotModel, robot_model, tool_point
 from ._limits import DURATION_RANGE, LIMITS, _show, check_duration, check_limits, robot_limits
 
 __all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
@@ -238,6 +238,13 @@ def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0
     if position.shape[1] != 3:
         raise ValueError(f"robot: {model.name} inverse kinematics needs 3-D positions, got "
                          f"{position.shape[1]}-D")
+    stated, tool = source.metadata.get(POSE_OF), tool_point(model)
+    if stated is None or check_pose_of(stated) != tool:
+        # inverse kinematics of another point's poses puts the tool where that point was (16 cm off for a
+        # flange recording and a 2F-85's TCP): never silently
+        what = "an unknown point" if stated is None else repr(stated)
+        raise ValueError(f"robot: the poses are of {what}, not {model.name}'s tool {tool}: convert them "
+                         "first (skillbank.robots.to_tool; reuse and plan do it)")
     seed = None
     if "joints" in source.streams and source["joints"].shape[1] == model.n_joints:
         i = int(np.clip(np.searchsorted(source.t, ts0, side="right") - 1, 0, source.n_steps - 1))
@@ -352,6 +359,12 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         streams[name], note = _carry(best, times[0], name, label)
         notes.append(note)
     metadata = dict(out.metadata)
+    # the point the result's poses are of: the robot's tool once converted, else the sources' own point
+    points = {s.metadata.get(POSE_OF) for s in sources}
+    if model is not None:
+        metadata[POSE_OF] = tool_point(model)
+    elif len(points) == 1 and None not in points:
+        metadata[POSE_OF] = points.pop()
     if model is not None:
         with numerical_errors(f"reuse ({model.name} inverse kinematics)"):
             streams["joints"] = _joints(model, streams["position"], orientation, best, float(times[0][0]),

@@ -9,7 +9,7 @@ import numpy as np
 from ..core import Demonstration
 from ..core._validation import check_array, check_positive, check_time, numerical_errors, summarise
 from ..representations import REPRESENTATIONS, fit_reproduce, representation
-from ..robots import CLEARANCE, RobotModel, robot_model
+from ..robots import CLEARANCE, KinematicsError, RobotModel, robot_model, to_tool
 from ._candidates import SHORTLIST, Selection, select_candidates
 from ._clear import keep_clear
 from ._execution import check_duration, check_limits, executable_dict, make_executable, retime
@@ -240,6 +240,23 @@ def _retimed(primitives, duration):
     return out
 
 
+def _at_tool(primitives, model, ids) -> tuple[list, list]:
+    """The primitives' poses converted to ``model``'s tool (:func:`skillbank.robots.to_tool`), with notes.
+
+    Arrays carry no point and no orientation: inverse kinematics names what they lack.
+    """
+    if not isinstance(primitives, (list, tuple)):
+        return primitives, []  # select_candidates names the problem
+    out, notes = [], []
+    for k, prim in enumerate(primitives):
+        if isinstance(prim, Demonstration):
+            name = ids[k] if ids is not None and k < len(ids) else k
+            prim, more = to_tool(prim, model, what=f"primitive {name}")
+            notes += [n for n in more if n not in notes]
+        out.append(prim)
+    return out, notes
+
+
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
           rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None, duration=None, robot=None,
           limits=None, branch=None, clearance_margin=None) -> ReuseResult:
@@ -304,7 +321,12 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         ``joints`` stream by inverse kinematics of the pose path (positions
         in metres and orientations in the robot's base frame), on the branch
         of the best candidate's recorded joints when it has them. The robot's
-        own joint velocity and acceleration limits always apply.
+        own joint velocity and acceleration limits always apply. Before
+        anything is adapted, each primitive's poses are converted from the
+        point they are of (``metadata["pose_of"]``: the flange, a gripper's
+        TCP or grip site, an offset) to the robot's tool
+        (:func:`skillbank.robots.to_tool`), so the constraints are the
+        tool's; a primitive whose point is unknown is an error.
     branch : int or str, optional
         With ``robot``: the inverse-kinematics branch to follow (a name of the
         robot's ``branch_names``), instead of the recorded joints' branch.
@@ -355,11 +377,16 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         (robot if isinstance(robot, RobotModel) else robot_model(robot)).branch_index(branch)
     if duration is not None:
         primitives = _retimed(primitives, duration)
+    model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
+    converted = []
+    if model is not None:
+        # the constraints are the robot's tool's: the poses become its tool's before anything is adapted
+        primitives, converted = _at_tool(primitives, model, ids)
     selection = select_candidates(primitives, constraints, ids=ids, t=t, rank=rank, shortlist=shortlist,
                                   min_samples=cls.min_samples, progress=progress)
-    model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
     margin = CLEARANCE if clearance_margin is None else check_positive(
         clearance_margin, name="clearance_margin", allow_zero=True)
+    retrying = False
     while True:
         def make(task, selection=selection):
             if task is not constraints:  # a repair's via points: the same candidates, edited to them too
@@ -376,17 +403,27 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
 
         if model is None:
             return make(constraints)[0]
-        done = keep_clear(make, constraints, model, margin=margin)
-        result = done.result
-        if done.reason is None:
-            result.clearance = done.clearance
-            result.notes = result.notes + done.notes
-            if done.via:
-                result.message += "; " + "; ".join(done.notes)
-            return result
-        # even repaired, the reproduction from these candidates takes a body of the robot into an obstacle:
-        # reject them and learn from the next ones (the tool point of each was clear: they were edited so)
-        more = {i: done.reason for i in result.used}
+        try:
+            done = keep_clear(make, constraints, model, margin=margin)
+        except KinematicsError as exc:
+            if not retrying:
+                raise  # the best candidates' own failure: the task's (a goal out of reach), said as it is
+            # a candidate tried because better ones hit the robot: its failure rejects it, the next is tried
+            n = _check_k(k, method, len(selection.candidates))
+            more = {c.id: str(exc) for c in selection.candidates[:n]}
+        else:
+            result = done.result
+            if done.reason is None:
+                result.clearance = done.clearance
+                result.notes = converted + result.notes + done.notes
+                if done.via:
+                    result.message += "; " + "; ".join(done.notes)
+                return result
+            # even repaired, the reproduction from these candidates takes a body of the robot into an
+            # obstacle: reject them and learn from the next ones (each one's tool point was clear: they were
+            # edited so)
+            more = {i: done.reason for i in result.used}
+        retrying = True
         left = [c for c in selection.candidates if c.id not in more]
         selection = Selection(candidates=left, rejected={**selection.rejected, **more}, rank=selection.rank)
         if not left:

@@ -31,9 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import log_map
+from ..core import check_pose_of, log_map, matrix_to_quaternion
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
+from ..io import ROBOSUITE_POSE_OF
+from ..robots import pose_point
 
 __all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ"]
 
@@ -380,8 +382,13 @@ def robot_frames(env) -> dict:
     flange = np.linalg.inv(_pose(env, "body", "robot0_right_hand"))
     tool = flange @ _pose(env, "body", eef)
     tool[:3, 3] = (flange @ _pose(env, "site", site))[:3, 3]
+    # the point by its name when robosuite's is the gripper's registered grip site (checked, not assumed)
+    named = ROBOSUITE_POSE_OF.get(str(robot.name).lower())
+    same = named is not None and np.abs(pose_point(named).transform - tool).max() < 1e-6
+    pose_of = named if same else check_pose_of(",".join(repr(float(v)) for v in (
+        *tool[:3, 3], *matrix_to_quaternion(tool[:3, :3]))))
     return {"name": robot.name, "base": _pose(env, "body", "robot0_base").tolist(),
-            "flange": "right_hand", "tool": tool.tolist()}
+            "flange": "right_hand", "tool": tool.tolist(), "pose_of": pose_of}
 
 
 def _env_args(task: str, horizon: int, seed: int, robot: str = "UR5e") -> dict:

@@ -266,6 +266,10 @@ class Store(ABC):
         """Ids of every stored demonstration, ascending."""
 
     @abstractmethod
+    def demonstration_metadata(self) -> dict:
+        """``{id: metadata}`` of every stored demonstration (without its samples)."""
+
+    @abstractmethod
     def provenance(self, demo_id: int) -> dict:
         """The provenance recorded when ``demo_id`` was added (``{}`` when none)."""
 

@@ -140,6 +140,15 @@ def orphan_check(db) -> None:
                       f"expected its demonstration {row[1]}, got none (an orphan primitive)")
 
 
+def stored_metadata(db, raw, did) -> dict:
+    """A demonstration's stored metadata, a JSON object; a damaged one is one line naming the row."""
+    meta = stored_json(db, raw, f"demonstration {did} (its metadata)", did)
+    if not isinstance(meta, dict):
+        raise damaged(db.store.location, f"demonstration {did} (its metadata)", "expected a JSON "
+                      f"object, got a JSON {type(meta).__name__}", remedy(db.store.location, did))
+    return meta
+
+
 def load_demonstrations(db, ids) -> dict:
     """Demonstrations by id, streams in their stored order; ValueError naming a missing one.
 
@@ -157,11 +166,7 @@ def load_demonstrations(db, ids) -> dict:
             if n != len(t):
                 raise damaged(db.store.location, f"demonstration {did}", f"expected n_steps {len(t)} (the "
                               f"samples of its t), got {n!r}"[:200], remedy(db.store.location, did))
-            meta = stored_json(db, meta, f"demonstration {did} (its metadata)", did)
-            if not isinstance(meta, dict):
-                raise damaged(db.store.location, f"demonstration {did} (its metadata)", "expected a JSON "
-                              f"object, got a JSON {type(meta).__name__}", remedy(db.store.location, did))
-            rows[did] = (t, meta)
+            rows[did] = (t, stored_metadata(db, meta, did))
         for did, name, data in db.execute(
                 f"SELECT demonstration_id, name, data FROM streams WHERE demonstration_id IN ({q}) "
                 "ORDER BY demonstration_id, position", part).fetchall():

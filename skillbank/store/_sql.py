@@ -46,6 +46,7 @@ from ._records import (
     remedy,
     stored_array,
     stored_json,
+    stored_metadata,
 )
 from ._rows import damaged
 from ._schema import now
@@ -230,6 +231,11 @@ class SQLStore(Store):
 
     def demonstration_ids(self) -> list:
         return [r[0] for r in self._rows("SELECT id FROM demonstrations ORDER BY id")]
+
+    def demonstration_metadata(self) -> dict:
+        with self._read() as db:
+            rows = db.execute("SELECT id, metadata FROM demonstrations ORDER BY id").fetchall()
+            return {did: stored_metadata(db, meta, did) for did, meta in rows}
 
     def provenance(self, demo_id) -> dict:
         demo_id = check_id(demo_id, name="demo_id")

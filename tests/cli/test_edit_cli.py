@@ -266,7 +266,8 @@ def test_edit_a_path_beyond_the_ur5es_reach_says_by_how_much(cli, tmp_path, beyo
     p, quat = robot.fk(q[0])
     s = np.linspace(0.0, 1.0, 2000)
     demo = skillbank.Demonstration(2.0 * s, {"position": p + np.outer(s * (0.1 + beyond) - 0.1, out),
-                                             "orientation": np.tile(quat, (2000, 1))})
+                                             "orientation": np.tile(quat, (2000, 1))},
+                              {"pose_of": "robotiq_2f85:tcp"})  # FK of the default tool
     path = sio.write_npz(demo, tmp_path / "out.npz")
     code, text, err = cli("edit", path, "--robot", "ur5e", "--out", tmp_path / "r.csv")
     assert code == 2 and text == "" and err.count("\n") == 1, err

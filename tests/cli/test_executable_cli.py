@@ -11,7 +11,7 @@ import pytest
 from skillbank import Demonstration
 from skillbank.core import Sphere, exp_map, quaternion_angle
 from skillbank.io import load, read_npz, write_csv, write_npz
-from skillbank.robots import UR5e, clearance
+from skillbank.robots import UR5e, clearance, to_tool
 
 KEYS = {"t", "streams", "joint_names", "trajectory", "used", "rejected", "constraint_error",
         "orientation_error", "collision", "peak_joint_velocity", "peaks", "notes", "clearance"}
@@ -31,7 +31,8 @@ def buttons(data_dir, tmp_path_factory):
     with Library(db) as lib:
         lib.add_files([path], label="button")
         prims = {p.id: p.demo for p in lib.primitives()}
-    end = prims[3]
+    # the recording's poses are the flange's; with --robot ur5e the goal is its tool's, the 2F-85's TCP
+    end = to_tool(prims[3], UR5e())[0]
     goal = end["position"][-1] + [0.03, -0.02, 0.0]
     goal_q = exp_map([0.0, 0.0, np.radians(10.0)], reference=end["orientation"][-1])
     return {"db": db, "file": path, "goal": goal, "goal_q": goal_q}
@@ -444,7 +445,8 @@ def test_a_reuse_whose_upper_arm_meets_an_obstacle_midway_is_repaired_with_via_p
     code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--json")
     assert code == 0, err
     plain = json.loads(text)
-    ball = _ball_beside(np.array(plain["streams"]["joints"]), "upper_arm", (1, 0, 0))
+    # beside the upper arm along y: the side the repair can move it away from (the tool's goal is the TCP's)
+    ball = _ball_beside(np.array(plain["streams"]["joints"]), "upper_arm", (0, 1, 0))
     robot = UR5e()
     assert clearance(robot, np.array(plain["streams"]["joints"]), [ball]).min_distance < -0.005
     code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--json")

@@ -40,12 +40,14 @@ def test_end_to_end_on_rail(run, tmp_path, new_library, data_dir):
     assert run("library", "label", db, "--cluster", "0", "first")[0] == 0
     code, out, _ = run("library", "list", db, "--json")
     doc = json.loads(out)
-    assert set(doc) == {"n_demonstrations", "version", "skills", "primitives", "unassigned"}
+    assert set(doc) == {"n_demonstrations", "version", "skills", "primitives", "unassigned", "demonstrations"}
     assert doc["n_demonstrations"] == 18
+    # RAIL's end-effector positions name no point of the robot: unknown, shown as such, never guessed
+    assert {d["pose_of"] for d in doc["demonstrations"]} == {None}
     assert doc["skills"][0] == {"cluster": 0, "label": "first", "count": doc["skills"][0]["count"],
                                 "label_source": "given"}
     assert set(doc["primitives"][0]) == {"id", "demonstration", "cluster", "label", "label_source", "n_steps",
-                                         "acts_on"}
+                                         "acts_on", "pose_of"}
     assert doc["primitives"][0]["acts_on"] is None  # RAIL records no object poses
     assert [p["label"] for p in doc["primitives"][:12]] == ["reaching"] * 12
     assert doc["primitives"][0]["n_steps"] == 1000

@@ -158,3 +158,30 @@ def test_three_button_reads_as_the_hdf5_file_of_the_same_samples(uniform_three_b
         np.testing.assert_allclose(as_h5[name], h5[name], atol=1e-9, err_msg=name)
     ours, theirs = MultimodalSegmenter().fit(as_h5).result_, MultimodalSegmenter().fit(h5).result_
     assert ours.n_segments == theirs.n_segments > 1 and ours.bounds == theirs.bounds
+
+
+@pytest.mark.parametrize(("env_kwargs", "attrs", "point"), [
+    ({"robots": ["Panda"]}, None, "panda_hand:grip_site"),
+    ({"robots": "UR5e"}, None, "robotiq_2f85:grip_site"),
+    ({"robots": ["Panda"], "gripper_types": "Robotiq85Gripper"}, None, None),  # another gripper: unknown
+    ({"robots": ["Sawyer"]}, None, None),
+    ({}, None, None),
+    ({"robots": ["Panda"]}, {"pose_of": "flange"}, "flange"),  # what the recorder wrote wins
+    ({}, {"tool": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.12], [0, 0, 0, 1]]}, "0,0,0.12,0,0,0,1"),
+])
+def test_the_point_the_poses_are_of_is_what_the_file_says(tmp_path, env_kwargs, attrs, point):
+    path = write_robomimic(tmp_path / "d.hdf5", {0: _demo(4, 0)},
+                           env_args={**LIFT, "env_kwargs": {**LIFT["env_kwargs"], **env_kwargs}})
+    if attrs is not None:
+        with h5py.File(path, "a") as h5:
+            h5["data"].attrs["robot"] = json.dumps(attrs)
+    assert read_robomimic(path)[0].metadata.get("pose_of") == point
+
+
+def test_a_malformed_stated_point_is_one_line(tmp_path):
+    path = write_robomimic(tmp_path / "d.hdf5", {0: _demo(4, 0)}, env_args=LIFT)
+    with h5py.File(path, "a") as h5:
+        h5["data"].attrs["robot"] = json.dumps({"pose_of": "tcp"})
+    with pytest.raises(ValueError, match=r"data.attrs\['robot'\]\['pose_of'\]: expected 'flange', .*'tcp' "
+                                         r"alone does not say whose"):
+        read_robomimic(path)

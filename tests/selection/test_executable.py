@@ -26,8 +26,10 @@ def reach(k, n=90, t0=20.0):
     gripper = (s >= 0.6).astype(float)[:, None] * 255.0
     t = t0 + np.linspace(0.0, 2.0 + 0.1 * k, n) + 0.002 * np.sin(7 * s)  # an uneven clock
     q_ref = UR5e().ik(P, Q, q_seed=UR5e.home)
+    # the poses are the UR5e's default tool's, the 2F-85's TCP (its joints are their inverse kinematics)
     return Demonstration(t, {"position": P, "orientation": Q, "gripper": gripper,
-                             "force": np.c_[s, s ** 2, 0 * s], "joints": q_ref})
+                             "force": np.c_[s, s ** 2, 0 * s], "joints": q_ref},
+                         {"pose_of": "robotiq_2f85:tcp"})
 
 
 SKILL = [reach(k) for k in range(3)]

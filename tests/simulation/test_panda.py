@@ -36,6 +36,13 @@ def _model(recording):
     return robot_model("panda", base=np.array(frames["base"]), tool=np.array(frames["tool"]))
 
 
+def test_the_recording_says_its_poses_are_of_the_hands_grip_site(recording):
+    from skillbank.io import read_robomimic
+
+    assert recording["frames"]["pose_of"] == "panda_hand:grip_site"
+    assert {d.metadata["pose_of"] for d in read_robomimic(recording["path"])} == {"panda_hand:grip_site"}
+
+
 def test_fk_of_the_recorded_joints_is_the_recorded_tool_pose(recording):
     model = _model(recording)
     # the registered Panda's default tool is the grip site robosuite reports
@@ -129,11 +136,12 @@ def test_edit_on_the_panda_writes_joints_whose_fk_is_the_edited_path(cli, tmp_pa
     demo = skillbank.Demonstration(4.0 * s[:, 0], {"position": position, "orientation": quaternion})
     path = write_npz(demo, tmp_path / "demo.npz")
     goal = position[-1] + [0.03, -0.02, 0.01]
+    # FK of the registered Panda: the poses are its hand's grip site's, which the file does not say
     code, _, err = cli("edit", path, "--robot", "panda", "--goal", ",".join(f"{v:.6f}" for v in goal),
-                       "--out", tmp_path / "edited.npz")
+                       "--pose-of", "panda_hand:grip_site", "--out", tmp_path / "edited.npz")
     assert code == 0, err
     back = read_npz(tmp_path / "edited.npz")
-    assert back.metadata["robot"] == "panda"
+    assert back.metadata["robot"] == "panda" and back.metadata["pose_of"] == "panda_hand:grip_site"
     np.testing.assert_allclose(back["position"][-1], goal, atol=1e-6)
     p, quat = model.fk(back["joints"])
     assert np.linalg.norm(p - back["position"], axis=1).max() < 2e-6

@@ -94,10 +94,11 @@ CASES = [
     ("features declare 10^11 values", "UPDATE cluster_members SET features = ? WHERE primitive_id = 1",
      (_huge_header(),), READS_ROWS, r"clustering version 1 member 1 \(its features\): expected a \.npy array "
      r"whose header matches its data, got a header declaring 800000000000 bytes" + r".*" + _RESTORE),
+    # list shows each demonstration's point of the robot (its metadata's pose_of): it reads the metadata
     ("metadata is not JSON", "UPDATE demonstrations SET metadata = ? WHERE id = 1", ("{not json",),
-     READS_SAMPLES, r"demonstration 1 \(its metadata\): expected JSON text, got text that is not" + _REMOVE),
+     READS_ROWS, r"demonstration 1 \(its metadata\): expected JSON text, got text that is not" + _REMOVE),
     ("metadata is a list", "UPDATE demonstrations SET metadata = ? WHERE id = 1", ("[1, 2]",),
-     READS_SAMPLES, r"demonstration 1 \(its metadata\): expected a JSON object, got a JSON list" + _REMOVE),
+     READS_ROWS, r"demonstration 1 \(its metadata\): expected a JSON object, got a JSON list" + _REMOVE),
     ("n_steps = -5", "UPDATE demonstrations SET n_steps = -5 WHERE id = 1", (),
      READS_ROWS, r"demonstration 1: expected n_steps (>= 1|80 \(the samples of its t\)), got -5"),
     ("n_steps longer than t", "UPDATE demonstrations SET n_steps = 500 WHERE id = 1", (),
@@ -135,7 +136,7 @@ def test_a_damaged_library_is_one_line_through_every_command(cli, new_library, l
         shown = re.escape(store.location)  # as messages show it (a URL without its password)
     for command in READS_ROWS:
         code, out, err, made = _run(cli, command, location, tmp_path)
-        if command not in refusing:  # list reads no samples: it lists what the rows say
+        if command not in refusing:  # list reads no samples: it lists what the rows and metadata say
             assert code == 0, (command, err)
             continue
         assert code == 2 and out == "" and err.count("\n") == 1, (command, err)
