@@ -9,6 +9,7 @@ import sys
 from ..core import __version__
 from ..io import check_output_path
 from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment, _sim, _simulate
+from ._library_location import check_libraries
 from ._options import join_negative_values
 from ._output import error_line, escaped_stdout
 
@@ -94,6 +95,7 @@ def main(argv=None) -> int:
             raise
         try:
             _check_outputs(args)
+            check_libraries(args)
             with escaped_stdout():  # user-given text (labels, file names) without raw terminal escapes
                 status = int(args.func(args) or 0)
         except (ValueError, ImportError, OSError) as exc:
