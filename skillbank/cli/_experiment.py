@@ -106,6 +106,10 @@ def run(args) -> int:
 
 def _composition(args) -> int:
     from ..experiments import composition_experiment  # the whole stack, when it runs
+    from ..experiments._composition import check_options  # every option, before anything is recorded
+
+    check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
+                  method=args.method, replan=args.replan)
 
     progress = None
     if show_progress(args):
