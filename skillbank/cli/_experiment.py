@@ -105,8 +105,8 @@ def run(args) -> int:
 
 
 def _composition(args) -> int:
-    from ..experiments import composition_experiment  # the whole stack, when it runs
-    from ..experiments._composition import check_options  # every option, before anything is recorded
+    # the whole stack, when it runs; every option checked before anything is recorded
+    from ..experiments import check_options, composition_experiment
 
     check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
                   method=args.method, replan=args.replan)
