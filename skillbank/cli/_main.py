@@ -72,16 +72,35 @@ def _quiet_stdout() -> None:
 _OUTPUTS = ("out", "plot", "video", "view")
 
 
+def _written(option: str, value) -> str:
+    """The file an output option writes: its folder resolved (``./a``, ``d/../a``, a linked folder), its
+    own name kept (a link there is replaced, not followed: ``io.atomic_output``); ``--plot`` without an
+    extension writes ``.png`` (``plotting.figure_path``)."""
+    path = os.path.abspath(os.fspath(value))
+    folder, name = os.path.split(path)
+    if option == "plot" and not os.path.splitext(name)[1]:
+        name = name.rstrip(".") + ".png"
+    return os.path.join(os.path.realpath(folder), name)
+
+
 def _check_outputs(args) -> None:
-    """Refuse an output that exists and is neither a regular file nor a folder, before any work.
+    """Refuse an output that exists and is neither a regular file nor a folder, and one path given to two
+    output options, before any work.
 
     Writing to a FIFO blocks and writing to a device clobbers it; each writer
-    also checks (``io.atomic_output``), but only once the work is done.
+    also checks (``io.atomic_output``), but only once the work is done. Two
+    options on one path would write one file over the other.
     """
+    seen: dict = {}
     for option in _OUTPUTS:
         value = getattr(args, option, None)
         if isinstance(value, (str, os.PathLike)):
             check_output_path(value, name=option)
+            where = _written(option, value)
+            if where in seen:
+                raise ValueError(f"{option}: {os.fspath(value)!r} is the path --{seen[where]} writes "
+                                 f"({where!r}); give each output its own file")
+            seen[where] = option
 
 
 def main(argv=None) -> int:
