@@ -96,11 +96,15 @@ def _check_outputs(args) -> None:
         value = getattr(args, option, None)
         if isinstance(value, (str, os.PathLike)):
             check_output_path(value, name=option)
-            where = _written(option, value)
-            if where in seen:
-                raise ValueError(f"{option}: {os.fspath(value)!r} is the path --{seen[where]} writes "
-                                 f"({where!r}); give each output its own file")
-            seen[where] = option
+            wheres = [_written(option, value)]
+            if option == "plot" and getattr(args, "command_name", "") == "skillbank plan":
+                stem = os.path.splitext(wheres[0])[0]  # its PDDL beside the figure (planning.write_pddl)
+                wheres += [stem + ".domain.pddl", stem + ".problem.pddl"]
+            for where in wheres:
+                if where in seen:
+                    raise ValueError(f"{option}: {os.fspath(value)!r} writes {where!r}, which "
+                                     f"--{seen[where]} writes too; give each output its own file")
+                seen[where] = option
 
 
 def main(argv=None) -> int:

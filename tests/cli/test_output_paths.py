@@ -21,6 +21,7 @@ def _listing(folder):
     (["edit", "d.csv", "--goal", "0,0", "--out", "x.csv", "--plot", "x.csv"], "plot", "out"),
     (["segment", "d.csv", "--plot", "fig", "--out", "fig.png"], "plot", "out"),  # --plot fig writes fig.png
     (["plan", "lib.db", "--scene", "s.json", "--out", "p", "--view", "p"], "view", "out"),
+    (["plan", "lib.db", "--scene", "s.json", "--out", "p.domain.pddl", "--plot", "p.png"], "plot", "out"),
     (["library", "reuse", "lib.db", "--skill", "press", "--out", "r.csv", "--plot", "linked/r.csv"],
      "plot", "out"),
 ], ids=lambda a: " ".join(a) if isinstance(a, list) else a)
@@ -33,7 +34,7 @@ def test_one_path_for_two_outputs_is_one_line_and_nothing_written(argv, option, 
     code, out, err = cli(*argv)
     assert code == 2 and out == ""
     assert err.count("\n") == 1, err
-    assert f"error: {option}: " in err and f"is the path --{other} writes" in err
+    assert f"error: {option}: " in err and f"which --{other} writes too" in err
     assert "give each output its own file" in err
     assert _listing(tmp_path) == before
 
@@ -92,3 +93,14 @@ def test_out_and_plot_replace_a_link_on_the_command_line(option, name, outside, 
     assert code == 0, err
     assert not link.is_symlink() and link.stat().st_size > 0
     assert secret.read_bytes() == before  # nothing written outside the folder
+
+
+def test_the_plans_pddl_is_written_whole_and_replaces_a_link(outside):
+    from skillbank.planning import PlanResult, write_pddl
+
+    work, secret = outside
+    os.symlink(secret, work / "plan.domain.pddl")
+    result = PlanResult([], [], None, False, 0.0, {}, domain="(define (domain d))", problem="(define)")
+    paths = write_pddl(result, work / "plan")
+    assert [p.read_text() for p in paths] == ["(define (domain d))", "(define)"]
+    assert not paths[0].is_symlink() and secret.read_text() == "not yours"
