@@ -105,7 +105,11 @@ def run(args) -> int:
 
 
 def _composition(args) -> int:
-    from ..experiments import composition_experiment  # the whole stack, when it runs
+    # the whole stack, when it runs; every option checked before anything is recorded
+    from ..experiments import check_options, composition_experiment
+
+    check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
+                  method=args.method, replan=args.replan)
 
     progress = None
     if show_progress(args):

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["_DB", "_DB_READ", "_URL", "_location", "_target", "_library", "_open"]
+__all__ = ["_DB", "_DB_READ", "_URL", "_location", "_target", "_library", "_open", "check_libraries"]
+
+#: The arguments that name a library (``library copy`` has two).
+_LIBRARIES = ("db", "src", "dst")
 
 _DB = "the library: a file (see 'library init') or a postgresql:// URL"
 _DB_READ = ("the library, a file or a postgresql:// URL; opened read-only, so a library in a folder you "
@@ -65,3 +68,17 @@ def _open(args, *, create=False, readonly=False):
     if readonly:
         return _library(args.db, readonly=True)
     return _library(args.db, create=create)
+
+
+def check_libraries(args) -> None:
+    """Refuse a library file that is a FIFO, a device or a socket before any work (``skillbank.cli.main``).
+
+    The store refuses them too when it opens one (``store._schema.check_library_file``, the same check);
+    here a command that would first read, plan or record learns it before that work.
+    """
+    for name in _LIBRARIES:
+        value = getattr(args, name, None)
+        if isinstance(value, Path):
+            from ..store._schema import check_library_file  # the store's one check, when a file is named
+
+            check_library_file(value)

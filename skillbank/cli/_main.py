@@ -9,6 +9,7 @@ import sys
 from ..core import __version__
 from ..io import check_output_path
 from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment, _sim, _simulate
+from ._library_location import check_libraries
 from ._options import join_negative_values
 from ._output import error_line, escaped_stdout
 
@@ -71,16 +72,39 @@ def _quiet_stdout() -> None:
 _OUTPUTS = ("out", "plot", "video", "view")
 
 
+def _written(option: str, value) -> str:
+    """The file an output option writes: its folder resolved (``./a``, ``d/../a``, a linked folder), its
+    own name kept (a link there is replaced, not followed: ``io.atomic_output``); ``--plot`` without an
+    extension writes ``.png`` (``plotting.figure_path``)."""
+    path = os.path.abspath(os.fspath(value))
+    folder, name = os.path.split(path)
+    if option == "plot" and not os.path.splitext(name)[1]:
+        name = name.rstrip(".") + ".png"
+    return os.path.join(os.path.realpath(folder), name)
+
+
 def _check_outputs(args) -> None:
-    """Refuse an output that exists and is neither a regular file nor a folder, before any work.
+    """Refuse an output that exists and is neither a regular file nor a folder, and one path given to two
+    output options, before any work.
 
     Writing to a FIFO blocks and writing to a device clobbers it; each writer
-    also checks (``io.atomic_output``), but only once the work is done.
+    also checks (``io.atomic_output``), but only once the work is done. Two
+    options on one path would write one file over the other.
     """
+    seen: dict = {}
     for option in _OUTPUTS:
         value = getattr(args, option, None)
         if isinstance(value, (str, os.PathLike)):
             check_output_path(value, name=option)
+            wheres = [_written(option, value)]
+            if option == "plot" and getattr(args, "command_name", "") == "skillbank plan":
+                stem = os.path.splitext(wheres[0])[0]  # its PDDL beside the figure (planning.write_pddl)
+                wheres += [stem + ".domain.pddl", stem + ".problem.pddl"]
+            for where in wheres:
+                if where in seen:
+                    raise ValueError(f"{option}: {os.fspath(value)!r} writes {where!r}, which "
+                                     f"--{seen[where]} writes too; give each output its own file")
+                seen[where] = option
 
 
 def main(argv=None) -> int:
@@ -94,6 +118,7 @@ def main(argv=None) -> int:
             raise
         try:
             _check_outputs(args)
+            check_libraries(args)
             with escaped_stdout():  # user-given text (labels, file names) without raw terminal escapes
                 status = int(args.func(args) or 0)
         except (ValueError, ImportError, OSError) as exc:

@@ -1,6 +1,6 @@
 """Reproducible experiments and the main demo job."""
 
-from ._composition import COMPOSITIONS, composition_experiment
+from ._composition import COMPOSITIONS, check_options, composition_experiment
 from ._demo import run_segmentation_demo, synthetic_multistream, synthetic_ur5e
 from ._library_demo import run_library_demo
 from ._planning_demo import button_task, rail_task, reach_task, run_planning_demo
@@ -20,6 +20,6 @@ __all__ = [
     "PAPER_REPRESENTATIVES",
     "RailExperimentResult",
     "composition", "count_misclustered",
-    "composition_experiment", "COMPOSITIONS",
+    "composition_experiment", "check_options", "COMPOSITIONS",
     "plot_rail_experiment", "rail_experiment", "run_rail_experiment",
 ]

@@ -23,12 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._validation import check_positive
 from ..pipeline import Library
-from ..simulation import binomial_interval, execute_plan, record
+from ..selection import METHODS
+from ..simulation import BASELINES, binomial_interval, execute_plan, record
 from ..simulation._compose import tally
 from ..simulation._stack3 import CUBES
 
-__all__ = ["composition_experiment", "COMPOSITIONS", "PICK", "PLACE"]
+__all__ = ["composition_experiment", "check_options", "COMPOSITIONS", "PICK", "PLACE"]
 
 #: The two skills' PDDL descriptions: a pick needs a free hand and a clear object resting on nothing, a
 #: place puts what is held on a clear object or place.
@@ -42,6 +44,39 @@ COMPOSITIONS = {
     "stack3": (("Stack",), "robosuite:Stack3"),
 }
 EPISODE_SEEDS = 1000  # episode k is placed from seed + EPISODE_SEEDS + k: never a recording's seed
+#: Seeds reach robosuite's and NumPy's generators, which take 0 to 2^32 - 1.
+LAST_SEED = 2 ** 32 - 1
+
+
+def check_options(name: str, *, episodes, seed, demos, method, replan=False) -> dict:
+    """Every option of a composition experiment checked, before anything is recorded; the checked values.
+
+    Each is a one-line ValueError naming its own option (``demos``, not ``episodes``), so that a bad
+    option costs no recording (tens of seconds per task).
+
+    Examples
+    --------
+    >>> check_options("stack3", episodes=0, seed=0, demos=1, method="lte")
+    Traceback (most recent call last):
+    ...
+    ValueError: episodes: expected an integer > 0, got 0
+    """
+    if name not in COMPOSITIONS:
+        raise ValueError(f"experiment: expected one of {sorted(COMPOSITIONS)}, got {name!r}")
+    episodes = check_positive(episodes, name="episodes", integer=True)
+    demos = check_positive(demos, name="demos", integer=True)
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    last = int(seed) + EPISODE_SEEDS + episodes - 1
+    if last > LAST_SEED:
+        raise ValueError(f"seed: episode {episodes - 1} would be placed from seed {last} (seed + "
+                         f"{EPISODE_SEEDS} + episode), past the generators' last seed {LAST_SEED}; give a "
+                         "smaller --seed")
+    if method not in METHODS and method not in BASELINES:
+        raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
+    if not isinstance(replan, bool):
+        raise ValueError(f"replan: expected True or False, got {replan!r}")
+    return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan}
 
 
 def _label_one_each(lib) -> dict:
@@ -96,6 +131,11 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         ``{"experiment", "scene", "method", "seed", "demos", "episodes", "successes", "success_rate",
         "interval", "failures", "per_episode", "labelled", "library"}``.
 
+    Raises
+    ------
+    ValueError
+        A bad option (:func:`check_options`), before anything is recorded.
+
     Examples
     --------
     >>> composition_experiment("dishes")
@@ -103,8 +143,8 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     ...
     ValueError: experiment: expected one of ['stack3', 'unload'], got 'dishes'
     """
-    if name not in COMPOSITIONS:
-        raise ValueError(f"experiment: expected one of {sorted(COMPOSITIONS)}, got {name!r}")
+    checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan)
+    episodes, seed, demos = checked["episodes"], checked["seed"], checked["demos"]
     tasks, scene = COMPOSITIONS[name]
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp if folder is None else folder)

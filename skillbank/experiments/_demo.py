@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import POSE_OF, Demonstration
-from ..io import load_lasa, write_json
+from ..io import atomic_output, load_lasa, write_json
 from ..plotting import plot_keypoint_probability, plot_segmentation_summary, plot_segments
 from ..robots import robot_model, tool_point
 from ..segmentation import segment
@@ -139,6 +139,7 @@ def run_segmentation_demo(out, *, shape: str = "NShape") -> dict:
                   f"(t = {item['keypoint_times']} s).", ""]
         lines += [f"![{k}]({Path(v).name})" for k, v in item["figures"].items()] + [""]
     summary = out / "summary.md"
-    summary.write_text("\n".join(lines))
+    with atomic_output(summary) as tmp:  # whole; a link there is replaced, not written through
+        tmp.write_text("\n".join(lines))
     write_json({"items": items}, out / "summary.json")
     return {"out": str(out), "summary": str(summary), "items": items}

@@ -11,7 +11,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..core import Constraints, Demonstration, Sphere, exp_map
-from ..io import load, load_lasa, load_rail, write_json, write_trajectory
+from ..io import atomic_output, load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..plotting import plot_executable, plot_reuse, plot_skills
 from ..plotting._view import write_view
@@ -450,7 +450,8 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
               "segmentation": None if seg is None else seg["summary"]}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"
-    path.write_text(_markdown(result, rows, reuses, seg))
+    with atomic_output(path) as tmp:  # whole; a link there is replaced, not written through
+        tmp.write_text(_markdown(result, rows, reuses, seg))
     result["summary"] = str(path)
     write_json(result, out / "summary.json")
     return result

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import Demonstration
-from ..io import load, load_rail, write_json, write_trajectory
+from ..io import atomic_output, load, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..planning import load_scene, write_pddl
 from ..plotting import plot_plan
@@ -232,7 +232,8 @@ def _command(lib, scene_path, robot, limits) -> str:
 def _task(lib, name, doc, out: Path, *, robot, limits, random_state, title) -> dict:
     """Plan ``doc`` with ``lib``'s skills; write the scene, PDDL, CSV and figure; the task's summary."""
     scene_path = out / f"{name}.scene.json"
-    scene_path.write_text(json.dumps(doc, indent=2) + "\n")
+    with atomic_output(scene_path) as tmp:  # whole; a link there is replaced, not written through
+        tmp.write_text(json.dumps(doc, indent=2) + "\n")
     scene = load_scene(scene_path)
     t0 = time.perf_counter()
     res = lib.plan(scene, robot=robot, limits=limits, random_state=random_state)
@@ -471,7 +472,8 @@ def run_planning_demo(out, *, data=None, robot="ur5e", random_state=0) -> dict:
         tasks["rail_table"] = rail_task(out, data, random_state=random_state)
     result = {"out": str(out), "tasks": tasks}
     path = out / "summary.md"
-    path.write_text(_markdown(result))
+    with atomic_output(path) as tmp:
+        tmp.write_text(_markdown(result))
     result["summary"] = str(path)
     result["seconds"] = time.perf_counter() - t0
     write_json(result, out / "summary.json")

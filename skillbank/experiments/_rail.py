@@ -162,6 +162,10 @@ def rail_experiment(data_dir, *, mode: str = "default", classes=("reaching", "pu
     if mode not in _MODES:
         raise ValueError(f"mode: expected one of {list(_MODES)}, got {mode!r}")
     names = _check_classes(classes)
+    if not (random_state is None or (isinstance(random_state, (int, np.integer)) and not isinstance(
+            random_state, bool) and 0 <= random_state <= 2 ** 32 - 1)):
+        raise ValueError(f"random_state: expected None or an integer in [0, 2^32 - 1] (--seed), got "
+                         f"{random_state!r}")
     folder = _rail_folder(data_dir)
     timing = {}
     start = time.perf_counter()

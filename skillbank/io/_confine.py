@@ -174,8 +174,9 @@ def atomic_output(path, *, name: str = "out"):
     (``os.replace``), else it is removed and ``path`` is left as it was.
     An existing target that is not a regular file (a FIFO, a device, a
     folder) is refused before anything is written: writing to a FIFO would
-    block, to a device would clobber it. A symbolic link to a regular file
-    is written through (the link stays a link).
+    block, to a device would clobber it. A symbolic link at ``path`` (to a
+    regular file or to nothing) is replaced by the new file, never written
+    through: its target, which may be anywhere, is left as it was.
 
     Parameters
     ----------
@@ -198,7 +199,10 @@ def atomic_output(path, *, name: str = "out"):
     >>> open(out).read()
     'done'
     """
-    p, target, st = _output_target(path, name=name, folder_too=False)
+    p, _, st = _output_target(path, name=name, folder_too=False)
+    if os.path.islink(p):  # replaced, not written through: the new file takes the link's place
+        st = None
+    target = Path(os.path.realpath(p.parent)) / p.name
     folder = target.parent
     if not folder.is_dir():
         raise ValueError(f"{name}: the folder {str(p.parent)!r} of {str(p)!r} does not exist; "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..io import atomic_output
 from ..store import Store
 from ._binding import check_binding
 from ._chain import PlanResult, _Skill, reproduce_plan
@@ -232,5 +233,6 @@ def write_pddl(result: PlanResult, stem) -> tuple:
     stem = Path(stem)
     paths = (stem.with_name(stem.name + ".domain.pddl"), stem.with_name(stem.name + ".problem.pddl"))
     for path, text in zip(paths, (result.domain, result.problem), strict=True):
-        path.write_text(text)
+        with atomic_output(path, name="plot") as tmp:  # whole; a link there is replaced, not written through
+            tmp.write_text(text)
     return paths

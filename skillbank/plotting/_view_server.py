@@ -3,7 +3,10 @@
 The server answers only its own pages (:class:`~skillbank.plotting._view.LibraryView`'s names, ``/`` for
 the index) and the three assets, to GET and HEAD; every other method is refused with 405, every other path
 with 404 (no file is ever read from a path in a request, so none outside the site can be reached, and
-nothing is listed). Pages are rendered one at a time by one worker thread that owns the library's
+nothing is listed). Requests are answered by a bounded pool of threads, and every connection has a
+deadline (``_http_pool``: idle and half-open clients hold no thread; the limits are parameters, or
+``SKILLBANK_VIEW_WORKERS``, ``SKILLBANK_VIEW_CONNECTIONS``, ``SKILLBANK_VIEW_TIMEOUT``). Pages are rendered
+one at a time by one worker thread that owns the library's
 connection (SQLite's may not be shared between threads), so it reads what the library holds at each
 request. Log lines carry the request line escaped and never a password: the library is named by its
 store's ``location``, which masks it, and an error is logged masked.
@@ -13,15 +16,15 @@ from __future__ import annotations
 
 import concurrent.futures
 import re
-import socket
 import sys
 import threading
 from http import HTTPStatus
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import BaseHTTPRequestHandler
 from urllib.parse import unquote, urlsplit
 
 from ..core._text import printable
 from ..store._secrets import mask_text
+from ._http_pool import PooledHTTPServer, PooledHTTPServer6, head_reader, server_limits
 from ._view import PAGE_SIZE, LibraryView, _assets
 from ._view_html import CSP_HEADER
 
@@ -53,13 +56,16 @@ def parse_address(text: str) -> tuple[str, int]:
     return host or DEFAULT_HOST, int(port)
 
 
-class _Server6(ThreadingHTTPServer):
-    address_family = socket.AF_INET6  # an IPv6 host ("::1")
-
-
 class _Handler(BaseHTTPRequestHandler):
     server_version = "skillbank-view"
     sys_version = ""
+
+    def setup(self):
+        super().setup()
+        head = self.server.take_head(self.request)
+        if head is not None:  # read by the accepting thread: reading it here never waits
+            self.rfile.close()
+            self.rfile = head_reader(head)
 
     def __getattr__(self, name):
         # any method but GET and HEAD (POST, PUT, DELETE, PATCH, OPTIONS, an unknown one): 405
@@ -117,6 +123,11 @@ class ViewServer:
     page_size : int, default=PAGE_SIZE
     log : file-like or None, default=sys.stderr
         Where each request is logged (one line each), None for no log.
+    workers, connections, timeout : optional
+        Threads that answer requests (8), connections open at once (128; past it the oldest idle one
+        is closed) and seconds a client has to send its request and to read the answer (10); each
+        defaults to ``SKILLBANK_VIEW_WORKERS``, ``SKILLBANK_VIEW_CONNECTIONS``, ``SKILLBANK_VIEW_TIMEOUT``
+        when set.
 
     Examples
     --------
@@ -131,21 +142,26 @@ class ViewServer:
     """
 
     def __init__(self, open_library, *, host: str = DEFAULT_HOST, port: int = 0, page_size: int = PAGE_SIZE,
-                 log=sys.stderr):
+                 log=sys.stderr, workers=None, connections=None, timeout=None):
         self.log = log
+        limits = server_limits(workers=workers, connections=connections, timeout=timeout)
         self._assets = {f"/{name}": data for name, data in _assets().items()}
         self._worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="view")
         self._library = None
         try:
             self._library = self._worker.submit(open_library).result()
             self._view = LibraryView(self._library, page_size=page_size)
-            self._http = (_Server6 if ":" in host else ThreadingHTTPServer)((host, port), _Handler)
+            self._http = (PooledHTTPServer6 if ":" in host else PooledHTTPServer)(
+                (host, port), _Handler, log_line=self._log_line, **limits)
         except BaseException:
             self.close()
             raise
-        self._http.daemon_threads = True
         self._http.view_server = self
         self._thread = None
+
+    def _log_line(self, text: str) -> None:
+        if self.log is not None:
+            print(printable(mask_text(text)), file=self.log, flush=True)
 
     @property
     def port(self) -> int:

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..core import Demonstration
 from ..robots import RobotModel, robot_model
+from ._bounds import check_frames, check_steps
 from ._mujoco import import_mujoco
 from ._video import Recorder, check_video_path, select_gl
 from ._world import GRIP_FORCE, PRESS_FORCE, build_world
@@ -209,7 +210,7 @@ def simulate(trajectory, scene, *, robot="ur5e", targets=None, timestep: float =
     progress : callable or tqdm, optional
         ``progress(done, total)`` over physics steps, or a tqdm bar (its ``total`` is set).
     video : path, optional
-        An animated GIF rendered off-screen (MUJOCO_GL=egl or osmesa).
+        An animated GIF rendered off-screen (MUJOCO_GL=egl or osmesa), each frame written as it is rendered.
 
     Returns
     -------
@@ -219,7 +220,9 @@ def simulate(trajectory, scene, *, robot="ur5e", targets=None, timestep: float =
     ------
     ValueError
         A trajectory without joints or of the wrong width, a robot that starts inside an obstacle or the
-        table, a table above the start tool point, bad parameters.
+        table, a table above the start tool point, bad parameters; more physics steps than
+        ``SKILLBANK_MAX_SIMULATION_STEPS`` (2^21) or video frames than ``SKILLBANK_MAX_VIDEO_FRAMES``
+        (2^14), counted before anything is allocated.
     ImportError
         Without MuJoCo: one line naming the extra.
 
@@ -243,6 +246,13 @@ def simulate(trajectory, scene, *, robot="ur5e", targets=None, timestep: float =
     if not (np.isfinite(settle) and settle >= 0):
         raise ValueError(f"settle: expected seconds >= 0, got {settle!r}")
     duration = float(t[-1])
+    steps = check_steps(duration, float(timestep))  # before any array of the replay is allocated
+    if video is not None:
+        fps_ok = isinstance(video_fps, (int, float)) and np.isfinite(video_fps)
+        if not (fps_ok and 0 < video_fps <= 1 / timestep):
+            raise ValueError(f"video_fps: expected frames/s in (0, {1 / timestep:g}] (one per physics step "
+                             f"at most), got {video_fps!r}")
+        check_frames(steps, max(1, int(round(1 / (video_fps * timestep)))), float(video_fps))
     windows = _targets(targets, scene, duration)
     tool = np.eye(4) if model.gripper_ is None else model.gripper_.tool()
     start_tcp = (model.link_frames(q_cmd[0])[0, -1] @ tool)[:3, 3]
@@ -275,6 +285,14 @@ def simulate(trajectory, scene, *, robot="ur5e", targets=None, timestep: float =
     finally:
         if renderer is not None:
             renderer.close()
+
+
+def _tool_points(model, q, tool, chunk: int = 16384):
+    """The tool point ``(m, 3)`` at each row of ``q``, in chunks (all link frames at once: ~1 KB a step)."""
+    out = np.empty((len(q), 3))
+    for s in range(0, len(q), chunk):
+        out[s:s + chunk] = (model.link_frames(q[s:s + chunk])[:, -1] @ tool)[:, :3, 3]
+    return out
 
 
 class _Runner:
@@ -409,8 +427,7 @@ class _Runner:
     def _result(self, times, q_sim, q_ref, tool, force, depth, buttons, objects, pos0, held, lifted, events,
                 press_fraction, wall):
         model, d = self.model, self.d
-        tcp = (model.link_frames(q_sim)[:, -1] @ tool)[:, :3, 3]
-        tcp_ref = (model.link_frames(q_ref)[:, -1] @ tool)[:, :3, 3]
+        tcp, tcp_ref = _tool_points(model, q_sim, tool), _tool_points(model, q_ref, tool)
         out_buttons = {}
         for b, (_, travel) in buttons.items():
             pressed = np.flatnonzero(depth[b] >= press_fraction * travel)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sqlite3
+import stat
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -107,11 +108,37 @@ def transaction(conn, *, write: bool = True):
     conn.execute("COMMIT")
 
 
+def check_library_file(path) -> None:
+    """Refuse a library path that exists and is not a regular file (or a link to one), without opening it.
+
+    The one check every SQLite library goes through (:func:`connect`): a FIFO would block SQLite's
+    open or fail deep inside it (``disk I/O error``), a device would be read or written as a database.
+
+    Examples
+    --------
+    >>> check_library_file("/dev/null")
+    Traceback (most recent call last):
+    ...
+    ValueError: library '/dev/null': expected a regular file (a SQLite library), got a character device; \
+give the path of a library file
+    """
+    from ..io._errors import kind_of  # the words for a file's kind, shared with the readers
+
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise ValueError(f"library {str(path)!r}: cannot inspect it: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"library {str(path)!r}: expected a regular file (a SQLite library), got "
+                         f"{kind_of(mode)}; give the path of a library file")
+
+
 def _check_header(path: Path) -> None:
+    check_library_file(path)
     if not path.exists() or path.stat().st_size == 0:
         return
-    if path.is_dir():
-        raise ValueError(f"library {str(path)!r}: expected a file, got a folder")
     with open(path, "rb") as fh:
         head = fh.read(len(_SQLITE_MAGIC))
     if head != _SQLITE_MAGIC:
