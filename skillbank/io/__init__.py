@@ -4,7 +4,8 @@ Readers for the robot multi-stream HDF5 recordings, handwriting HDF5 files,
 the RAIL benchmark (MATLAB v5) and the LASA dataset; what labs record: ROS 1
 and ROS 2 bags and MCAP files (:func:`read_rosbag`, extra ``skillbank[ros]``),
 LeRobot datasets (:func:`read_lerobot`, extra ``skillbank[lerobot]``) and
-robomimic HDF5 files (:func:`read_robomimic`); generic CSV and NPZ readers and
+robomimic HDF5 files (:func:`read_robomimic`), robosuite's raw collection format (states replayed in
+robosuite, :func:`read_robosuite_raw`); generic CSV and NPZ readers and
 writers; JSON output for results; and format detection with :func:`load` /
 :func:`load_all`. Every reading problem raises
 :class:`FormatError`, a :class:`ValueError` with a one-line message
@@ -30,6 +31,7 @@ from ._lasa import lasa_shapes, load_lasa
 from ._lerobot import read_lerobot, select_episodes
 from ._rail import load_rail, read_rail_file
 from ._robomimic import ROBOSUITE_POSE_OF, read_robomimic
+from ._robosuite_raw import import_robosuite, read_robosuite_raw
 from ._robot_h5 import read_robot_h5
 from ._ros import read_rosbag
 from ._ros_messages import parse_topics
@@ -54,7 +56,7 @@ __all__ = [
     "read_rosbag",
     "parse_topics",
     "read_lerobot",
-    "read_robomimic", "ROBOSUITE_POSE_OF",
+    "read_robomimic", "ROBOSUITE_POSE_OF", "read_robosuite_raw", "import_robosuite",
     "select_episodes",
     "read_rail_file",
     "load_rail",

@@ -23,21 +23,22 @@ from ._handwriting_h5 import HANDWRITING_GROUPS, read_handwriting_h5
 from ._lerobot import LEROBOT_INFO, read_lerobot
 from ._rail import read_rail_file
 from ._robomimic import ROBOMIMIC_GROUP, is_robomimic, read_robomimic
+from ._robosuite_raw import is_states_only, read_robosuite_raw
 from ._robot_h5 import ROBOT_STREAMS, read_robot_h5
 from ._ros import ROS2_METADATA, ROS_FILES, read_rosbag, ros_kind
 from ._tabular import read_csv, read_npz
 
 __all__ = ["detect_format", "load", "load_all", "FORMATS"]
 
-FORMATS = ("robot-h5", "handwriting-h5", "robomimic-h5", "rail-mat", "csv", "npz", "ros1-bag", "ros2-bag",
-           "mcap", "lerobot")
+FORMATS = ("robot-h5", "handwriting-h5", "robomimic-h5", "robosuite-raw", "rail-mat", "csv", "npz",
+           "ros1-bag", "ros2-bag", "mcap", "lerobot")
 _EXTENSIONS = {
     ".h5": "hdf5", ".hdf5": "hdf5", ".hdf": "hdf5",
     ".mat": "mat", ".npz": "npz", ".csv": "csv", ".txt": "csv",
 }
 # Recordings read by the optional readers, which take options of their own (load_all's reader_options).
 _RECORDINGS = {"ros1-bag": read_rosbag, "ros2-bag": read_rosbag, "mcap": read_rosbag, "lerobot": read_lerobot,
-               "robomimic-h5": read_robomimic}
+               "robomimic-h5": read_robomimic, "robosuite-raw": read_robosuite_raw}
 
 
 def _hdf5_kind(path) -> str:
@@ -46,11 +47,14 @@ def _hdf5_kind(path) -> str:
     with open_h5(path) as h5:
         groups = sorted(k for k in h5.keys() if isinstance(h5[k], h5py.Group))
         robomimic = is_robomimic(h5)
+        states_only = robomimic and is_states_only(h5)
     robot_group = ROBOT_STREAMS["joints"][0]
     if robot_group in groups:
         return "robot-h5"
     if any(g in groups for g in HANDWRITING_GROUPS):
         return "handwriting-h5"
+    if states_only:  # robosuite's raw collection, or robomimic before its observations were extracted
+        return "robosuite-raw"
     if robomimic:
         return "robomimic-h5"
     raise FormatError(
@@ -103,8 +107,9 @@ def detect_format(path) -> str:
     Returns
     -------
     str
-        One of ``"robot-h5"``, ``"handwriting-h5"``, ``"robomimic-h5"`` (all
-        ``.h5``/``.hdf5``, told apart by their groups), ``"rail-mat"``
+        One of ``"robot-h5"``, ``"handwriting-h5"``, ``"robomimic-h5"``,
+        ``"robosuite-raw"`` (states without observations: robosuite's raw
+        collection; all ``.h5``/``.hdf5``, told apart by their groups), ``"rail-mat"``
         (``.mat``), ``"csv"`` (``.csv``/``.txt``), ``"npz"``, ``"ros1-bag"``
         (``.bag``), ``"ros2-bag"`` (a folder with ``metadata.yaml``, or a
         ``.db3`` file), ``"mcap"`` (``.mcap``) or ``"lerobot"`` (a folder with
@@ -208,7 +213,7 @@ def load_all(path, *, group: str = "normalized", repair_time=None,
     fmt = detect_format(path)
     options = _recording_options(fmt, options)
     if fmt in _RECORDINGS:
-        if fmt not in ("lerobot", "robomimic-h5"):  # the bag reader checks its clocks like the others
+        if fmt not in ("lerobot", "robomimic-h5", "robosuite-raw"):  # the bag reader checks its clocks too
             options.setdefault("repair_time", repair_time)
         demos = _RECORDINGS[fmt](path, **options)
     elif fmt == "robot-h5":

@@ -35,6 +35,7 @@ from ..core import check_pose_of, log_map, matrix_to_quaternion
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..io import ROBOSUITE_POSE_OF
+from ..io import import_robosuite as import_quiet_robosuite
 from ..robots import pose_point
 
 __all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ"]
@@ -94,12 +95,8 @@ TASKS = {
 
 
 def import_robosuite():
-    """The ``robosuite`` module, or an ImportError of one line naming the extra."""
-    try:
-        import robosuite  # the optional extra skillbank[sim], only when an environment is made
-    except ImportError:
-        raise ImportError(MISSING_ROBOSUITE) from None
-    return robosuite
+    """The ``robosuite`` module, its set-up log off, or an ImportError of one line naming the extra."""
+    return import_quiet_robosuite(MISSING_ROBOSUITE)
 
 
 def parse_env(spec: str) -> str:
