@@ -32,9 +32,13 @@ KINDS = ("motion", "contact", "discrete")
 #: stream is motion (positions, joints, orientations, or a user's own name).
 DEFAULT_KINDS = {"force": "contact", "torque": "contact", "wrench": "contact", "gripper": "discrete"}
 
-#: A discrete stream switches state when it crosses from one quarter of its
-#: range to the other (hysteresis), so that noise about one level, or a slow
-#: drift within it, is never a switch.
+#: A discrete stream switches state when it moves, between two rests, by at least this fraction of its
+#: whole range (a reversal of less is noise about one level, or a drift within it). Relative to where it
+#: rested, not to fixed levels: fingers closing on a thin can stop half-way (37-50 % of their range in a
+#: PickPlace demonstration whose milk and cereal grasps set the range), and that grasp is a switch too.
+SWITCH = 0.25
+#: Within one move, the switch is placed half-way between the last sample in its first quarter and the
+#: first in its last quarter (the middle of a gripper's closing).
 SWITCH_LOW, SWITCH_HIGH = 0.25, 0.75
 
 #: A discrete stream whose range is below this fraction of its magnitude
@@ -75,19 +79,58 @@ def stream_kind(name: str, kinds=None) -> str:
     return kind
 
 
+def _pivots(u: np.ndarray, height: float) -> list[int]:
+    """The samples where ``u`` turns after a move of at least ``height`` (a zig-zag of its extremes).
+
+    The first pivot is the extreme the first such move starts from, each next one the extreme a move of
+    at least ``height`` the other way starts from, the last the end of the last move; of equal samples
+    the latest (a gripper starts closing at the end of its rest).
+    """
+    # only where u changes can an extreme begin or end: a held gripper is a few such samples
+    moving = np.flatnonzero(np.diff(u) != 0)
+    points = np.unique(np.r_[0, moving, moving + 1, u.size - 1]).astype(int)
+    pivots, lo, hi, rising = [], 0, 0, None
+    for i in points:
+        if rising is None:
+            hi = i if u[i] >= u[hi] else hi
+            lo = i if u[i] <= u[lo] else lo
+            if u[hi] - u[lo] >= height:
+                rising = bool(hi > lo)
+                pivots.append(lo if rising else hi)
+        elif rising:
+            if u[i] >= u[hi]:
+                hi = i
+            elif u[hi] - u[i] >= height:
+                pivots.append(hi)
+                rising, lo = False, i
+        else:
+            if u[i] <= u[lo]:
+                lo = i
+            elif u[i] - u[lo] >= height:
+                pivots.append(lo)
+                rising, hi = True, i
+    if rising is not None:
+        pivots.append(hi if rising else lo)
+    return pivots
+
+
 def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
     """Where a discrete stream switches between its levels, each with confidence 1.
 
-    Each dimension is scaled to [0, 1] over its own range; it switches when
-    it crosses from below ``SWITCH_LOW`` to above ``SWITCH_HIGH`` or back, and
-    the switch is placed half-way through the crossing (the middle of a
-    gripper's closing). A switch is a definite event, hence confidence 1.
+    Each dimension is scaled to [0, 1] over its own range; it switches at every move between two rests
+    of at least :data:`SWITCH` of that range, whatever level it starts and ends at (one grasp closes the
+    fingers fully on a small object, another half-way on a large one). The switch is placed half-way
+    through the move's crossing (from its first quarter to its last: the middle of a gripper's closing).
+    A switch is a definite event, hence confidence 1.
 
     Examples
     --------
     >>> y = np.r_[np.zeros(50), np.linspace(0, 1, 11), np.ones(50), np.zeros(40)]
     >>> discrete_events(y[:, None])[0].tolist()
     [55, 110]
+    >>> half = np.r_[np.ones(50), np.full(50, 0.45), np.ones(50), np.zeros(50), np.ones(50)]
+    >>> discrete_events(half[:, None])[0].tolist()  # closing half-way on one object, fully on another
+    [49, 99, 149, 199]
     """
     Y = np.asarray(Y, dtype=float)
     Y = Y.reshape(Y.shape[0], -1)
@@ -97,15 +140,16 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
         if hi - lo <= HELD_RANGE * (1.0 + max(abs(lo), abs(hi))):
             continue
         u = (y - lo) / (hi - lo)
-        # state: +1 above the high mark, -1 below the low mark, 0 in between (kept from before)
-        mark = np.where(u >= SWITCH_HIGH, 1, np.where(u <= SWITCH_LOW, -1, 0))
-        at = np.flatnonzero(mark)
-        if at.size < 2:
-            continue
-        switch = np.flatnonzero(np.diff(mark[at]) != 0)
-        for k in switch:
-            # the crossing runs from the last sample in the old state to the first in the new one
-            events.append((int(at[k]) + int(at[k + 1])) // 2)
+        pivots = _pivots(u, SWITCH)
+        for a, b in zip(pivots[:-1], pivots[1:]):
+            leg = u[a:b + 1] if u[b] > u[a] else 1.0 - u[a:b + 1]
+            first, last = float(leg[0]), float(leg[-1])
+            low, high = first + SWITCH_LOW * (last - first), first + SWITCH_HIGH * (last - first)
+            # the crossing runs from the last sample in the move's first quarter to the first in its last
+            start = int(np.flatnonzero(leg <= low)[-1]) if np.any(leg <= low) else 0
+            above = np.flatnonzero(leg[start:] >= high)
+            end = start + (int(above[0]) if above.size else leg.size - 1)
+            events.append(a + (start + end) // 2)
     events = np.unique(np.asarray(events, dtype=int))
     return events, np.full(events.size, MAX_CONFIDENCE)
 
