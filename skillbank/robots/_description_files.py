@@ -133,18 +133,18 @@ def _parse(data: bytes, path: str):
 
 
 def _locate(state: _State, path: str, shown: str, value: str, candidates: list[str]) -> str:
-    """The first candidate in the folder that exists (its real path); one outside is never looked at."""
-    outside = False
+    """The real path of the first candidate that exists, in MuJoCo's order of trying them.
+
+    A candidate outside the folder is refused, whether or not a later one would be found inside: MuJoCo
+    would read it if it existed, and whether it exists is never looked at.
+    """
     for candidate in candidates:
         if not inside(state.folder, candidate):
-            outside = True
-            continue
+            raise ValueError(f"robot description {path}: {shown} {value!r} lies outside the description's "
+                             f"folder {state.folder}; keep every file it names inside that folder")
         real = os.path.realpath(candidate)
         if os.path.exists(real):
             return real
-    if outside:
-        raise ValueError(f"robot description {path}: {shown} {value!r} lies outside the description's folder "
-                         f"{state.folder}; keep every file it names inside that folder")
     raise ValueError(f"robot description {path}: {shown} {value!r} is no file in the description's folder "
                      f"{state.folder}")
 
@@ -330,10 +330,10 @@ def _check_limit(path: str, joint) -> None:
 def _count(path: str, root, body: str, joints: tuple, geoms: tuple) -> None:
     """Refuse more elements, bodies, joints or geoms than the bounds, before MuJoCo parses any."""
     tags = [el.tag for el in root.iter()]
-    over_bound(path, len(tags), "ELEMENTS")
     over_bound(path, tags.count(body), "BODIES")
     over_bound(path, sum(tags.count(t) for t in joints), "JOINTS")
     over_bound(path, sum(tags.count(t) for t in geoms), "GEOMS")
+    over_bound(path, len(tags), "ELEMENTS")
 
 
 def read_description(path) -> Described:
