@@ -22,7 +22,15 @@ import xml.parsers.expat
 from collections import deque
 from typing import NamedTuple
 
-from ._description_bounds import Budget, check_png, inside, over_bound, read_regular_file
+from ._description_bounds import (
+    BOUNDS,
+    Budget,
+    check_png,
+    description_bound,
+    inside,
+    over_bound,
+    read_regular_file,
+)
 
 __all__ = ["Described", "read_description"]
 
@@ -62,7 +70,12 @@ _WORDS = frozenset("""name class childclass model link joint joint1 joint2 body 
     geom geom1 geom2 parent child mesh material texture hfield tendon tendon1 tendon2 actuator objname refname
     objtype reftype target prefix content_type type plugin key mode meshname cranksite slidersite
     jointinparent""".split())
+#: The tags counted as bodies, joints and geoms.
+_COUNTED = {"mjcf": ("body", ("joint", "freejoint"), ("geom",)),
+            "urdf": ("link", ("joint",), ("visual", "collision"))}
 _NONFINITE = re.compile(r"[+-]?(nan|inf)", re.IGNORECASE)
+#: What a value holding a non-finite number must contain: a word, a large exponent, a hex float or 309 digits.
+_SUSPECT = re.compile(r"nan|inf|e[+-]?\d{3}|0x|\d{309}", re.IGNORECASE)
 
 
 class _State:
@@ -105,26 +118,51 @@ def _check_depth(root, path: str) -> None:
         stack.extend((c, d + 1) for c in el)
 
 
+class _Scan:
+    """expat's pass over one file before it is built into a tree: no DOCTYPE or ENTITY, and the depth
+    and the counts of :data:`_COUNTED` within their bounds, stopping at the first element over."""
+
+    def __init__(self, path: str):
+        self.path, self.depth, self.counts, self.kind = path, 0, {}, None
+        self.bounds = {key: description_bound(key) for key in ("ELEMENTS", "BODIES", "JOINTS", "GEOMS")}
+
+    def declared(self, *_):
+        raise ValueError(f"robot description {self.path}: declares a DOCTYPE or ENTITY, which MuJoCo's XML "
+                         "parser reads differently; remove the declaration")
+
+    def start(self, tag, _attrs):
+        if self.kind is None:
+            self.kind = "urdf" if tag.lower() == "robot" else "mjcf"
+            body, joints, geoms = _COUNTED[self.kind]
+            self.keys = {body: "BODIES", **dict.fromkeys(joints, "JOINTS"), **dict.fromkeys(geoms, "GEOMS")}
+        self.depth += 1
+        if self.depth > 200:  # MuJoCo's XML parser stops at 500; deeper is no arm
+            raise ValueError(f"robot description {self.path}: elements nested more than 200 deep")
+        for key in (self.keys.get(tag), "ELEMENTS"):
+            if key is not None:
+                self.counts[key] = self.counts.get(key, 0) + 1
+                if self.counts[key] > self.bounds[key]:
+                    over_bound(self.path, self.counts[key], key, f"or more {BOUNDS[key][1]}")
+
+    def end(self, _tag):
+        self.depth -= 1
+
+
 def _parse(data: bytes, path: str):
     """The tree of one file's bytes; a DOCTYPE or ENTITY (MuJoCo's parser reads them otherwise) is refused."""
-    def declared(*_):
-        raise ValueError(f"robot description {path}: declares a DOCTYPE or ENTITY, which MuJoCo's XML parser "
-                         "reads differently; remove the declaration")
-
-    scan = xml.parsers.expat.ParserCreate()
-    scan.StartDoctypeDeclHandler = declared
-    scan.EntityDeclHandler = declared
+    scan, parser = _Scan(path), xml.parsers.expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = parser.EntityDeclHandler = scan.declared
+    parser.StartElementHandler, parser.EndElementHandler = scan.start, scan.end
     try:
-        scan.Parse(data, True)
+        parser.Parse(data, True)
         root = ET.fromstring(data)
     except (xml.parsers.expat.ExpatError, ET.ParseError) as e:
         raise ValueError(f"robot description {path}: not well-formed XML ({e}); give a URDF or MJCF "
                          "file") from None
-    _check_depth(root, path)
     for el in root.iter():
         for key, value in el.attrib.items():
-            if key in _WORDS or key.lower().startswith("file"):
-                continue
+            if key in _WORDS or key.lower().startswith("file") or not _SUSPECT.search(value):
+                continue  # most values: one regular expression over the whole, not a loop over the numbers
             for token in value.split():
                 if _nonfinite(token):
                     raise ValueError(f"robot description {path}: <{el.tag}> {key}={value[:60]!r} holds "
@@ -225,7 +263,7 @@ def _mjcf(state: _State, root) -> None:
             pending.extendleft((c, real, "" if where == "." else where) for c in reversed(list(inner)))
         parent[:] = children
     _check_depth(root, state.main)
-    _count(state.main, root, "body", ("joint", "freejoint"), ("geom",))
+    _count(state.main, root, *_COUNTED["mjcf"])
     for el in root.iter():
         if el.tag.lower() in _REFUSED:
             raise ValueError(f"robot description {origin.get(el, (state.main,))[0]}: <{el.tag}> is not "
@@ -288,7 +326,7 @@ def _urdf(state: _State, root) -> None:
                 link.remove(visual)
     for joint in root.findall("joint"):
         _check_limit(path, joint)
-    _count(path, root, "link", ("joint",), ("visual", "collision"))
+    _count(path, root, *_COUNTED["urdf"])
     for el in root.iter():
         for attr in [a for a in el.attrib if a.lower().startswith("file")]:
             if el.tag != "mesh" or attr != "filename":

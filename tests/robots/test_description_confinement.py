@@ -178,7 +178,7 @@ def _include_bomb(robot, outside):
 
 def _thousand_links(robot, outside):
     (robot / "r.urdf").write_text(urdf(1000))
-    return robot / "r.urdf", r"r.urdf: 1001 bodies \(links\), more than the bound of 200; set " \
+    return robot / "r.urdf", r"r.urdf: 201 or more bodies \(links\), more than the bound of 200; set " \
                              r"SKILLBANK_MAX_DESCRIPTION_BODIES to a larger number to read it$"
 
 
@@ -186,8 +186,8 @@ def _boxes(robot, outside):
     boxes = "".join(f'<geom type="box" size="0.1 0.1 0.1" pos="{i * 1e-3:.3f} 0 0"/>' for i in range(100_000))
     (robot / "arm.xml").write_text(f'<mujoco><worldbody><body name="b"><joint name="j"/>{boxes}</body>'
                                    '</worldbody></mujoco>')
-    return robot / "arm.xml", r"arm.xml: 100000 geoms \(visual and collision\), more than the bound of " \
-                              r"1000; set SKILLBANK_MAX_DESCRIPTION_GEOMS"
+    return robot / "arm.xml", r"arm.xml: 1001 or more geoms \(visual and collision\), more than the " \
+                              r"bound of 1000; set SKILLBANK_MAX_DESCRIPTION_GEOMS"
 
 
 def _huge_mesh(robot, outside):
@@ -399,13 +399,13 @@ def test_each_bound_has_a_variable_that_raises_it(tmp_path, monkeypatch):
     path = tmp_path / "r.urdf"
     path.write_text(urdf(3))
     monkeypatch.setenv("SKILLBANK_MAX_DESCRIPTION_JOINTS", "2")
-    with pytest.raises(ValueError, match=r"r.urdf: 3 joints, more than the bound of 2; set "
+    with pytest.raises(ValueError, match=r"r.urdf: 3 or more joints, more than the bound of 2; set "
                                          r"SKILLBANK_MAX_DESCRIPTION_JOINTS to a larger number to read it$"):
         load_description(path)
     monkeypatch.setenv("SKILLBANK_MAX_DESCRIPTION_JOINTS", "3")
     assert load_description(path).joint_names == ("j0", "j1", "j2")
     monkeypatch.setenv("SKILLBANK_MAX_DESCRIPTION_GEOMS", "2")
-    with pytest.raises(ValueError, match=r"3 geoms \(visual and collision\), more than the bound of 2"):
+    with pytest.raises(ValueError, match=r"3 or more geoms \(visual and collision\), more than the bound"):
         read_description(path)
     monkeypatch.setenv("SKILLBANK_MAX_DESCRIPTION_BYTES", "100")
     with pytest.raises(ValueError, match=r"its files hold more than the bound of 100 bytes in all .* set "
@@ -428,6 +428,14 @@ def test_includes_and_pixels_are_bounded(tmp_path, monkeypatch):
         read_description(tmp_path / "arm.xml")
     monkeypatch.delenv("SKILLBANK_MAX_DESCRIPTION_INCLUDES")
     assert read_description(tmp_path / "arm.xml").kind == "mjcf"
+    for k in range(3):  # each file within the bound, the description over it once expanded
+        (tmp_path / f"p{k}.xml").write_text(f'<mujocoinclude><body name="b{k}"/></mujocoinclude>')
+    includes = "".join(f'<include file="p{k}.xml"/>' for k in range(3))
+    (tmp_path / "arm.xml").write_text(f"<mujoco><worldbody>{includes}</worldbody></mujoco>")
+    monkeypatch.setenv("SKILLBANK_MAX_DESCRIPTION_BODIES", "2")
+    with pytest.raises(ValueError, match=r"arm.xml: 3 bodies \(links\), more than the bound of 2"):
+        read_description(tmp_path / "arm.xml")
+    monkeypatch.delenv("SKILLBANK_MAX_DESCRIPTION_BODIES")
     png(tmp_path / "wide.png", 4, 4)
     data = bytearray((tmp_path / "wide.png").read_bytes())
     data[16:24] = struct.pack(">II", 100_000, 100_000)  # the header of a decompression bomb
