@@ -286,6 +286,7 @@ def _mjcf(state: _State, root) -> None:
         for key in ("assetdir", "meshdir", "texturedir"):
             el.attrib.pop(key, None)
     for el in root.iter():
+        _check_grid(origin.get(el, (state.main,))[0], el)
         for attr in [a for a in el.attrib if a.lower().startswith("file")]:
             src, sub = origin.get(el, (state.main, ""))
             shown = _shown(el.tag, attr)
@@ -302,6 +303,21 @@ def _mjcf(state: _State, root) -> None:
             el.set(attr, _asset(state, real, value, src, f"{shown} {value!r}"))
             if attr == "file" and el.get("name") is None:
                 el.set("name", _stem(value))  # the name MuJoCo gives it, which the flat name may not keep
+
+
+def _check_grid(path: str, el) -> None:
+    """A texture made by MuJoCo (``builtin``) or a height field without a file is sized by its attributes:
+    their pixels are bounded as an image's, before MuJoCo allocates them."""
+    keys = {"texture": ("width", "height"), "hfield": ("nrow", "ncol")}.get(el.tag)
+    if keys is None:
+        return
+    try:
+        width, height = (int(el.get(k, "0")) for k in keys)
+    except ValueError:
+        return  # MuJoCo's own error says what is wrong
+    faces = 6 if el.tag == "texture" and el.get("type") in ("cube", "skybox") else 1
+    over_bound(path, abs(width * height) * faces, "PIXELS",
+               f"pixels in <{el.tag} {keys[0]}={width} {keys[1]}={height}>")
 
 
 def _urdf(state: _State, root) -> None:

@@ -446,6 +446,11 @@ def test_includes_and_pixels_are_bounded(tmp_path, monkeypatch):
                                          r"100000\), more than the bound of 33554432; set "
                                          r"SKILLBANK_MAX_DESCRIPTION_PIXELS"):
         read_description(tmp_path / "arm.xml")
+    for asset in ('<texture name="t" type="2d" builtin="checker" width="40000" height="40000"/>',
+                  '<hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/>'):
+        (tmp_path / "arm.xml").write_text(f"<mujoco><asset>{asset}</asset>{ARM}</mujoco>")
+        with pytest.raises(ValueError, match=r"1600000000 pixels in <(texture width|hfield nrow)=40000 "):
+            read_description(tmp_path / "arm.xml")
 
 
 @pytest.mark.parametrize("body, match", [
