@@ -70,6 +70,9 @@ _WORDS = frozenset("""name class childclass model link joint joint1 joint2 body 
     geom geom1 geom2 parent child mesh material texture hfield tendon tendon1 tendon2 actuator objname refname
     objtype reftype target prefix content_type type plugin key mode meshname cranksite slidersite
     jointinparent""".split())
+#: Deepest nesting read: MuJoCo's XML parser (tinyxml2) stops at 500, and the tree is written out again
+#: recursively.
+_DEPTH = 490
 #: The tags counted as bodies, joints and geoms.
 _COUNTED = {"mjcf": ("body", ("joint", "freejoint"), ("geom",)),
             "urdf": ("link", ("joint",), ("visual", "collision"))}
@@ -113,8 +116,9 @@ def _check_depth(root, path: str) -> None:
     stack = [(root, 1)]
     while stack:
         el, d = stack.pop()
-        if d > 200:  # MuJoCo's XML parser stops at 500; deeper is no arm
-            raise ValueError(f"robot description {path}: elements nested more than 200 deep")
+        if d > _DEPTH:
+            raise ValueError(f"robot description {path}: elements nested more than {_DEPTH} deep (MuJoCo's "
+                             "XML parser reads 500)")
         stack.extend((c, d + 1) for c in el)
 
 
@@ -136,8 +140,9 @@ class _Scan:
             body, joints, geoms = _COUNTED[self.kind]
             self.keys = {body: "BODIES", **dict.fromkeys(joints, "JOINTS"), **dict.fromkeys(geoms, "GEOMS")}
         self.depth += 1
-        if self.depth > 200:  # MuJoCo's XML parser stops at 500; deeper is no arm
-            raise ValueError(f"robot description {self.path}: elements nested more than 200 deep")
+        if self.depth > _DEPTH:
+            raise ValueError(f"robot description {self.path}: elements nested more than {_DEPTH} deep "
+                             "(MuJoCo's XML parser reads 500)")
         for key in (self.keys.get(tag), "ELEMENTS"):
             if key is not None:
                 self.counts[key] = self.counts.get(key, 0) + 1

@@ -453,6 +453,18 @@ def test_includes_and_pixels_are_bounded(tmp_path, monkeypatch):
             read_description(tmp_path / "arm.xml")
 
 
+def test_nesting_is_bounded_in_a_file_and_across_includes(tmp_path):
+    (tmp_path / "arm.xml").write_text("<mujoco>" + "<default>" * 500 + "</default>" * 500 + "</mujoco>")
+    with pytest.raises(ValueError, match=r"arm.xml: elements nested more than 490 deep \(MuJoCo's XML"):
+        read_description(tmp_path / "arm.xml")
+    for k in range(3):  # 300 deep each: 900 once expanded
+        inner = f'<include file="p{k + 1}.xml"/>' if k < 2 else ""
+        (tmp_path / f"p{k}.xml").write_text("<x>" + "<default>" * 300 + inner + "</default>" * 300 + "</x>")
+    (tmp_path / "arm.xml").write_text('<mujoco><include file="p0.xml"/></mujoco>')
+    with pytest.raises(ValueError, match=r"arm.xml: elements nested more than 490 deep"):
+        read_description(tmp_path / "arm.xml")
+
+
 @pytest.mark.parametrize("body, match", [
     ('<asset><model name="m" file="other.xml"/></asset>', r"<model> is not supported"),
     ('<worldbody><replicate count="1000000"><geom size="1"/></replicate></worldbody>',
