@@ -19,11 +19,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from skillbank.robots import check_description_files, load_description, robot_model
 from skillbank.robots._description import _compile
 from skillbank.robots._description_bounds import description_bound
-from skillbank.robots._description_files import read_description
+from skillbank.robots._description_files import _nonfinite, read_description
 
 mujoco = pytest.importorskip("mujoco")  # the extra skillbank[sim]
 
@@ -375,6 +377,25 @@ def test_a_nan_is_refused_before_mujoco_prints_on_stdout(tmp_path, capfd):
     with pytest.raises(ValueError, match=r"arm.xml: <body> pos='0 NaN 0' holds 'NaN', not a finite number"):
         load_description(path)
     assert capfd.readouterr().out == ""
+
+
+def test_what_mujoco_prints_while_it_compiles_goes_to_stderr(tmp_path, capfd):
+    from skillbank.robots._description_files import Described
+
+    nan = Described("mjcf", '<mujoco><worldbody><body pos="0 nan 0"><joint/><geom size="1"/></body>'
+                            '</worldbody></mujoco>', {}, ())  # past the checks: MuJoCo warns, then fails
+    with pytest.raises(ValueError, match=r"arm.xml: MuJoCo cannot read this MJCF \(Nan, Inf or huge value"):
+        _compile(tmp_path / "arm.xml", nan)
+    out, err = capfd.readouterr()
+    assert out == "" and "WARNING: XML contains a 'NaN'" in err
+
+
+@given(st.floats(allow_nan=False, allow_infinity=False))
+def test_finite_numbers_pass_and_their_non_finite_spellings_do_not(x):
+    for text in (repr(x), f"{x:.17e}", f"{x:g}", x.hex()):
+        assert not _nonfinite(text)
+    for text in ("nan", "-NaN", "nan(0x1)", "inf", "+Infinity", "1e999", "-1E+400", "0x1p99999"):
+        assert _nonfinite(text)
 
 
 def test_the_cli_refuses_a_bad_description_with_one_line_and_an_empty_stdout(cli, tmp_path):
