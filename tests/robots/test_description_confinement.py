@@ -180,7 +180,7 @@ def _include_bomb(robot, outside):
 
 def _thousand_links(robot, outside):
     (robot / "r.urdf").write_text(urdf(1000))
-    return robot / "r.urdf", r"r.urdf: 201 or more bodies \(links\), more than the bound of 200; set " \
+    return robot / "r.urdf", r"r.urdf: 101 or more bodies \(links\), more than the bound of 100; set " \
                              r"SKILLBANK_MAX_DESCRIPTION_BODIES to a larger number to read it$"
 
 
