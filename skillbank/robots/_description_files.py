@@ -316,9 +316,9 @@ def _check_grid(path: str, el) -> None:
     keys = {"texture": ("width", "height"), "hfield": ("nrow", "ncol")}.get(el.tag)
     if keys is None:
         return
-    try:
-        width, height = (int(el.get(k, "0")) for k in keys)
-    except ValueError:
+    try:  # as a number, whatever its spelling ("4e4", "40000.5"): finite, the numbers' check has seen to it
+        width, height = (int(float((el.get(k) or "0").split()[0])) for k in keys)
+    except (ValueError, IndexError):
         return  # MuJoCo's own error says what is wrong
     faces = 6 if el.tag == "texture" and el.get("type") in ("cube", "skybox") else 1
     over_bound(path, abs(width * height) * faces, "PIXELS",

@@ -468,7 +468,7 @@ def test_includes_and_pixels_are_bounded(tmp_path, monkeypatch):
                                          r"SKILLBANK_MAX_DESCRIPTION_PIXELS"):
         read_description(tmp_path / "arm.xml")
     for asset in ('<texture name="t" type="2d" builtin="checker" width="40000" height="40000"/>',
-                  '<hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/>'):
+                  '<hfield name="h" nrow="4e4" ncol="40000.5" size="1 1 1 1"/>'):
         (tmp_path / "arm.xml").write_text(f"<mujoco><asset>{asset}</asset>{ARM}</mujoco>")
         with pytest.raises(ValueError, match=r"1600000000 pixels in <(texture width|hfield nrow)=40000 "):
             read_description(tmp_path / "arm.xml")
