@@ -379,8 +379,10 @@ def test_a_nan_is_refused_before_mujoco_prints_on_stdout(tmp_path, capfd):
     assert capfd.readouterr().out == ""
 
 
-def test_what_mujoco_prints_while_it_compiles_goes_to_stderr(tmp_path, capfd):
+def test_what_mujoco_prints_while_it_compiles_goes_to_stderr(tmp_path, capfd, monkeypatch):
     from skillbank.robots._description_files import Described
+
+    monkeypatch.chdir(tmp_path)  # MuJoCo also logs its warnings to MUJOCO_LOG.TXT in the working folder
 
     nan = Described("mjcf", '<mujoco><worldbody><body pos="0 nan 0"><joint/><geom size="1"/></body>'
                             '</worldbody></mujoco>', {}, ())  # past the checks: MuJoCo warns, then fails
