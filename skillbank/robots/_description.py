@@ -2,20 +2,22 @@
 
 MuJoCo's own compiler reads both formats (``mujoco.MjSpec``; extra ``sim``,
 imported when a description is read, so ``skillbank.robots`` stays numpy
-only). Before MuJoCo sees a file, every file it names (meshes, textures,
-included MJCF) is resolved and refused if it lies outside the description's
-folder. The compiled model at zero joint angles gives the joints' anchors and
-axes, the tool frame's pose, the limits and every collision geom; each body's
-collision geoms become one capsule that contains them (the smallest found
-over three axes and a range of radii; MuJoCo collides a mesh as its convex
-hull, and a capsule contains the hull exactly when it contains the vertices).
+only). MuJoCo opens no file of a description: skillbank reads the file and
+every file it names, confined to its folder and within bounds, and MuJoCo
+compiles from memory (``_description_files``). The compiled model at zero
+joint angles gives the joints' anchors and axes, the tool frame's pose, the
+limits and every collision geom; each body's collision geoms become one
+capsule that contains them (the smallest found over three axes and a range
+of radii; MuJoCo collides a mesh as its convex hull, and a capsule contains
+the hull exactly when it contains the vertices).
 docs/robots.md records the choices.
 """
 
 from __future__ import annotations
 
 import os
-import xml.etree.ElementTree as ET
+import sys
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -23,97 +25,39 @@ import numpy as np
 
 from ._bodies import Capsule
 from ._chain import KinematicChain, self_collision_skip
+from ._description_files import Described, read_description
 
 __all__ = ["load_description", "enclosing_capsule", "check_description_files"]
 
 #: Points per rim when a cylinder is enclosed: the polygon is grown to contain the circle.
 _RIM = 32
+#: Most vertices of MuJoCo's convex hull of a mesh (``maxhullvert``). skillbank fits its capsules to every
+#: vertex and never uses the hull, whose making grows faster than quadratically: 63,000 vertices on a
+#: sphere (a 1 MB STL) took 15 s, 250,000 (4 MB) 213 s; capped at 4096 they take 0.2 s.
+_MAX_HULL = 4096
 
 
-def _refuse(path: Path, what: str, value: str, folder: Path) -> None:
-    raise ValueError(f"robot description {path}: {what} {value!r} lies outside the description's folder "
-                     f"{folder}; keep every file it names inside that folder")
+def check_description_files(path) -> str:
+    """Read a description and every file it names, confined to its folder; return its format.
 
-
-def _inside(folder: Path, candidate: Path) -> bool:
-    try:
-        candidate.resolve().relative_to(folder.resolve())
-    except ValueError:
-        return False
-    return True
-
-
-def _parse(path: Path):
-    try:
-        return ET.parse(path).getroot()
-    except ET.ParseError as e:
-        raise ValueError(f"robot description {path}: not well-formed XML ({e}); give a URDF or MJCF "
-                         "file") from None
-    except OSError as e:
-        raise ValueError(f"robot description {path}: cannot be read ({e.strerror or e})") from None
-
-
-def check_description_files(path, *, folder=None, _depth=0) -> str:
-    """Check that every file a description names lies inside its folder; return its format.
-
-    URDF (``<robot>``): every ``<mesh filename>`` (``package://`` and ``file://`` prefixes taken off)
-    and any ``meshdir`` of a ``<mujoco><compiler>`` extension. MJCF (``<mujoco>``): every ``file``
-    attribute (meshes, textures, height fields, skins, ``<include>``, recursively) after the
-    compiler's ``meshdir``, ``texturedir`` and ``assetdir``. Absolute paths and paths through a
-    link out of the folder are refused alike.
+    Every file is resolved with MuJoCo 3.3.7's rules (URDF meshes after ``strippath`` and the
+    ``<mujoco><compiler>`` block; MJCF includes, each parsed once, and every file of meshes,
+    skins, height fields and textures, cube faces included, after ``meshdir`` / ``texturedir`` /
+    ``assetdir`` in document order) and read as the bytes of a regular file inside the
+    description's folder; a file outside it, a FIFO or a device, a DOCTYPE, a non-finite number,
+    a URDF limit with lower above upper, or a description over a bound (docs/robots.md) is refused.
 
     Returns
     -------
     str
         ``"urdf"`` or ``"mjcf"``.
+
+    Examples
+    --------
+    >>> check_description_files(robot_model("panda").chain.source)  # doctest: +SKIP
+    'mjcf'
     """
-    path = Path(path)
-    folder = path.parent if folder is None else Path(folder)
-    root = _parse(path)
-    if root.tag == "robot":
-        dirs = [c.get("meshdir") for c in root.iter("compiler") if c.get("meshdir")]
-        for d in dirs:
-            if os.path.isabs(d) or not _inside(folder, path.parent / d):
-                _refuse(path, "meshdir", d, folder)
-        for mesh in root.iter("mesh"):
-            name = mesh.get("filename", "")
-            for prefix in ("package://", "file://"):
-                if name.startswith(prefix):
-                    name = name[len(prefix):]
-            if name and (os.path.isabs(name) or not _inside(folder, path.parent / (dirs[-1] if dirs else "")
-                                                            / name)):
-                _refuse(path, "mesh", mesh.get("filename", ""), folder)
-        return "urdf"
-    if root.tag != "mujoco":
-        raise ValueError(f"robot description {path}: expected a URDF (<robot>) or MJCF (<mujoco>) document, "
-                         f"got <{root.tag}>")
-    base = {"mesh": "meshdir", "skin": "meshdir", "texture": "texturedir", "hfield": "assetdir"}
-    dirs = {}
-    for c in root.iter("compiler"):
-        for key in ("meshdir", "texturedir", "assetdir"):
-            if c.get(key) is not None:
-                dirs[key] = c.get(key)
-    for key, d in dirs.items():
-        if os.path.isabs(d) or not _inside(folder, path.parent / d):
-            _refuse(path, key, d, folder)
-    for el in root.iter():
-        name = el.get("file")
-        if name is None:
-            continue
-        if os.path.isabs(name):
-            _refuse(path, f"<{el.tag}> file", name, folder)
-        if el.tag == "include":
-            target = path.parent / name
-            if not _inside(folder, target):
-                _refuse(path, "<include> file", name, folder)
-            if _depth > 20:
-                raise ValueError(f"robot description {path}: <include> nested more than 20 deep")
-            check_description_files(target, folder=folder, _depth=_depth + 1)
-            continue
-        d = dirs.get(base.get(el.tag, "assetdir"), dirs.get("assetdir", ""))
-        if not _inside(folder, path.parent / d / name):
-            _refuse(path, f"<{el.tag}> file", name, folder)
-    return "mjcf"
+    return read_description(path).kind
 
 
 def enclosing_capsule(points, radii=None, *, margin=1e-6):
@@ -253,17 +197,37 @@ def _perpendicular(z: np.ndarray, hint: np.ndarray) -> np.ndarray:
     return x / np.linalg.norm(x)
 
 
-def _compile(path: Path, kind: str):
+@contextmanager
+def _stdout_to_stderr():
+    """MuJoCo prints its warnings on the standard output, which ``--json`` keeps for JSON: send them to
+    the standard error."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _compile(path: Path, described: Described):
     import mujoco  # extra "sim": MuJoCo's compiler reads both formats
 
+    kind = described.kind
     try:
-        spec = mujoco.MjSpec.from_file(str(path))
-        # a URDF's fixed links are its tool frames: keep them as bodies (MuJoCo fuses them by default)
-        spec.compiler.fusestatic = False
-        # kinematics needs no inertia; a description without it (common in URDF) still compiles
-        spec.compiler.boundmass = 1e-6
-        spec.compiler.boundinertia = 1e-9
-        return spec.compile()
+        with _stdout_to_stderr():
+            # from memory: the XML names no path, every file is an asset's bytes (_description_files)
+            spec = mujoco.MjSpec.from_string(described.xml, assets=described.assets)
+            for mesh in spec.meshes:
+                if mesh.maxhullvert < 0 or mesh.maxhullvert > _MAX_HULL:
+                    mesh.maxhullvert = _MAX_HULL
+            # a URDF's fixed links are its tool frames: keep them as bodies (MuJoCo fuses them by default)
+            spec.compiler.fusestatic = False
+            # kinematics needs no inertia; a description without it (common in URDF) still compiles
+            spec.compiler.boundmass = 1e-6
+            spec.compiler.boundinertia = 1e-9
+            return spec.compile()
     except ValueError as e:  # MuJoCo's parser and compiler errors
         first = str(e).strip().splitlines()
         raise ValueError(f"robot description {path}: MuJoCo cannot read this {kind.upper()} "
@@ -313,8 +277,7 @@ def _load(path: str, stamp: float, tool_frame, name):
     import mujoco  # extra "sim"
 
     file = Path(path)
-    kind = check_description_files(file)
-    m = _compile(file, kind)
+    m = _compile(file, read_description(file))
     d = mujoco.MjData(m)
     d.qpos[:] = 0.0
     mujoco.mj_kinematics(m, d)
