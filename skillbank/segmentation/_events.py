@@ -141,7 +141,7 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
             continue
         u = (y - lo) / (hi - lo)
         pivots = _pivots(u, SWITCH)
-        for a, b in zip(pivots[:-1], pivots[1:]):
+        for a, b in zip(pivots[:-1], pivots[1:], strict=True):
             leg = u[a:b + 1] if u[b] > u[a] else 1.0 - u[a:b + 1]
             first, last = float(leg[0]), float(leg[-1])
             low, high = first + SWITCH_LOW * (last - first), first + SWITCH_HIGH * (last - first)

@@ -120,8 +120,8 @@ def test_a_recorded_world_that_names_files_opens_none_of_them(human, demos, tmp_
     ({"env_info": {"env_name": "Lift", "robots": "UR5e"}},
      r"'demo_1/states' holds 32 values a step, and robosuite's Lift with \['UR5e'\] has \d+: recorded in "
      r"another world"),
-    ({"env_info": {"env_name": "NoSuchTask", "robots": "Panda"}}, r"the environment 'NoSuchTask' is not one of "
-                                                                  r"robosuite's"),
+    ({"env_info": {"env_name": "NoSuchTask", "robots": "Panda"}},
+     r"the environment 'NoSuchTask' is not one of robosuite's"),
     ({"env_info": {"env_name": "Lift"}}, r"expected the recorded robot\(s\) in the environment's 'robots'"),
     ({"drop": ("env_info", "env")}, r"expected data.attrs\['env_info'\] \(robosuite's raw format\) or "
                                     r"data.attrs\['env_args'\] \(robomimic\)"),
