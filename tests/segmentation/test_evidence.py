@@ -279,3 +279,20 @@ def test_three_button_without_force_is_cut_at_each_press(data_dir):
     # with force the cuts are as they were (the orientation's slow turns back displace nothing)
     np.testing.assert_allclose(segment(demo).keypoint_times - demo.t[0], [7.65, 9.41, 14.08, 18.87, 22.75],
                                atol=0.01)
+
+
+def test_every_grasp_of_several_objects_is_a_switch_whatever_the_fingers_close_to():
+    """Issue 42: in one PickPlace demonstration the milk's grasp closes the fingers fully and the can's
+    stops them at 37-50 % of their range; each grasp and each release is a switch (the old rule, a
+    crossing from the bottom to the top quarter of the whole range, missed the can's)."""
+    rng = np.random.default_rng(3)
+    opened, levels = 0.04, [0.0, 0.018, 0.016, 0.021]  # closed on milk, then on can-sized objects (37-50 %)
+    parts = [np.full(60, opened)]
+    for level in levels:
+        parts += [np.linspace(opened, level, 8), np.full(80, level), np.linspace(level, opened, 8),
+                  np.full(60, opened)]
+    y = np.concatenate(parts) + rng.normal(0.0, 2e-4, sum(map(len, parts)))
+    at, _ = discrete_events(np.c_[y, -y])  # robosuite's two finger joints, mirrored
+    assert len(at) == 2 * len(levels)
+    starts = np.cumsum([0] + [len(p) for p in parts])[1:-1:4]  # each grasp's closing begins here
+    np.testing.assert_array_less(np.abs(at[::2] - (starts + 4)), 3)  # half-way through each closing
