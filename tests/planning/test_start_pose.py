@@ -49,10 +49,11 @@ def test_a_plan_whose_start_is_a_position_alone_starts_clear_and_presses_every_b
                                                                                    tmp_path):
     doc = three_buttons()
     scene = write_scene(tmp_path, doc)
-    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "ur5e",
+    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "UR5e",
                          "--simulate", "--json")
     assert code == 0, err
     res = json.loads(out)
+    assert res["robot"] == res["simulation"]["robot"] == "ur5e"  # the arm it drove (issue 41, item 6)
     J = np.asarray(res["streams"]["joints"])
     assert _start_is_clear(doc, J) >= CLEARANCE
     np.testing.assert_allclose(robot_model("ur5e").fk(J[0])[0], doc["start"]["position"], atol=1e-9)
@@ -143,3 +144,12 @@ def test_a_numerical_arm_tries_seeds_and_keeps_the_clear_solutions():
     with pytest.raises(ValueError, match=r"^start: robot panda has no configuration .* every seed tried: "
                                          r"seed home: its \w+ [\d.]+ mm into ball; seed 1: "):
         clear_starts(model, scene_from_dict(doc), p, r, names=["ball"], margin=CLEARANCE, label=str)
+
+
+def test_plan_simulate_says_which_arm_it_drove(cli, button_library, tmp_path):
+    """Issue 41, item 6: the text names the arm, and --robot is taken in any case."""
+    scene = write_scene(tmp_path, three_buttons())
+    code, out, err = cli("plan", str(button_library.path), "--scene", str(scene), "--robot", "Ur5E",
+                         "--simulate")
+    assert code == 0, err
+    assert any(line.startswith("  simulated ") and " s on ur5e at " in line for line in out.splitlines())
