@@ -59,10 +59,9 @@ def _candidates(model, position, quaternion, reference):
         except ValueError:
             out.append((label, None, "unreachable"))
             continue
-        same = next((f for f, p in found if np.abs(wrap_angle(q - p)).max() < 1e-3), None)
-        if same is not None:  # a seed that converged to a configuration already tried
-            continue
-        found.append((label, q))
+        if any(np.abs(wrap_angle(q - p)).max() < 1e-3 for p in found):
+            continue  # a seed that converged to a configuration already tried
+        found.append(q)
         out.append((label, q, None))
     return out
 
