@@ -52,6 +52,23 @@ def test_the_command_line_takes_the_robot_in_any_case(cli, tmp_path, given):
     assert out.splitlines()[0].startswith(f"{traj}: simulated 0.5 s on ur5e at ")
 
 
+def test_library_reuse_takes_the_robot_in_any_case(cli, data_dir, tmp_path):
+    from skillbank import Library
+
+    db = tmp_path / "lib.db"
+    with Library(db) as lib:
+        lib.add_files([data_dir / "seed" / "three_button_pressing_demo.h5"], label="button")
+        goal = next(p.demo for p in lib.primitives() if p.id == 3)["position"][-1] + [0.03, -0.02, 0.0]
+    joints = {}
+    for given in ("ur5e", "UR5E", "Ur5e"):
+        code, out, err = cli("library", "reuse", db, "--skill", "button", "--method", "ja", "--goal",
+                             ",".join(f"{v:.6f}" for v in goal), "--robot", given, "--json")
+        assert code == 0, err
+        joints[given] = json.loads(out)["streams"]["joints"]
+    for given in ("UR5E", "Ur5e"):  # the same arm: the same joints (to round-off)
+        np.testing.assert_allclose(joints[given], joints["ur5e"], atol=1e-12)
+
+
 # ------------------------------------------------------------------ robosuite's arms
 
 
