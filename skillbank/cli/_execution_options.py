@@ -13,8 +13,8 @@ __all__ = ["add_robot_options", "add_export_options", "add_execution_options", "
            "execution_params", "export_params", "add_tool_frame_option", "cli_robot", "ROBOT_HELP"]
 
 #: What ``--robot`` takes, for every command's help.
-ROBOT_HELP = ("a registered robot (ur5e, with its Robotiq 2F-85; panda) or a URDF / MJCF description file "
-              "(docs/robots.md)")
+ROBOT_HELP = ("a registered robot (ur5e, with its Robotiq 2F-85; panda; in any case: UR5e, Panda) or a "
+              "URDF / MJCF description file (docs/robots.md)")
 
 
 def add_tool_frame_option(p) -> None:

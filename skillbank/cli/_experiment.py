@@ -135,7 +135,8 @@ def _composition(args) -> int:
         verdict = "success" if row["success"] else f"failure at step {row['failure']['step']}: " \
             f"{row['failure']['reason']}"
         print(f"  seed {row['seed']}: {' '.join(row['plan'])}: {verdict}")
-    print(f"{report['scene']} ({report['method']}): {report['successes']}/{report['episodes']} = "
+    print(f"{report['scene']} ({report['method']}, on {report['robot']}): {report['successes']}/"
+          f"{report['episodes']} = "
           f"{100 * report['success_rate']:.0f} % [{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %)")
     if report["failures"]:
         print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(report["failures"].items())))

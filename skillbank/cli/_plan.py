@@ -163,6 +163,7 @@ def _plan(args) -> int:
         doc["planner"] = _planner(args)
         doc["written"] = [str(p) for p in written]
         if sim is not None:
+            doc["robot"] = sim.robot  # the arm the simulation drove
             doc["simulation"] = sim.to_dict()
             doc["facts"] = {fact: {"planned": True, "achieved": value} for fact, value in sim.facts.items()}
             doc["agree"] = status == 0
@@ -326,7 +327,9 @@ def _plan_physics(args) -> int:
         print(f"  {verdict} by the environment's check, {row['control_steps']} control steps")
     lo, hi = report["interval"]
     print(f"{args.scene}: {report['successes']}/{report['episodes']} = {100 * report['success_rate']:.0f} % "
-          f"[{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %), method {report['method']}")
+          f"[{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %), method {report['method']}, on {report['robot']}")
+    for note in report["notes"]:
+        print(f"  note: {note}")
     if report["failures"]:
         print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(report["failures"].items())))
     for path in written:

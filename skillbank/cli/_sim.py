@@ -41,13 +41,13 @@ def add_parser(sub):
                    help="episodes run at most (default 3 x --episodes); fewer successes write nothing")
     r.add_argument("--out", type=Path, required=True, help="the HDF5 file to write (must not exist)")
     r.add_argument("--robot", default="UR5e",
-                   help="robosuite's arm: UR5e (default), Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7, each "
-                        "with its default gripper")
+                   help="robosuite's arm: UR5e (default), Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7 (any "
+                        "case: panda, ur5e), each with its default gripper")
     r.add_argument("--json", action="store_true",
-                   help="print env, episodes, tried, seed, out, samples as JSON")
+                   help="print env, robot, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
-    e = inner.add_parser("evaluate", help="run a library's skills in new scenes of a robosuite task, closed "
-                                          "loop, and count the environment's own successes")
+    e = inner.add_parser("evaluate", help="run a library's skills in new scenes of a robosuite task on its "
+                                          "UR5e, closed loop, and count the environment's own successes")
     e.add_argument("db", type=_location, help=_DB_READ)
     e.add_argument("--env", required=True, metavar="robosuite:TASK", help="the task, e.g. robosuite:Lift")
     e.add_argument("--episodes", type=int, default=10, help="scenes to run (default 10)")
@@ -66,7 +66,8 @@ def add_parser(sub):
                    help="when the library's demonstrations each move other objects (one per object), the "
                         "order in which their parts run, by object name (default: by name)")
     e.add_argument("--json", action="store_true",
-                   help="print env, episodes, successes, success_rate, interval and per_episode as JSON")
+                   help="print env, robot, recorded_on, notes, episodes, successes, success_rate, interval "
+                        "and per_episode as JSON")
     e.set_defaults(func=_evaluate)
     return p
 
@@ -92,7 +93,10 @@ def _evaluate(args) -> int:
     print(f"{args.db}: {report['successes']} of {report['episodes']} episodes of {report['env']} succeeded "
           f"({100 * report['success_rate']:.0f} %, 95 % interval {100 * low:.0f}-{100 * high:.0f} %), "
           f"method {report['method']}, seeds {report['seed']}-{report['seed'] + report['episodes'] - 1}"
-          + ("" if report["placement"] is None else f", placement +-{report['placement']} m"))
+          + ("" if report["placement"] is None else f", placement +-{report['placement']} m")
+          + f", on {report['robot']}")
+    for note in report["notes"]:
+        print(f"  note: {note}")
     for row in report["per_episode"]:
         if not row["success"]:
             f = row["failure"]
@@ -123,5 +127,6 @@ def _record(args) -> int:
         print(json.dumps(report))
     else:
         print(f"{args.out}: {report['episodes']} successful episode(s) of {report['env']} "
-              f"({report['tried']} tried, seed {report['seed']}), {report['samples']} samples")
+              f"({report['tried']} tried, seed {report['seed']}) on {report['robot']}, {report['samples']} "
+              "samples")
     return 0

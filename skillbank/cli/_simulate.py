@@ -84,8 +84,8 @@ def _simulate(args) -> int:
 
 
 def _report(args, result, written) -> None:
-    print(f"{args.trajectory}: simulated {result.duration:.3g} s at {result.real_time_factor:.3g}x real "
-          f"time; {'ok' if result.ok else 'NOT ok'}")
+    print(f"{args.trajectory}: simulated {result.duration:.3g} s on {result.robot} at "
+          f"{result.real_time_factor:.3g}x real time; {'ok' if result.ok else 'NOT ok'}")
     print(f"  tracking: joints within {result.joint_max:.3g} rad, tool within "
           f"{result.tool_max * 1000:.3g} mm")
     if result.contacts:

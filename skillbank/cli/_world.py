@@ -135,8 +135,8 @@ def run_simulation(args, trajectory, scene, obstacles=(), *, targets=None, video
 
 def print_simulation(sim, *, planned: bool = False) -> None:
     """The simulation's report under a command's own (two-space indent)."""
-    print(f"  simulated {sim.duration:.3g} s at {sim.real_time_factor:.3g}x real time: tracking within "
-          f"{sim.joint_max:.3g} rad, tool within {sim.tool_max * 1000:.3g} mm")
+    print(f"  simulated {sim.duration:.3g} s on {sim.robot} at {sim.real_time_factor:.3g}x real time: "
+          f"tracking within {sim.joint_max:.3g} rad, tool within {sim.tool_max * 1000:.3g} mm")
     for fact, value in sim.facts.items():
         seen = "cannot judge" if value is None else ("holds" if value else "FAILS")
         print(f"    {fact}: {'planned holds, ' if planned else ''}simulated {seen}")

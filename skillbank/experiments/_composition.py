@@ -128,8 +128,9 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     Returns
     -------
     dict
-        ``{"experiment", "scene", "method", "seed", "demos", "episodes", "successes", "success_rate",
-        "interval", "failures", "per_episode", "labelled", "library"}``.
+        ``{"experiment", "scene", "robot", "method", "seed", "demos", "episodes", "successes",
+        "success_rate", "interval", "failures", "per_episode", "labelled", "library"}``; ``robot`` is the
+        arm that recorded the demonstrations and ran the plans (robosuite's UR5e).
 
     Raises
     ------
@@ -167,16 +168,20 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
             rows = []
             for k in range(episodes):
                 goal = _goal(np.random.default_rng(first + k))
-                rows += execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
-                                     replan=replan, paths=paths)["per_episode"]
+                report = execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
+                                      replan=replan, paths=paths)
+                rows += report["per_episode"]
                 if progress is not None:
                     progress("episodes", k + 1, episodes)
         else:
-            rows = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
-                                paths=paths, progress=None if progress is None else
-                                (lambda done, _: progress("episodes", done, episodes)))["per_episode"]
+            report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
+                                  paths=paths, progress=None if progress is None else
+                                  (lambda done, _: progress("episodes", done, episodes)))
+            rows = report["per_episode"]
     successes, failures = tally(rows)
-    return {"experiment": name, "scene": scene, "method": method, "seed": int(seed), "demos": demos,
+    # recorded and driven on the same arm (sim record's default, robosuite's UR5e): no note to carry
+    return {"experiment": name, "scene": scene, "robot": report["robot"], "method": method, "seed": int(seed),
+            "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
             "per_episode": rows, "labelled": labelled, "library": library}

@@ -29,6 +29,7 @@ from ..core._validation import check_positive, summarise
 from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model, tool_point
 from ..selection import reuse, shift_near
 from ..selection._execution import check_limits, peak_rates, robot_limits
+from ._start import clear_starts
 
 __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE", "arm_clearance"]
 
@@ -591,6 +592,38 @@ def _joints(model, streams, seed, where, branch=None) -> np.ndarray:
         raise ValueError(f"{where}: robot {model.name}: {' '.join(str(exc).split())}") from None
 
 
+def _first_joints(model, scene, streams, reference, where, names, margin, args) -> np.ndarray:
+    """The first step's joints from a start given as a pose.
+
+    The start configurations clear of the robot and the scene (:func:`clear_starts`, nearest
+    ``reference`` first) are tried in turn: the first whose branch the step's whole path follows and
+    keeps clear (as :func:`check_step` would check it) is taken; else the first the path follows (the
+    step's repairs then work on it); else the first one's error.
+    """
+    if "orientation" not in streams:
+        return _joints(model, streams, reference, where)  # refused there, naming the missing orientation
+    starts = clear_starts(model, scene, streams["position"][0], streams["orientation"][0],
+                          reference=reference, names=names, margin=margin,
+                          label=lambda other: _other_label(scene, other))
+    followed, first = None, None
+    for q0 in starts:
+        try:
+            J = _joints(model, streams, q0, where)
+        except ValueError as exc:
+            first = exc if first is None else first
+            continue
+        if len(starts) == 1:
+            return J
+        acted = set(args) | _resting(model, scene, J[:1], margin)
+        others = [n for n in scene.objects if n not in acted]
+        if not arm_clearance(model, scene, names, J, objects=others).collides(margin):
+            return J
+        followed = J if followed is None else followed
+    if followed is not None:
+        return followed
+    raise first
+
+
 def _joint_scale(J, t, limits) -> float:
     """The uniform time stretch that keeps every joint within the joint limits (1.0: none needed)."""
     scale = 1.0
@@ -751,7 +784,11 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                         best = next(p for p in skill.primitives if p.id == res.used[0]).demo
                         if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
                             seed = best["joints"][0]
-                    streams["joints"] = _joints(model, streams, seed, where, branch)
+                    if joints is None and branch is None:  # the start is a pose: a configuration clear of all
+                        streams["joints"] = _first_joints(model, scene, streams, seed, where,
+                                                          _obstacles(scene, b, where), clearance_margin, args)
+                    else:
+                        streams["joints"] = _joints(model, streams, seed, where, branch)
                     scale = _joint_scale(streams["joints"], t, limits)
                     if scale > 1.0:
                         t = t * scale

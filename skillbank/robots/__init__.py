@@ -27,11 +27,12 @@ from ._clearance import Clearance, clearance
 from ._clearing import CLEARANCE, clearing_move
 from ._description import check_description_files, enclosing_capsule, load_description
 from ._points import PosePoint, pose_point, to_tool, tool_point
-from ._registry import DESCRIPTIONS, ROBOTS, robot_model
+from ._registry import DESCRIPTIONS, ROBOTS, registered_name, robot_model
 from ._ur5e import UR5E_DH, UR5e
 
 __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "DESCRIPTIONS",
-           "robot_model", "ChainModel", "KinematicChain", "load_description", "check_description_files",
+           "robot_model", "registered_name", "ChainModel", "KinematicChain", "load_description",
+           "check_description_files",
            "enclosing_capsule",
            "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "PANDA_HAND", "Clearance", "clearance",
            "CLEARANCE", "clearing_move", "PosePoint", "pose_point", "to_tool", "tool_point"]

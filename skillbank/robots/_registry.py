@@ -18,7 +18,7 @@ import numpy as np
 from ._base import RobotModel
 from ._ur5e import UR5e
 
-__all__ = ["ROBOTS", "DESCRIPTIONS", "RegisteredDescription", "robot_model"]
+__all__ = ["ROBOTS", "DESCRIPTIONS", "RegisteredDescription", "robot_model", "registered_name"]
 
 
 class RegisteredDescription(NamedTuple):
@@ -96,13 +96,33 @@ def _described(path, *, tool_frame=None, name=None, registered=None, **params) -
     return model
 
 
+def registered_name(name):
+    """``name`` as the registry spells it (``"Panda"``, ``"UR5E"``: ``"panda"``, ``"ur5e"``), else as given.
+
+    Robot names are case-insensitive everywhere (the command line's ``--robot``, ``robot=``): this is the
+    one place they are normalised. Anything that is not a registered name (a description file's path)
+    is returned as given.
+
+    Examples
+    --------
+    >>> registered_name("UR5e"), registered_name("Panda"), registered_name("arm.urdf")
+    ('ur5e', 'panda', 'arm.urdf')
+    """
+    if isinstance(name, str):
+        key = name.strip().lower()
+        if key in ROBOTS or key in DESCRIPTIONS:
+            return key
+    return name
+
+
 def robot_model(name, **params) -> RobotModel:
     """The model registered as ``name``, or read from the description file at path ``name``.
 
     Parameters
     ----------
     name : str or path-like
-        ``"ur5e"``, a name in :data:`DESCRIPTIONS` (``"panda"``) or a URDF / MJCF file.
+        ``"ur5e"``, a name in :data:`DESCRIPTIONS` (``"panda"``) or a URDF / MJCF file. Names are
+        case-insensitive (``"UR5e"``, ``"Panda"``; :func:`registered_name`).
     **params
         The model's parameters (``base``, ``tool``, ...); for a description also ``tool_frame``
         (the flange's link or site).
@@ -113,7 +133,10 @@ def robot_model(name, **params) -> RobotModel:
     'shoulder_pan_joint'
     >>> robot_model("panda").n_joints
     7
+    >>> robot_model("UR5e").name
+    'ur5e'
     """
+    name = registered_name(name)
     if isinstance(name, str) and name in ROBOTS:
         if params.get("tool_frame") is not None:
             raise ValueError(f"tool frame: {name} is a built-in model whose flange is fixed; give tool=... "

@@ -61,6 +61,7 @@ from ._evaluate import (
     _sources,
     _widen,
     binomial_interval,
+    driven_robot,
 )
 from ._reach import Reach
 from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite
@@ -498,8 +499,10 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     Returns
     -------
     dict
-        ``{"scene", "method", "seed", "episodes", "successes", "success_rate", "interval", "failures",
-        "per_episode", "timing"}``; ``failures`` counts the reasons (:data:`STEP_REASONS`); each
+        ``{"scene", "robot", "recorded_on", "notes", "method", "seed", "episodes", "successes",
+        "success_rate", "interval", "failures", "per_episode", "timing"}`` (``robot``: the arm driven,
+        ``recorded_on``, ``notes``: as :func:`~skillbank.simulation.evaluate`'s); ``failures`` counts
+        the reasons (:data:`STEP_REASONS`); each
         episode has its ``seed``, ``success``, ``plan`` (the first, as text), ``replans``, ``steps``
         (per step: ``action``, ``args``, ``planned`` effect, ``observed`` facts of its predicates and
         the poses of its objects, ``source`` and ``primitives``, ``ok``, and for a failure ``reason``
@@ -555,8 +558,9 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     finally:
         environment.close()
     successes, failures = tally(rows)
-    return {"scene": scene, "method": method, "seed": int(seed), "placement": placement, "episodes": episodes,
-            "successes": successes, "success_rate": successes / episodes,
+    return {"scene": scene, **driven_robot(sources), "method": method, "seed": int(seed),
+            "placement": placement, "episodes": episodes, "successes": successes,
+            "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
             "timing": {"plan_seconds": timings["plan"], "adapt_seconds": timings["adapt"],
                        "driven_seconds": timings["driven"], "segments": timings["segments"]},

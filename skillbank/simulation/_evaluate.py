@@ -52,9 +52,14 @@ from ._robosuite import (
     _turn,
     _yaw,
     import_robosuite,
+    recorded_robot,
+    robosuite_robot,
 )
 
-__all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval"]
+__all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
+
+#: The arm ``sim evaluate`` and plans in robosuite scenes drive (robosuite's name), with its default gripper.
+DRIVEN_ROBOT = "UR5e"
 
 #: Why an episode failed, judged at the end of the segment that failed.
 REASONS = {
@@ -126,6 +131,7 @@ class _Source:
     start: dict  # object -> its position at the demonstration's start
     actions: np.ndarray | None
     segments: list = field(default_factory=list)
+    robot: str | None = None  # the arm it was recorded on, where the recording says
 
 
 def _pose(demo, obj, k):
@@ -290,13 +296,34 @@ def _sources(store):
                              f"{demo['actions'].shape[1]} columns; expected robosuite's 7 (OSC pose deltas "
                              "and the gripper) of a one-arm robot")
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
-                      np.asarray(demo["actions"], float))
+                      np.asarray(demo["actions"], float), robot=recorded_robot(demo))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
             src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
         sources.append(src)
     _choose_frames(sources)
     return sources
+
+
+def _spelled(name: str) -> str:
+    """robosuite's spelling of one of its arms (``ur5e`` -> ``UR5e``); any other name as it is."""
+    try:
+        return robosuite_robot(name)
+    except ValueError:
+        return name
+
+
+def driven_robot(sources) -> dict:
+    """Which arm runs (``robot``), which the library was recorded on (``recorded_on``: the names its
+    sources say, sorted; empty where none says), and a note when they differ (names compared in any case).
+    """
+    recorded = sorted({_spelled(s.robot) for s in sources if s.robot is not None}, key=str.lower)
+    other = [r for r in recorded if r.lower() != DRIVEN_ROBOT.lower()]
+    notes = [f"library recorded on {' and '.join(recorded)}; driven on {DRIVEN_ROBOT}"] if other else []
+    unknown = sum(s.robot is None for s in sources)
+    if unknown and recorded:
+        notes.append(f"{unknown} of the library's {len(sources)} demonstrations say no arm")
+    return {"robot": DRIVEN_ROBOT, "recorded_on": recorded, "notes": notes}
 
 
 def _fingers(env, obs):
@@ -780,7 +807,7 @@ def _make(suite, task, seed, horizon):
                          f"{sorted(suite.ALL_ENVIRONMENTS)}")
     # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
     # widened ranges and the episode's generator stay where they were put
-    return suite.make(task, robots=["UR5e"], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+    return suite.make(task, robots=[DRIVEN_ROBOT], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
                       has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
                       ignore_done=True, reward_shaping=False, hard_reset=False)
 
@@ -823,8 +850,11 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     Returns
     -------
     dict
-        ``{"env", "method", "seed", "placement", "episodes", "successes", "success_rate", "interval",
-        "timing", "per_episode"}``; each episode's entry has its ``seed``, ``success``, ``steps``,
+        ``{"env", "robot", "recorded_on", "notes", "method", "seed", "placement", "episodes", "successes",
+        "success_rate", "interval", "timing", "per_episode"}``: ``robot`` the arm driven
+        (:data:`DRIVEN_ROBOT`, robosuite's UR5e whatever arm recorded the library), ``recorded_on`` the
+        arms the library's demonstrations say they were recorded on, and a note when that is another;
+        each episode's entry has its ``seed``, ``success``, ``steps``,
         ``source`` (the demonstration it followed; ``sources``, one per part), ``objects`` (each
         object's position at rest before the first segment), ``arm_contact`` and, for a failure,
         ``failure`` with the ``segment`` (from 0, counted along every part), its ``primitive`` and
@@ -910,8 +940,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         environment.close()
     successes = sum(r["success"] for r in rows)
-    return {"env": env, "method": method, "seed": int(seed), "placement": placement, "episodes": episodes,
-            "successes": successes, "success_rate": successes / episodes,
+    return {"env": env, **driven_robot(sources), "method": method, "seed": int(seed), "placement": placement,
+            "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
             "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],
                        "segments": timings["segments"]},

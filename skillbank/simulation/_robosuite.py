@@ -38,7 +38,8 @@ from ..io import ROBOSUITE_POSE_OF
 from ..io import import_robosuite as import_quiet_robosuite
 from ..robots import pose_point
 
-__all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ"]
+__all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ", "RECORD_ROBOTS",
+           "robosuite_robot", "recorded_robot"]
 
 MISSING_ROBOSUITE = "sim record needs robosuite: pip install 'skillbank[sim]'"
 #: Control steps per second (robosuite's default, and robomimic's datasets').
@@ -341,11 +342,76 @@ def _episode(env, task: Task, rng) -> tuple:
 RECORD_ROBOTS = ("UR5e", "Panda", "Sawyer", "IIWA", "Jaco", "Kinova3", "XArm7")
 
 
-def _check_robot(robot) -> str:
-    if robot not in RECORD_ROBOTS:
-        raise ValueError(f"robot: expected one of robosuite's single arms {list(RECORD_ROBOTS)}, got "
-                         f"{robot!r}")
-    return robot
+def robosuite_robot(robot) -> str:
+    """``robot`` as robosuite spells its arm (:data:`RECORD_ROBOTS`), whatever its case: ``"panda"`` ->
+    ``"Panda"``, ``"ur5e"`` -> ``"UR5e"``; one line listing the arms for anything else.
+
+    Examples
+    --------
+    >>> robosuite_robot("panda"), robosuite_robot("UR5E"), robosuite_robot("xarm7")
+    ('Panda', 'UR5e', 'XArm7')
+    """
+    key = robot.strip().lower() if isinstance(robot, str) else None
+    for name in RECORD_ROBOTS:
+        if name.lower() == key:
+            return name
+    raise ValueError(f"robot: expected one of robosuite's single arms {list(RECORD_ROBOTS)} (any case), got "
+                     f"{robot!r}")
+
+
+def _robot_name(value) -> str | None:
+    """An arm's name from what a recording says: a name, ``{"name": ...}`` (``data.attrs["robot"]``) or
+    robomimic's ``env_args`` (``{"env_kwargs": {"robots": [...]}}``), as JSON text or parsed."""
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", "replace")
+    if isinstance(value, str) and value.lstrip().startswith("{"):
+        try:
+            value = json.loads(value)
+        except ValueError:
+            return None
+    if isinstance(value, dict):
+        if "name" in value:
+            return _robot_name(value["name"])
+        robots = (value.get("env_kwargs") or {}).get("robots") if isinstance(value.get("env_kwargs"), dict) \
+            else None
+        return _robot_name(robots[0]) if isinstance(robots, list) and robots else None
+    return value.strip() if isinstance(value, str) and value.strip() else None
+
+
+def recorded_robot(demo) -> str | None:
+    """The arm a demonstration was recorded on, or None where nothing says.
+
+    From its metadata (``robot``: a name or ``{"name": ...}``; ``env_args``), else, for a robomimic
+    file (``format`` ``robomimic-h5``) still at its ``source`` path, from that file's
+    ``data.attrs["robot"]`` (``sim record`` writes it) or ``data.attrs["env_args"]``: the reader keeps
+    neither in the metadata.
+
+    Examples
+    --------
+    >>> from skillbank.core import Demonstration
+    >>> recorded_robot(Demonstration([0.0, 1.0], {"x": [[0.0], [1.0]]}, {"robot": {"name": "Panda"}}))
+    'Panda'
+    """
+    meta = getattr(demo, "metadata", None) or {}
+    for key in ("robot", "env_args"):
+        name = _robot_name(meta.get(key))
+        if name is not None:
+            return name
+    source = meta.get("source")
+    if meta.get("format") != "robomimic-h5" or not isinstance(source, str) or not Path(source).is_file():
+        return None
+    try:
+        import h5py  # a core dependency (the HDF5 readers)
+
+        with h5py.File(source, "r") as h5:
+            attrs = h5["data"].attrs if "data" in h5 else {}
+            for key in ("robot", "env_args"):
+                name = _robot_name(attrs.get(key)) if key in attrs else None
+                if name is not None:
+                    return name
+    except (OSError, KeyError, ValueError, TypeError):
+        return None  # moved, replaced or unreadable since: nothing says
+    return None
 
 
 def _pose(env, kind: str, name: str) -> np.ndarray:
@@ -425,7 +491,7 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
         ``{"env", "episodes", "tried", "seed", "out", "samples", "robot"}``.
     """
     task = parse_env(env)
-    robot = _check_robot(robot)
+    robot = robosuite_robot(robot)
     episodes = check_positive(episodes, name="episodes", integer=True)
     tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:

@@ -60,6 +60,8 @@ class SimulationResult:
     facts : dict
         ``"(pressed b1)"`` -> True, False, or None where the simulation cannot judge the atom.
     notes : list of str
+    robot : str
+        The arm driven (its model's name, e.g. ``"ur5e"``, ``"panda"``).
     t_, q_, q_ref_ : ndarray
         The physics steps' times ``(m,)``, simulated and commanded joints ``(m, n_joints)``.
     tool_, tool_ref_ : ndarray
@@ -83,6 +85,7 @@ class SimulationResult:
     objects: dict
     facts: dict
     notes: list = field(default_factory=list)
+    robot: str = ""
     t_: np.ndarray = None
     q_: np.ndarray = None
     q_ref_: np.ndarray = None
@@ -111,6 +114,7 @@ class SimulationResult:
     def to_dict(self) -> dict:
         """The JSON contract (docs/simulation.md): plain floats, bools, strings and None."""
         return {
+            "robot": self.robot,
             "duration": float(self.duration),
             "real_time_factor": float(self.real_time_factor),
             "tracking": {"joint_max": float(self.joint_max), "tool_max": float(self.tool_max)},
@@ -462,7 +466,7 @@ class _Runner:
             joint_max=float(np.abs(q_sim - q_ref).max(initial=0.0)),
             tool_max=float(np.linalg.norm(tcp - tcp_ref, axis=1).max(initial=0.0)),
             contacts=contacts, buttons=out_buttons, objects=out_objects, facts=facts, notes=notes,
-            t_=times, q_=q_sim, q_ref_=q_ref, tool_=tcp, tool_ref_=tcp_ref,
+            robot=model.name, t_=times, q_=q_sim, q_ref_=q_ref, tool_=tcp, tool_ref_=tcp_ref,
             button_force_=force, button_depth_=depth, contact_spans_=spans,
             contact_points_=[e["at"] for e in events])
 

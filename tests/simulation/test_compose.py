@@ -101,6 +101,8 @@ def test_plan_cli_on_a_robosuite_scene_prints_json_and_a_figure(library, tmp_pat
     assert code == 0, err
     doc = json.loads(out)
     assert doc["successes"] == 1 and doc["planner"]["search"] == "satisficing"
+    # the arm driven, and the one the library was recorded on (the same: no note; issue 41, item 6)
+    assert doc["robot"] == "UR5e" and doc["recorded_on"] == ["UR5e"] and doc["notes"] == []
     assert doc["written"] == [str(figure)] and figure.stat().st_size > 10_000
     assert set(doc) >= {"episodes", "successes", "success_rate", "interval", "failures", "per_episode"}
 
