@@ -72,6 +72,21 @@ def _pose_of(path, data, env_args):
     return None
 
 
+def _arm(path, data, env_args):
+    """The one arm the file says it was recorded on (skillbank's recorder, else ``env_args``), or None."""
+    raw = data.attrs.get("robot")
+    if raw is not None:
+        with reading(path, "invalid JSON in data.attrs['robot']"):
+            robot = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
+        if isinstance(robot, dict) and isinstance(robot.get("name"), str):
+            return robot["name"]
+    robots = (env_args.get("env_kwargs") or {}).get("robots")
+    robots = [robots] if isinstance(robots, str) else robots
+    if isinstance(robots, list) and len(robots) == 1 and isinstance(robots[0], str):
+        return robots[0]
+    return None
+
+
 def _rate(path, control_freq, env_args) -> tuple[float, str]:
     if control_freq is not None:
         return check_positive(control_freq, name="control_freq"), "argument"
@@ -120,8 +135,9 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         ``format`` (``"robomimic-h5"``), ``demo`` (the group name),
         ``episode`` (``N``), ``label`` (the environment's name, when
         recorded), ``rate_hz``, ``rate_from``, ``skipped_obs`` and
-        ``pose_of``, the point of the robot the poses are of, where the file
-        says it (``data.attrs["robot"]`` of skillbank's recorder; else the
+        ``arm``, the robot it was recorded on, and ``pose_of``, the point of
+        the robot the poses are of, where the file says it
+        (``data.attrs["robot"]`` of skillbank's recorder; else the
         default gripper's grip site of the one robosuite arm ``env_args``
         names, :data:`ROBOSUITE_POSE_OF`).
 
@@ -167,6 +183,9 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         pose_of = _pose_of(p, data, env_args)
         if pose_of is not None:
             common[POSE_OF] = pose_of
+        arm = _arm(p, data, env_args)
+        if arm is not None:
+            common["arm"] = arm
         return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
 
 

@@ -381,10 +381,9 @@ def _robot_name(value) -> str | None:
 def recorded_robot(demo) -> str | None:
     """The arm a demonstration was recorded on, or None where nothing says.
 
-    From its metadata (``robot``: a name or ``{"name": ...}``; ``env_args``), else, for a robomimic
-    file (``format`` ``robomimic-h5``) still at its ``source`` path, from that file's
-    ``data.attrs["robot"]`` (``sim record`` writes it) or ``data.attrs["env_args"]``: the reader keeps
-    neither in the metadata.
+    From its metadata: ``arm`` (the robomimic and raw robosuite readers keep the arm the file names),
+    else ``robot`` (a name or ``{"name": ...}``) or ``env_args``. Never from a file at a path the
+    metadata holds: a library's rows do not make a command open files.
 
     Examples
     --------
@@ -393,24 +392,10 @@ def recorded_robot(demo) -> str | None:
     'Panda'
     """
     meta = getattr(demo, "metadata", None) or {}
-    for key in ("robot", "env_args"):
+    for key in ("arm", "robot", "env_args"):
         name = _robot_name(meta.get(key))
         if name is not None:
             return name
-    source = meta.get("source")
-    if meta.get("format") != "robomimic-h5" or not isinstance(source, str) or not Path(source).is_file():
-        return None
-    try:
-        import h5py  # a core dependency (the HDF5 readers)
-
-        with h5py.File(source, "r") as h5:
-            attrs = h5["data"].attrs if "data" in h5 else {}
-            for key in ("robot", "env_args"):
-                name = _robot_name(attrs.get(key)) if key in attrs else None
-                if name is not None:
-                    return name
-    except (OSError, KeyError, ValueError, TypeError):
-        return None  # moved, replaced or unreadable since: nothing says
     return None
 
 

@@ -185,3 +185,16 @@ def test_a_malformed_stated_point_is_one_line(tmp_path):
     with pytest.raises(ValueError, match=r"data.attrs\['robot'\]\['pose_of'\]: expected 'flange', .*'tcp' "
                                          r"alone does not say whose"):
         read_robomimic(path)
+
+
+@pytest.mark.parametrize(("env_kwargs", "attrs", "arm"), [
+    ({"robots": ["Panda"]}, None, "Panda"), ({"robots": "UR5e"}, None, "UR5e"), ({}, None, None),
+    ({"robots": ["Panda", "Panda"]}, None, None), ({"robots": ["UR5e"]}, {"name": "Panda"}, "Panda"),
+])
+def test_the_arm_the_file_was_recorded_on(tmp_path, env_kwargs, attrs, arm):
+    path = write_robomimic(tmp_path / "d.hdf5", {0: _demo(4, 0)},
+                           env_args={**LIFT, "env_kwargs": {**LIFT["env_kwargs"], **env_kwargs}})
+    if attrs is not None:
+        with h5py.File(path, "a") as h5:
+            h5["data"].attrs["robot"] = json.dumps(attrs)
+    assert read_robomimic(path)[0].metadata.get("arm") == arm

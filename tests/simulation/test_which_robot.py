@@ -94,13 +94,14 @@ def test_the_arm_a_demonstration_was_recorded_on_is_read_where_it_is_said(tmp_pa
     del demo.metadata["robot"]
     demo.metadata["env_args"] = {"env_name": "Lift", "env_kwargs": {"robots": ["IIWA"]}}
     assert recorded_robot(demo) == "IIWA"
-    # robomimic's reader keeps neither: the file at its source says (sim record writes data.attrs["robot"])
+    # the readers keep the arm their file names (sim record's data.attrs["robot"], else env_args)
+    demo = Demonstration([0.0, 1.0], {"x": [[0.0], [1.0]]}, {"arm": "Panda"})
+    assert recorded_robot(demo) == "Panda"
+    # a path in the metadata is never opened: a library's rows do not make a command read files
     path = tmp_path / "rec.hdf5"
     with h5py.File(path, "w") as h5:
         h5.create_group("data").attrs["robot"] = json.dumps({"name": "Panda"})
     demo = Demonstration([0.0, 1.0], {"x": [[0.0], [1.0]]}, {"format": "robomimic-h5", "source": str(path)})
-    assert recorded_robot(demo) == "Panda"
-    path.unlink()  # moved since: nothing says
     assert recorded_robot(demo) is None
 
 
