@@ -70,4 +70,6 @@ def test_robosuites_warnings_stay_out_of_the_json(tmp_path):
                           "--json")
     assert code == 0, err
     assert json.loads(out)["episodes"] == 1 and out.count("\n") == 1
-    assert "[robosuite WARNING]" in err and "WARNING" not in out
+    # robosuite's set-up log (no macro file, optional robots, controller files) is not the command's output
+    # (io.import_robosuite turns its logger off): nowhere, and never in the JSON
+    assert "WARNING" not in out and "[robosuite" not in err
