@@ -46,8 +46,9 @@ def add_parser(sub):
     r.add_argument("--json", action="store_true",
                    help="print env, robot, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
-    e = inner.add_parser("evaluate", help="run a library's skills in new scenes of a robosuite task on its "
-                                          "UR5e, closed loop, and count the environment's own successes")
+    e = inner.add_parser("evaluate", help="run a library's skills in new scenes of a robosuite task on one "
+                                          "of its arms (--robot, default UR5e), closed loop, and count the "
+                                          "environment's own successes")
     e.add_argument("db", type=_location, help=_DB_READ)
     e.add_argument("--env", required=True, metavar="robosuite:TASK", help="the task, e.g. robosuite:Lift")
     e.add_argument("--episodes", type=int, default=10, help="scenes to run (default 10)")
@@ -61,6 +62,10 @@ def add_parser(sub):
                         "rigid (the recorded segment moved rigidly into the object's new frame) or replay "
                         "(the source's actions, open loop)")
     e.add_argument("--horizon", type=int, default=1000, help="control steps per episode (default 1000, 50 s)")
+    e.add_argument("--robot", default="UR5e",
+                   help="robosuite's arm that runs the skills, with its default gripper: UR5e (default), "
+                        "Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7 (any case); a library recorded on "
+                        "another arm runs through the tool's pose, with a note")
     e.add_argument("--order", type=lambda text: [o.strip() for o in text.split(",")], default=None,
                    metavar="OBJ,OBJ,...",
                    help="when the library's demonstrations each move other objects (one per object), the "
@@ -85,7 +90,7 @@ def _evaluate(args) -> int:
 
         report = evaluate(_target(args.db), args.env, episodes=args.episodes, seed=args.seed,
                           placement=args.placement, method=args.method, horizon=args.horizon,
-                          order=args.order, progress=tick)
+                          order=args.order, progress=tick, robot=args.robot)
     if args.json:
         print(json.dumps(report))
         return 0

@@ -345,17 +345,17 @@ def _spelled(name: str) -> str:
         return name
 
 
-def driven_robot(sources) -> dict:
+def driven_robot(sources, robot: str = DRIVEN_ROBOT) -> dict:
     """Which arm runs (``robot``), which the library was recorded on (``recorded_on``: the names its
     sources say, sorted; empty where none says), and a note when they differ (names compared in any case).
     """
     recorded = sorted({_spelled(s.robot) for s in sources if s.robot is not None}, key=str.lower)
-    other = [r for r in recorded if r.lower() != DRIVEN_ROBOT.lower()]
-    notes = [f"library recorded on {' and '.join(recorded)}; driven on {DRIVEN_ROBOT}"] if other else []
+    other = [r for r in recorded if r.lower() != robot.lower()]
+    notes = [f"library recorded on {' and '.join(recorded)}; driven on {robot}"] if other else []
     unknown = sum(s.robot is None for s in sources)
     if unknown and recorded:
         notes.append(f"{unknown} of the library's {len(sources)} demonstrations say no arm")
-    return {"robot": DRIVEN_ROBOT, "recorded_on": recorded, "notes": notes}
+    return {"robot": robot, "recorded_on": recorded, "notes": notes}
 
 
 def _fingers(env, obs):
@@ -833,20 +833,20 @@ def _order(groups, order):
     return parts
 
 
-def _make(suite, task, seed, horizon):
+def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
     if task not in suite.ALL_ENVIRONMENTS:
         raise ValueError(f"env: robosuite has no task {task!r}; its tasks are "
                          f"{sorted(suite.ALL_ENVIRONMENTS)}")
     # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
     # widened ranges and the episode's generator stay where they were put
-    return suite.make(task, robots=[DRIVEN_ROBOT], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+    return suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
                       has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
                       ignore_done=True, reward_shaping=False, hard_reset=False)
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
              horizon: int = 1000, order=None, random_state=None, paths: bool = False,
-             progress=None) -> dict:
+             progress=None, robot: str = DRIVEN_ROBOT) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -878,13 +878,18 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         Add each episode's tool positions, one per control step (``path``, m), for a figure.
     progress : callable, optional
         ``progress(done, successes)`` after each episode.
+    robot : str, default="UR5e"
+        robosuite's arm that runs the skills, with its default gripper (any case: ``panda``). The
+        library's poses are of its recorded gripper's grip site, which robosuite's observations and
+        controller speak of on every arm: the skills run on another arm through the tool's pose (a note
+        says so when the library was recorded on another).
 
     Returns
     -------
     dict
         ``{"env", "robot", "recorded_on", "notes", "method", "seed", "placement", "episodes", "successes",
         "success_rate", "interval", "timing", "per_episode"}``: ``robot`` the arm driven
-        (:data:`DRIVEN_ROBOT`, robosuite's UR5e whatever arm recorded the library), ``recorded_on`` the
+        (``robot``, by default :data:`DRIVEN_ROBOT`, robosuite's UR5e), ``recorded_on`` the
         arms the library's demonstrations say they were recorded on, and a note when that is another;
         each episode's entry has its ``seed``, ``success``, ``steps``,
         ``source`` (the demonstration it followed; ``sources``, one per part), ``objects`` (each
@@ -903,6 +908,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         placement = check_positive(placement, name="placement")
     if method not in METHODS and method not in BASELINES:
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
+    robot = robosuite_robot(robot)
     store = open_store(library, create=False)
     try:
         sources = _sources(store)
@@ -914,7 +920,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         groups.setdefault(tuple(sorted(src.start)), []).append(src)
     order = _order(groups, order)
     suite = import_robosuite()
-    environment = _make(suite, task, seed, horizon)
+    environment = _make(suite, task, seed, horizon, robot)
     if placement is not None:
         _widen(environment, placement)
     rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0}
@@ -972,7 +978,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         environment.close()
     successes = sum(r["success"] for r in rows)
-    return {"env": env, **driven_robot(sources), "method": method, "seed": int(seed), "placement": placement,
+    return {"env": env, **driven_robot(sources, robot), "method": method, "seed": int(seed),
+            "placement": placement,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
             "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],

@@ -165,3 +165,16 @@ def test_sim_evaluate_says_it_drove_the_ur5e_a_library_recorded_on_the_panda(cli
     assert code == 0, err
     assert out.splitlines()[0].endswith(", on UR5e")
     assert "  note: library recorded on Panda; driven on UR5e" in out.splitlines()
+
+
+def test_sim_evaluate_runs_on_the_arm_asked_for(cli, panda_library):
+    """`sim evaluate --robot panda` drives robosuite's Panda: the arm that recorded the library, so no note;
+    the lift succeeds on it (the scripted episode's own arm)."""
+    code, out, err = cli("sim", "evaluate", str(panda_library), "--env", "robosuite:Lift", "--episodes", "2",
+                         "--seed", "40", "--robot", "panda", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["robot"] == "Panda" and doc["recorded_on"] == ["Panda"] and doc["notes"] == []
+    assert doc["successes"] >= 1
+    code, out, err = cli("sim", "evaluate", str(panda_library), "--env", "robosuite:Lift", "--robot", "Kuka")
+    assert code == 2 and out == "" and "robot: expected one of robosuite's single arms" in err
