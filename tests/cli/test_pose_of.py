@@ -14,7 +14,7 @@ import pytest
 
 from skillbank import Demonstration
 from skillbank.core import quaternion_to_matrix
-from skillbank.io import write_npz
+from skillbank.io import load, write_npz
 from skillbank.robots import robot_model, to_tool
 
 
@@ -90,8 +90,7 @@ def test_pose_of_where_the_file_does_not_say_and_a_contradiction(cli, press_libr
 
 def test_edit_converts_a_files_flange_poses_to_the_tool(cli, data_dir, tmp_path):
     """``edit --robot ur5e`` of the recording: its goal is the TCP's, and FK of its joints meets it."""
-    demo = to_tool(__import__("skillbank.io", fromlist=["load"]).load(
-        data_dir / "seed" / "three_button_pressing_demo.h5"), robot_model("ur5e"))[0]
+    demo = to_tool(load(data_dir / "seed" / "three_button_pressing_demo.h5"), robot_model("ur5e"))[0]
     goal = demo["position"][1400]
     code, out, err = cli("edit", data_dir / "seed" / "three_button_pressing_demo.h5", "--goal",
                          ",".join(map(str, goal + [0.02, 0.0, 0.0])), "--robot", "ur5e",
