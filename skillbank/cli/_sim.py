@@ -43,6 +43,11 @@ def add_parser(sub):
     r.add_argument("--robot", default="UR5e",
                    help="robosuite's arm: UR5e (default), Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7, each "
                         "with its default gripper")
+    r.add_argument("--style", choices=("scripted", "human"), default="scripted",
+                   help="scripted (default: smooth moves, robomimic's layout) or human (a person at a "
+                        "keyboard: short pulses, pauses, overshoot, off-centre grasps, retries; robosuite's "
+                        "raw collection format)")
+    r.add_argument("-v", "--verbose", action="store_true", help="let robosuite's log through")
     r.add_argument("--json", action="store_true",
                    help="print env, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
@@ -117,8 +122,15 @@ def _record(args) -> int:
             bar.update(kept - bar.n)
             bar.set_postfix_str(f"{tried} tried")
 
-        report = record(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
-                        max_tries=args.max_tries, progress=tick, robot=args.robot)
+        if args.style == "human":
+            from ..simulation import record_human
+
+            report = record_human(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
+                                  max_tries=args.max_tries, progress=tick, robot=args.robot,
+                                  verbose=args.verbose)
+        else:
+            report = record(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
+                            max_tries=args.max_tries, progress=tick, robot=args.robot)
     if args.json:
         print(json.dumps(report))
     else:
