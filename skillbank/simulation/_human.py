@@ -250,6 +250,8 @@ class _Operator:
             while direction * error(aim) > self.coast[kind] and taps < 60:
                 self.tap(key, direction)
                 taps += 1
+                if taps % 10 == 0 and abs(error(before)) < 2 * self.travel[kind]:
+                    raise _Done  # what the person watches does not follow (a dropped object): gives up
             if taps == 0:  # within the coast of the goal, but not within tolerance: a single tap
                 self.tap(key, direction)
                 taps = 1
