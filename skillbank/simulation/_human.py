@@ -29,10 +29,26 @@ __all__ = ["HumanDemonstrator"]
 SUCCESS_HOLD = 10
 #: Control steps an episode may last at most (120 s at 20 Hz).
 MAX_STEPS = 2400
+#: Tasks of several objects, one demonstration moving each in turn (the tallest first: fingers closing
+#: on a low object beside a tall one tip it over). Their parts are :data:`TASKS`' single-object tasks,
+#: and robosuite's own check of the whole task says whether it was done.
+MULTI_TASKS = {
+    "PickPlace": tuple(TASKS[f"PickPlace{name}"] for name in ("Cereal", "Milk", "Can", "Bread")),
+    "NutAssembly": (TASKS["NutAssemblySquare"],
+                    Task(pick="RoundNut", site="RoundNut_handle_site", site_out=0.01, across=1, peg="peg2",
+                         release=0.13)),
+}
+#: The farthest off centre (m) a grasp of these objects holds: a can (7.1 cm across) held 2-3 cm off
+#: its axis slips out of the Panda's fingers as it is carried, a square nut's handle is 4 cm long.
+OFF_CENTRE_LIMIT = {"Can": 0.015, "Milk": 0.01, "Bread": 0.01, "Cereal": 0.01, "SquareNut": 0.01}
 
 
 class _Done(Exception):
     """The task has been done (the check held for :data:`SUCCESS_HOLD` steps), or time ran out."""
+
+
+class _Lost(Exception):
+    """What the person watches does not follow the keys (the object slipped out of the fingers)."""
 
 
 def _wrap(angle: float, period: float) -> float:
@@ -70,7 +86,7 @@ class HumanDemonstrator:
         1.4): 0.6 turns it 0.07 rad.
     pulse_steps : int, default=1
         Control steps a key is held down (a tap).
-    gap : (int, int), default=(1, 4)
+    gap : (int, int), default=(1, 3)
         Control steps between two taps of a run (drawn uniformly, both ends included).
     pause_probability : float, default=0.06
         After a tap, the chance that the person stops to look for ``pause`` seconds.
@@ -100,7 +116,7 @@ class HumanDemonstrator:
     (0.01, 0.03)
     """
 
-    def __init__(self, *, pulse=1.0, turn_pulse=0.6, pulse_steps=1, gap=(1, 4), pause_probability=0.06,
+    def __init__(self, *, pulse=1.0, turn_pulse=0.6, pulse_steps=1, gap=(1, 3), pause_probability=0.06,
                  pause=(0.5, 2.5), reaction=(0.3, 1.0), start=(1.5, 6.0), overshoot=0.02,
                  overshoot_probability=0.5, off_centre=(0.01, 0.03), retry_probability=0.25,
                  random_state=None):
@@ -135,17 +151,20 @@ class HumanDemonstrator:
                              f"{self.random_state!r}")
         return self
 
-    def episode(self, env, task: Task | str, rng=None) -> bool:
+    def episode(self, env, task, rng=None) -> bool:
         """Drive one episode of ``env`` (reset here) through ``task``; True when the task was done.
 
         ``env``: a robosuite environment with one arm and ``OSC_POSE`` delta control, possibly wrapped
         (robosuite's ``DataCollectionWrapper`` records what it is stepped with); ``task``: a
-        :class:`~skillbank.simulation._robosuite.Task` or a key of ``TASKS``; ``rng``: a numpy
-        Generator (default: one from ``random_state``).
+        :class:`~skillbank.simulation._robosuite.Task`, a tuple of them (several objects, one after
+        the other), or a key of ``TASKS`` or :data:`MULTI_TASKS`; ``rng``: a numpy Generator
+        (default: one from ``random_state``).
         """
-        task = TASKS[task] if isinstance(task, str) else task
+        if isinstance(task, str):
+            task = MULTI_TASKS[task] if task in MULTI_TASKS else TASKS[task]
+        task = (task,) if isinstance(task, Task) else tuple(task)
         rng = np.random.default_rng(self.random_state) if rng is None else rng
-        operator = _Operator(self, env, env.reset(), rng)
+        operator = _Operator(self, env, env.reset(), rng, limit=MAX_STEPS * len(task))
         try:
             operator.perform(task)
             while True:  # done moving: the person waits for the check, as robosuite's collection does
@@ -158,11 +177,11 @@ class HumanDemonstrator:
 class _Operator:
     """One episode's person: what it sees (the observations) and the keys it presses."""
 
-    def __init__(self, habits: HumanDemonstrator, env, obs, rng):
-        self.h, self.env, self.obs, self.rng = habits, env, obs, rng
+    def __init__(self, habits: HumanDemonstrator, env, obs, rng, *, limit=MAX_STEPS):
+        self.h, self.env, self.obs, self.rng, self.limit = habits, env, obs, rng, limit
         self.sim_env = getattr(env, "env", env)  # the environment under a wrapper
         self.objects = _objects(obs)
-        self.grip, self.steps, self.held = -1.0, 0, 0
+        self.grip, self.steps, self.held, self.grasps = -1.0, 0, 0, 0
         # what the person has learnt of the arm: how far one tap moves it from rest, and how far it
         # coasts once the taps stop (translation in metres, rotation in radians), refined as it goes
         self.travel, self.coast = [0.015, 0.04], [0.01, 0.03]
@@ -172,7 +191,7 @@ class _Operator:
         self.obs, _, _, _ = self.env.step(action)
         self.steps += 1
         self.held = self.held + 1 if self.sim_env._check_success() else 0
-        if self.held >= SUCCESS_HOLD or self.steps >= MAX_STEPS:
+        if self.held >= SUCCESS_HOLD or self.steps >= self.limit:
             raise _Done
 
     def idle(self, steps):
@@ -236,6 +255,7 @@ class _Operator:
             e = aim - read()
             return _wrap(e, period) if period else e
 
+        total = 0
         for attempt in range(tries):
             e = error(goal)
             if abs(e) <= max(tol, 0.55 * self.travel[kind]):
@@ -250,8 +270,9 @@ class _Operator:
             while direction * error(aim) > self.coast[kind] and taps < 60:
                 self.tap(key, direction)
                 taps += 1
-                if taps % 10 == 0 and abs(error(before)) < 2 * self.travel[kind]:
-                    raise _Done  # what the person watches does not follow (a dropped object): gives up
+                total += 1
+                if (taps % 10 == 0 and abs(error(before)) < 2 * self.travel[kind]) or total > 80:
+                    raise _Lost
             if taps == 0:  # within the coast of the goal, but not within tolerance: a single tap
                 self.tap(key, direction)
                 taps = 1
@@ -276,18 +297,34 @@ class _Operator:
             self.reach(k, coordinate(k), float(goal[k]), tol)
 
     # -- the task -----------------------------------------------------------------------------------
-    def perform(self, task: Task):
+    def perform(self, tasks: tuple):
         self.wait(self.h.start)
+        for k, task in enumerate(tasks):
+            if k:
+                self.wait(self.h.reaction)  # a look for the next object
+            self.one(task)
+
+    def one(self, task: Task):
+        """Grasp the task's object and take it where it goes; again (up to three times) if it slips."""
         self.start_height = float(self.at(task.pick)[2])
-        self.grasp(task)
-        if task.peg is not None:
-            self.assemble(task)
-        elif task.into is not None:
-            self.sort(task)
-        elif task.onto is not None:
-            self.stack(task)
-        else:
-            self.lift(task)
+        for _ in range(3):
+            try:
+                self.grasp(task)
+                if task.peg is not None:
+                    self.assemble(task)
+                elif task.into is not None:
+                    self.sort(task)
+                elif task.onto is not None:
+                    self.stack(task)
+                else:
+                    self.lift(task)
+                return
+            except _Lost:  # it slipped: open, lift the hand, and take it again
+                if self.grip > 0:
+                    self.press_grip(False)
+                self.tap(2, 1.0)
+                self.wait(self.h.reaction)
+        raise _Done
 
     def grasp_point(self, task: Task) -> tuple:
         """Where to grasp now, and the horizontal unit vector of the graspable axis."""
@@ -307,18 +344,24 @@ class _Operator:
             goal, period = _yaw(q) + task.across * math.pi / 2, math.pi
         else:
             goal, period = _yaw(q), math.pi / 2
-        self.reach(5, self.closing, goal, 0.1, period=period)
+        self.reach(5, self.closing, goal, 0.15, period=period)  # roughly square: the fingers square it
 
     def grasp(self, task: Task):
         """Over the object, the wrist turned, down off its centre, closed; again while it is not held."""
         side = self.rng.choice([-1.0, 1.0])
-        off = side * self.rng.uniform(*self.h.off_centre)
-        early = self.rng.random() < self.h.retry_probability
+        limit = OFF_CENTRE_LIMIT.get(task.pick, math.inf)
+        self.off_range = (min(self.h.off_centre[0], 0.5 * limit), min(self.h.off_centre[1], limit))
+        off = side * self.rng.uniform(*self.off_range)
+        early = self.grasps == 0 and self.rng.random() < self.h.retry_probability
+        self.grasps += 1
         order = (0, 1) if self.rng.random() < 0.5 else (1, 0)
         for attempt in range(3):
             if attempt == 0:
                 target, _ = self.grasp_point(task)
-                self.move(target, keys=order, tol=0.01)
+                if self.grasps == 1:  # over it at the height the hand is, then down
+                    self.move(target, keys=order, tol=0.01)
+                else:  # high enough to pass over what it dropped it beside
+                    self.move(target + [0, 0, 0.1], keys=(2,) + order, tol=0.01)
                 self.turn_to(task)
             target, along = self.grasp_point(task)
             point = target + off * along
@@ -326,7 +369,13 @@ class _Operator:
             self.move(point + [0, 0, 0.03], keys=(2,))
             self.off_centre(task, side)  # a look before the end: off centre as meant, centred across
             if not (early and attempt == 0):  # else it closes too early, 3 cm above: the fingers meet over it
-                self.move(point, keys=(2,), tol=0.006)
+                for _ in range(3):
+                    self.move(point, keys=(2,), tol=0.006)
+                    if self.tool()[2] < point[2] + 0.02:
+                        break
+                    self.tap(2, 1.0)  # a finger came down on the object: up, line up again, down
+                    self.tap(2, 1.0)
+                    self.off_centre(task, side)
             height = float(self.at(task.pick)[2])
             self.press_grip(True)
             self.tap(2, 1.0)
@@ -338,10 +387,10 @@ class _Operator:
             self.wait(self.h.reaction)
         raise _Done  # three misses: the person gives up (the episode is not kept)
 
-    def off_centre(self, task: Task, side: float, across_tol=0.01):
+    def off_centre(self, task: Task, side: float, across_tol=0.006):
         """Single taps until the tool is ``off_centre`` off the grasp point along the graspable axis (on
         ``side``) and within ``across_tol`` of it across: a person lines the fingers up by eye."""
-        lo, hi = self.h.off_centre
+        lo, hi = self.off_range
         for _ in range(6):
             target, along = self.grasp_point(task)
             across = np.array([along[1], -along[0], 0.0])

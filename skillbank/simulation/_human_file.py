@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core._validation import check_positive
-from ._human import HumanDemonstrator
-from ._robosuite import CONTROL_FREQ, TASKS, _check_robot, import_robosuite, parse_env
+from ._human import MULTI_TASKS, HumanDemonstrator
+from ._robosuite import CONTROL_FREQ, TASKS, _check_robot, import_robosuite
 
 __all__ = ["record_human", "quiet_robosuite"]
 
@@ -40,6 +40,23 @@ def quiet_robosuite(quiet: bool = True) -> None:
     Called before robosuite is imported, it also silences the warnings its import prints.
     """
     logging.getLogger("robosuite_logs").disabled = bool(quiet)
+
+
+def parse_task(spec) -> str:
+    """The task of ``robosuite:TASK``: a key of ``TASKS`` or of ``MULTI_TASKS`` (several objects).
+
+    Examples
+    --------
+    >>> parse_task("robosuite:PickPlace")
+    'PickPlace'
+    """
+    known = sorted(TASKS) + sorted(MULTI_TASKS)
+    if not isinstance(spec, str) or not spec.startswith("robosuite:"):
+        raise ValueError(f"env: expected robosuite:TASK (TASK one of {known}), got {spec!r}")
+    task = spec.split(":", 1)[1]
+    if task not in known:
+        raise ValueError(f"env: the recorder knows robosuite tasks {known}, got {task!r}")
+    return task
 
 
 def _check_seed(seed) -> int:
@@ -81,7 +98,8 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
     Parameters
     ----------
     env : str
-        ``robosuite:TASK``, TASK a key of :data:`~skillbank.simulation.TASKS`.
+        ``robosuite:TASK``, TASK a key of :data:`~skillbank.simulation.TASKS`, or ``PickPlace`` (its
+        four objects into their bins) or ``NutAssembly`` (both nuts on their pegs) in one demonstration.
     episodes : int
         Successful episodes to keep (the environment's ``_check_success()`` held at the end).
     out : path-like
@@ -110,7 +128,7 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
     --------
     >>> record_human("robosuite:Lift", episodes=1, out="lift_human.hdf5", robot="Panda")  # doctest: +SKIP
     """
-    task = parse_env(env)
+    task = parse_task(env)
     robot = _check_robot(robot)
     episodes = check_positive(episodes, name="episodes", integer=True)
     tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
@@ -146,7 +164,7 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
             wrapped = DataCollectionWrapper(base, str(folder / "raw"))
             try:
                 while len(kept) < episodes and tried < tries:
-                    ok = person.episode(wrapped, TASKS[task], rng)
+                    ok = person.episode(wrapped, task, rng)
                     tried += 1
                     if ok:
                         kept.append(Path(wrapped.ep_directory))
