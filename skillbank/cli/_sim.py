@@ -113,7 +113,7 @@ def _evaluate(args) -> int:
 def _record(args) -> int:
     from tqdm import tqdm  # core dependency; the bar only when asked
 
-    from ..simulation import record  # robosuite (the sim extra) is imported when the environment is made
+    from ..simulation import record, record_human  # robosuite (the sim extra): when the environment is made
 
     check_folder(args.out, "out")  # record checks the task, the counts and the file before robosuite starts
     with tqdm(total=args.episodes, desc="recording", unit="episode", file=sys.stderr,
@@ -123,8 +123,6 @@ def _record(args) -> int:
             bar.set_postfix_str(f"{tried} tried")
 
         if args.style == "human":
-            from ..simulation import record_human
-
             report = record_human(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
                                   max_tries=args.max_tries, progress=tick, robot=args.robot,
                                   verbose=args.verbose)

@@ -152,9 +152,9 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
     folder = Path(tempfile.mkdtemp(prefix="skillbank-human-"))
     try:
         with chatter:
-            suite = import_robosuite()
-            from robosuite.controllers import load_composite_controller_config
-            from robosuite.wrappers import DataCollectionWrapper
+            suite = import_robosuite()  # the extra skillbank[sim], only when episodes are recorded
+            from robosuite.controllers import load_composite_controller_config  # after its check
+            from robosuite.wrappers import DataCollectionWrapper  # after its check
 
             controller = load_composite_controller_config(robot=robot)
             info = {"env_name": task, "robots": [robot], "controller_configs": controller}
