@@ -28,18 +28,33 @@ from ..core._validation import check_positive
 from ._human import MULTI_TASKS, HumanDemonstrator
 from ._robosuite import CONTROL_FREQ, TASKS, _check_robot, import_robosuite
 
-__all__ = ["record_human", "quiet_robosuite"]
+__all__ = ["record_human", "quiet_robosuite", "command_statistics"]
 
 #: The recorder's styles (``sim record --style``).
 STYLES = ("scripted", "human")
 
 
-def quiet_robosuite(quiet: bool = True) -> None:
-    """Silence robosuite's logger (its warnings at import, its INFO lines at each environment), or not.
+@contextlib.contextmanager
+def quiet_robosuite(quiet: bool = True):
+    """Within the block, robosuite's logger is silent (its warnings at import, its INFO lines at each
+    environment), and its lines on stdout are dropped; as they were afterwards. ``quiet=False``: as is.
 
-    Called before robosuite is imported, it also silences the warnings its import prints.
+    Examples
+    --------
+    >>> with quiet_robosuite():
+    ...     print("dropped")
     """
-    logging.getLogger("robosuite_logs").disabled = bool(quiet)
+    if not quiet:
+        yield
+        return
+    logger = logging.getLogger("robosuite_logs")
+    was = logger.disabled
+    logger.disabled = True
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            yield
+    finally:
+        logger.disabled = was
 
 
 def parse_task(spec) -> str:
@@ -57,6 +72,39 @@ def parse_task(spec) -> str:
     if task not in known:
         raise ValueError(f"env: the recorder knows robosuite tasks {known}, got {task!r}")
     return task
+
+
+def command_statistics(actions) -> dict:
+    """How a demonstration's commands look: keyboard-like pulses or a smooth stream.
+
+    ``actions``: (n, 7) ``OSC_POSE`` deltas and the gripper (robosuite's layout). Returns
+    ``{"steps", "bursts"`` (runs of control steps with a motion command), ``"idle"`` (the fraction
+    of steps with none), ``"gap_median"``, ``"gap_max"`` (control steps between bursts),
+    ``"corrections"`` (a key followed by its opposite), ``"turn_taps"`` (steps turning the wrist),
+    ``"closes"`` (the gripper closed), ``"first_key"`` (the step of the first motion command)}.
+
+    Examples
+    --------
+    >>> a = np.zeros((10, 7)); a[[2, 3, 7], 0] = [1, 1, -1]
+    >>> s = command_statistics(a)
+    >>> s["bursts"], s["idle"], s["corrections"], s["first_key"]
+    (2, 0.7, 1, 2)
+    """
+    a = np.asarray(actions, float)
+    if a.ndim != 2 or a.shape[1] != 7 or not len(a):
+        raise ValueError(f"actions: expected an array (n, 7), got shape {a.shape}")
+    motion = np.any(a[:, :6] != 0, axis=1)
+    starts = np.flatnonzero(motion & ~np.r_[False, motion[:-1]])
+    ends = np.flatnonzero(motion & ~np.r_[motion[1:], False])
+    gaps = starts[1:] - ends[:-1] - 1
+    keys = [(int(k), float(np.sign(row[k]))) for row in a[motion] for k in np.flatnonzero(row[:6])]
+    return {"steps": len(a), "bursts": len(starts), "idle": float(1 - motion.mean()),
+            "gap_median": float(np.median(gaps)) if len(gaps) else 0.0,
+            "gap_max": int(gaps.max()) if len(gaps) else 0,
+            "corrections": sum(k == j and s == -t for (k, s), (j, t) in zip(keys, keys[1:], strict=False)),
+            "turn_taps": int(np.count_nonzero(np.any(a[:, 3:6] != 0, axis=1))),
+            "closes": int(np.count_nonzero(np.diff(a[:, 6]) > 0) + (a[0, 6] > 0)),
+            "first_key": int(starts[0]) if len(starts) else None}
 
 
 def _check_seed(seed) -> int:
@@ -144,14 +192,13 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
         raise ValueError(f"out: {out} exists; give a new file")
     if not out.parent.is_dir():
         raise ValueError(f"out: the folder {out.parent} does not exist")
-    quiet_robosuite(not verbose)
     rng = np.random.default_rng(seed)
     kept, tried = [], 0
-    # robosuite prints (its gym wrapper at import, the collection wrapper at each episode) on stdout
-    chatter = contextlib.nullcontext() if verbose else contextlib.redirect_stdout(io.StringIO())
     folder = Path(tempfile.mkdtemp(prefix="skillbank-human-"))
     try:
-        with chatter:
+        # robosuite logs, and prints on stdout (its gym wrapper at import, the collection wrapper at
+        # each episode): off unless verbose
+        with quiet_robosuite(not verbose):
             suite = import_robosuite()  # the extra skillbank[sim], only when episodes are recorded
             from robosuite.controllers import load_composite_controller_config  # after its check
             from robosuite.wrappers import DataCollectionWrapper  # after its check
