@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ..core._validation import check_fraction, check_positive
-from ._robosuite import CONTROL_FREQ, TASKS, Task, _closing_axis, _objects, _yaw
+from ._robosuite import CONTROL_FREQ, TASKS, Task, _box, _closing_axis, _objects, _yaw
 
 __all__ = ["HumanDemonstrator"]
 
@@ -334,6 +334,12 @@ class _Operator:
             target = np.array(sim.data.site_xpos[sim.model.site_name2id(task.site)], float)
             out = (target - self.at(task.pick)) * [1, 1, 0]
             target = target + task.site_out * out / max(np.linalg.norm(out), 1e-9)
+        # not so low that the palm comes down on a tall object's top (the Panda's is 3.7 cm above its
+        # grip site: on the can, 8 cm tall, it pressed the can into the bin and flung it)
+        sim = self.sim_env.sim
+        geoms = [n for n in sim.model.geom_names if n and n.startswith(f"{task.pick}_g") and "vis" not in n]
+        if geoms:
+            target[2] = max(target[2], _box(sim, geoms)[1][2] - 0.03)
         c = self.closing()
         return target, np.array([-math.sin(c), math.cos(c), 0.0])
 
