@@ -47,7 +47,8 @@ def add_parser(sub):
                    help="scripted (default: smooth moves, robomimic's layout) or human (a person at a "
                         "keyboard: short pulses, pauses, overshoot, off-centre grasps, retries; robosuite's "
                         "raw collection format)")
-    r.add_argument("-v", "--verbose", action="store_true", help="let robosuite's log through")
+    r.add_argument("-v", "--verbose", action="store_true",
+                   help="--style human: let robosuite's log and lines through (off by default)")
     r.add_argument("--json", action="store_true",
                    help="print env, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
