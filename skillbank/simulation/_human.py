@@ -450,7 +450,14 @@ class _Operator:
             self.reach(5, lambda: _yaw(self.obs[f"{task.pick}_quat"]), 0.0, 0.06, period=task.align)
         goal = peg + [0, 0, task.release]
         self._carry_to(task, goal, 0.05)
-        self.move(goal, keys=(0, 1), watch=task.pick, tol=0.004)
         self.move(goal, keys=(2,), watch=task.pick, tol=0.01)
+        for _ in range(3):  # a held nut swings and turns as the hand moves: look again, once it hangs still
+            self.settled(lambda: float(self.at(task.pick)[0]) + float(self.at(task.pick)[1]))
+            yaw = _yaw(self.obs[f"{task.pick}_quat"])
+            if task.align and abs(_wrap(yaw, task.align)) > 0.08:
+                self.reach(5, lambda: _yaw(self.obs[f"{task.pick}_quat"]), 0.0, 0.06, period=task.align)
+            elif np.linalg.norm((self.at(task.pick) - goal)[:2]) < 0.006:
+                break
+            self.move(goal, keys=(0, 1), watch=task.pick, tol=0.004)
         self.press_grip(False)
         self.tap(2, 1.0)
