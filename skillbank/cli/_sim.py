@@ -43,6 +43,12 @@ def add_parser(sub):
     r.add_argument("--robot", default="UR5e",
                    help="robosuite's arm: UR5e (default), Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7 (any "
                         "case: panda, ur5e), each with its default gripper")
+    r.add_argument("--style", choices=("scripted", "human"), default="scripted",
+                   help="scripted (default: smooth moves, robomimic's layout) or human (a person at a "
+                        "keyboard: short pulses, pauses, overshoot, off-centre grasps, retries; robosuite's "
+                        "raw collection format)")
+    r.add_argument("-v", "--verbose", action="store_true",
+                   help="--style human: let robosuite's log and lines through (off by default)")
     r.add_argument("--json", action="store_true",
                    help="print env, robot, episodes, tried, seed, out, samples as JSON")
     r.set_defaults(func=_record)
@@ -117,7 +123,7 @@ def _evaluate(args) -> int:
 def _record(args) -> int:
     from tqdm import tqdm  # core dependency; the bar only when asked
 
-    from ..simulation import record  # robosuite (the sim extra) is imported when the environment is made
+    from ..simulation import record, record_human  # robosuite (the sim extra): when the environment is made
 
     check_folder(args.out, "out")  # record checks the task, the counts and the file before robosuite starts
     with tqdm(total=args.episodes, desc="recording", unit="episode", file=sys.stderr,
@@ -126,8 +132,13 @@ def _record(args) -> int:
             bar.update(kept - bar.n)
             bar.set_postfix_str(f"{tried} tried")
 
-        report = record(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
-                        max_tries=args.max_tries, progress=tick, robot=args.robot)
+        if args.style == "human":
+            report = record_human(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
+                                  max_tries=args.max_tries, progress=tick, robot=args.robot,
+                                  verbose=args.verbose)
+        else:
+            report = record(args.env, episodes=args.episodes, out=args.out, seed=args.seed,
+                            max_tries=args.max_tries, progress=tick, robot=args.robot)
     if args.json:
         print(json.dumps(report))
     else:

@@ -12,6 +12,8 @@ is compiled, not when this package is imported.
 
 from ._compose import COMPOSED, STEP_REASONS, execute_plan, observe
 from ._evaluate import BASELINES, REASONS, binomial_interval, evaluate
+from ._human import HumanDemonstrator
+from ._human_file import command_statistics, record_human
 from ._mujoco import MISSING, import_mujoco
 from ._robosuite import TASKS, record
 from ._run import GRIPPER_RANGE, SimulationResult, simulate
@@ -21,4 +23,5 @@ from ._world import GRIP_FORCE, LINK_MASSES, PRESS_FORCE, World, build_world
 __all__ = ["simulate", "SimulationResult", "GRIPPER_RANGE", "build_world", "World", "LINK_MASSES",
            "PRESS_FORCE", "GRIP_FORCE", "SERVO_GAINS", "MISSING", "import_mujoco", "record", "TASKS",
            "evaluate", "REASONS", "BASELINES", "binomial_interval", "execute_plan", "COMPOSED",
-           "STEP_REASONS", "observe"]
+           "STEP_REASONS", "observe", "HumanDemonstrator", "record_human",
+           "command_statistics"]
