@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core._validation import check_positive
 from ._human import MULTI_TASKS, HumanDemonstrator
-from ._robosuite import CONTROL_FREQ, TASKS, _check_robot, import_robosuite
+from ._robosuite import CONTROL_FREQ, TASKS, import_robosuite, robosuite_robot
 
 __all__ = ["record_human", "quiet_robosuite", "command_statistics"]
 
@@ -177,7 +177,7 @@ def record_human(env: str, *, episodes: int, out, seed: int = 0, robot: str = "U
     >>> record_human("robosuite:Lift", episodes=1, out="lift_human.hdf5", robot="Panda")  # doctest: +SKIP
     """
     task = parse_task(env)
-    robot = _check_robot(robot)
+    robot = robosuite_robot(robot)
     episodes = check_positive(episodes, name="episodes", integer=True)
     tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
     seed = _check_seed(seed)

@@ -229,3 +229,23 @@ def test_the_habits_are_stored_unchanged():
     person = HumanDemonstrator(gap=(2, 3), off_centre=(0.015, 0.025), random_state=5)
     assert person.gap == (2, 3) and person.off_centre == (0.015, 0.025) and person.random_state == 5
     assert HumanDemonstrator().pulse_steps == 1
+
+
+def test_skillbanks_reader_takes_the_file_and_a_library_cuts_one_reach(lift, replay, tmp_path):
+    """The recorded file is what people record: `io.read_robosuite_raw` replays it (its world agrees with
+    today's), its tool is the simulator's, and `library add` takes it."""
+    from skillbank.io import detect_format, read_robosuite_raw
+    from skillbank.pipeline import Library
+
+    out, _ = lift
+    run, _ = replay
+    assert detect_format(out) == "robosuite-raw"
+    (demo,) = read_robosuite_raw(out)
+    with h5py.File(out, "r") as h5:
+        tool, _, _ = run(h5["data/demo_1/states"][()])
+    np.testing.assert_allclose(demo["position"], tool, atol=1e-9)
+    assert demo.metadata["arm"] == "Panda" and demo.metadata["pose_of"] == "panda_hand:grip_site"
+    assert demo.metadata["world_check"]["agrees"]
+    with Library(tmp_path / "lib.sqlite", create=True) as lib:
+        lib.add_files([out])
+        assert len(lib.primitives()) >= 2  # at least a reach and a lift, cut at the grasp
