@@ -67,7 +67,9 @@ def add_parser(sub):
                    help="how a primitive is adapted: lte (default), ja, promp, elmap or dmp; or a baseline, "
                         "rigid (the recorded segment moved rigidly into the object's new frame) or replay "
                         "(the source's actions, open loop)")
-    e.add_argument("--horizon", type=int, default=1000, help="control steps per episode (default 1000, 50 s)")
+    e.add_argument("--horizon", type=int, default=None,
+                   help="control steps per episode (20 a second; default: what the library's longest "
+                        "demonstration needs, its samples and the executor's waits, at least 1000)")
     e.add_argument("--robot", default="UR5e",
                    help="robosuite's arm that runs the skills, with its default gripper: UR5e (default), "
                         "Panda, Sawyer, IIWA, Jaco, Kinova3 or XArm7 (any case); a library recorded on "

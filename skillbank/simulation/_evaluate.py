@@ -833,6 +833,25 @@ def _order(groups, order):
     return parts
 
 
+#: The horizon when the demonstrations are short: robosuite's default, 50 s.
+DEFAULT_HORIZON = 1000
+
+
+def _horizon(groups) -> int:
+    """Control steps the executor may need to carry out the longest demonstration of every part.
+
+    Each segment runs its demonstrated samples, then waits up to ``SETTLE`` steps to arrive and up to one
+    second before a change of the gripper's command; the episode's last second lets the objects settle. A
+    person's demonstration is often longer than robosuite's default 1000 steps (a four-object PickPlace:
+    7184), so the horizon follows the demonstrations, never below the default.
+    """
+    need = SETTLE
+    for sources in groups.values():
+        need += max(sum(seg.primitive.demo.n_steps + SETTLE + CONTROL_FREQ for seg in src.segments)
+                    for src in sources)
+    return max(DEFAULT_HORIZON, int(need))
+
+
 def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
     if task not in suite.ALL_ENVIRONMENTS:
         raise ValueError(f"env: robosuite has no task {task!r}; its tasks are "
@@ -845,7 +864,7 @@ def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
-             horizon: int = 1000, order=None, random_state=None, paths: bool = False,
+             horizon: int | None = None, order=None, random_state=None, paths: bool = False,
              progress=None, robot: str = DRIVEN_ROBOT) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
@@ -865,8 +884,10 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         default centre.
     method : str, default="lte"
         A name of :data:`skillbank.selection.METHODS`, or a baseline of :data:`BASELINES`.
-    horizon : int, default=1000
-        Control steps an episode may take (20 per second).
+    horizon : int, optional
+        Control steps an episode may take (20 per second). Default: what the executor may need to carry
+        out the library's longest demonstration of each part (its samples, plus the waits to arrive and
+        before each change of the gripper), at least :data:`DEFAULT_HORIZON`.
     order : sequence of str, optional
         When the library's demonstrations each act on other objects (one per object, say), the task is
         done part after part: each part is the demonstrations of one set of objects, run from the
@@ -887,7 +908,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     Returns
     -------
     dict
-        ``{"env", "robot", "recorded_on", "notes", "method", "seed", "placement", "episodes", "successes",
+        ``{"env", "robot", "recorded_on", "notes", "method", "seed", "placement", "horizon", "episodes",
+        "successes",
         "success_rate", "interval", "timing", "per_episode"}``: ``robot`` the arm driven
         (``robot``, by default :data:`DRIVEN_ROBOT`, robosuite's UR5e), ``recorded_on`` the
         arms the library's demonstrations say they were recorded on, and a note when that is another;
@@ -901,7 +923,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         raise ValueError(f"env: expected robosuite:TASK, got {env!r}")
     task = env.split(":", 1)[1]
     episodes = check_positive(episodes, name="episodes", integer=True)
-    horizon = check_positive(horizon, name="horizon", integer=True)
+    if horizon is not None:
+        horizon = check_positive(horizon, name="horizon", integer=True)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     if placement is not None:
@@ -919,6 +942,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     for src in sources:  # the parts of a task: the sources that act on the same objects
         groups.setdefault(tuple(sorted(src.start)), []).append(src)
     order = _order(groups, order)
+    if horizon is None:
+        horizon = _horizon(groups)
     suite = import_robosuite()
     environment = _make(suite, task, seed, horizon, robot)
     if placement is not None:
@@ -979,8 +1004,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         environment.close()
     successes = sum(r["success"] for r in rows)
     return {"env": env, **driven_robot(sources, robot), "method": method, "seed": int(seed),
-            "placement": placement,
-            "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
+            "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
+            "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
             "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],
                        "segments": timings["segments"]},

@@ -217,3 +217,24 @@ def test_the_gripper_acts_once_the_tool_is_where_the_path_says(lift, monkeypatch
     report = evaluate(db, "robosuite:Lift", episodes=1, seed=500, placement=0.12)
     assert report["successes"] == 1 and changes, report["per_episode"]
     assert max(changes) < _evaluate.ARRIVE, changes
+
+
+def test_the_horizon_follows_the_longest_demonstration_of_each_part(lift):
+    """Issue 42: a person's demonstration is longer than robosuite's default 1000 steps. The default horizon
+    is what the executor may need for the longest demonstration of each part: its samples, up to a second to
+    arrive and a second before each gripper change per segment, and a last second to settle."""
+    from types import SimpleNamespace
+
+    from skillbank.simulation._evaluate import DEFAULT_HORIZON, SETTLE, _horizon
+
+    def source(*lengths):
+        segs = [SimpleNamespace(primitive=SimpleNamespace(demo=SimpleNamespace(n_steps=n))) for n in lengths]
+        return SimpleNamespace(segments=segs)
+
+    short = {("cube",): [source(100, 50), source(120)]}
+    assert _horizon(short) == DEFAULT_HORIZON
+    long = {("can",): [source(3000, 500), source(100)], ("milk",): [source(2000)]}
+    assert _horizon(long) == SETTLE + (3500 + 2 * 40) + (2000 + 40)
+    db, _ = lift
+    report = evaluate(db, "robosuite:Lift", episodes=1, seed=3, horizon=40)
+    assert report["horizon"] == 40  # as asked
