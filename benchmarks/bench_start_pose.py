@@ -21,28 +21,12 @@ import time
 from pathlib import Path
 
 from _common import data_dir
+from bench_whole_arm_repair import DOWN, library  # the same three-button skill and its press
 
-from skillbank import Library
-from skillbank.io import load
 from skillbank.planning import arm_clearance, plan_task, scene_from_dict
 from skillbank.robots import robot_model
 
-PRESS = """(:action press
-  :parameters (?b - button)
-  :precondition (free ?b)
-  :effect (and (pressed ?b) (not (free ?b))))"""
-DOWN = [0.0, 1.0, 0.0, 0.0]
 TCP = 0.163
-
-
-def library(folder: Path, data: Path) -> Library:
-    lib = Library(folder / "buttons.db")
-    lib.add(load(data / "seed" / "three_button_pressing_demo.h5"), segment=True, assign="none")
-    for p in lib.primitives():
-        if p.demo["position"][[0, -1], 2].max() < 0.15:  # the presses from one button to the next
-            lib.label("press", primitive=p.id)
-    lib.describe("press", PRESS)
-    return lib
 
 
 def scene_doc(start, lift) -> dict:

@@ -26,7 +26,9 @@ import re
 
 import numpy as np
 
-__all__ = ["POSE_OF", "check_pose_of", "parse_pose_of", "state_pose_of", "POINT_KINDS"]
+from ._rotations import matrix_to_quaternion
+
+__all__ = ["POSE_OF", "check_pose_of", "parse_pose_of", "state_pose_of", "offset_pose_of", "POINT_KINDS"]
 
 #: The metadata key that says which point of the robot the pose streams are of.
 POSE_OF = "pose_of"
@@ -103,13 +105,32 @@ def check_pose_of(value, *, name: str = "pose_of") -> str:
     >>> check_pose_of("0,0,0.163")
     '0,0,0.163,0,0,0,1'
     """
-    parts = parse_pose_of(value, name=name)
+    return pose_of_text(parse_pose_of(value, name=name))
+
+
+def pose_of_text(parts) -> str:
+    """The canonical text of the parts :func:`parse_pose_of` gives."""
     if parts[0] == "flange":
         return "flange"
     if parts[0] == "gripper":
         return f"{parts[1]}:{parts[2]}"
     # the shortest text that reads back as the same float: stored, exported and compared as text
     return ",".join(np.format_float_positional(float(v), trim="-") for v in (*parts[1], *parts[2]))
+
+
+def offset_pose_of(T, *, name: str = "pose_of") -> str:
+    """The canonical text of an offset given as a 4 x 4 rigid transform in the flange frame.
+
+    Examples
+    --------
+    >>> T = np.eye(4)
+    >>> T[2, 3] = 0.097
+    >>> offset_pose_of(T)
+    '0,0,0.097,0,0,0,1'
+    """
+    T = np.asarray(T, float)
+    q = matrix_to_quaternion(T[:3, :3])
+    return check_pose_of(",".join(repr(float(v)) for v in (*T[:3, 3], *q)), name=name)
 
 
 def state_pose_of(demos, value, *, source="the file") -> list:

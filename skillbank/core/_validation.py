@@ -19,6 +19,7 @@ Long lists in messages are cut by :func:`summarise`.
 
 from __future__ import annotations
 
+import os
 import warnings
 from contextlib import contextmanager
 
@@ -306,6 +307,30 @@ def check_positive(value, *, name: str, integer: bool = False, allow_zero: bool 
         raise ValueError(f"{name}: expected {kind} {bound} and at most {MAX_MAGNITUDE:g} (larger ones "
                          f"overflow the solvers), got {number!r}")
     return int(value) if integer else number
+
+
+def env_bound(variable: str, default: int, what: str, environ=None) -> int:
+    """A bound a user may raise: the whole number > 0 in ``$variable``, else ``default``.
+
+    ``what`` names the unit in the message (``"samples"``, ``"steps"``). ``environ`` defaults to
+    ``os.environ``.
+
+    Examples
+    --------
+    >>> env_bound("X", 10, "steps", {}), env_bound("X", 10, "steps", {"X": "20"})
+    (10, 20)
+    """
+    environ = os.environ if environ is None else environ
+    text = environ.get(variable, "").strip()
+    if not text:
+        return default
+    try:
+        value = int(text)
+        if value <= 0:
+            raise ValueError
+    except ValueError:
+        raise ValueError(f"{variable}: expected a whole number of {what} > 0, got {text[:40]!r}") from None
+    return value
 
 
 def check_fraction(value, *, name: str, low: float = 0.0, high: float = 1.0):

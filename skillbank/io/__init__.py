@@ -31,7 +31,7 @@ from ._lasa import lasa_shapes, load_lasa
 from ._lerobot import read_lerobot, select_episodes
 from ._rail import load_rail, read_rail_file
 from ._robomimic import ROBOSUITE_POSE_OF, read_robomimic
-from ._robosuite_raw import import_robosuite, read_robosuite_raw
+from ._robosuite_raw import import_robosuite, read_robosuite_raw, robosuite_objects
 from ._robot_h5 import read_robot_h5
 from ._ros import read_rosbag
 from ._ros_messages import parse_topics
@@ -56,7 +56,7 @@ __all__ = [
     "read_rosbag",
     "parse_topics",
     "read_lerobot",
-    "read_robomimic", "ROBOSUITE_POSE_OF", "read_robosuite_raw", "import_robosuite",
+    "read_robomimic", "ROBOSUITE_POSE_OF", "read_robosuite_raw", "import_robosuite", "robosuite_objects",
     "select_episodes",
     "read_rail_file",
     "load_rail",

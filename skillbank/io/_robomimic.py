@@ -7,7 +7,8 @@ import re
 
 import numpy as np
 
-from ..core import POSE_OF, Demonstration, check_pose_of, matrix_to_quaternion
+from ..core import POSE_OF, Demonstration, check_pose_of
+from ..core._pose_point import offset_pose_of
 from ..core._validation import check_positive, summarise
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
@@ -59,9 +60,7 @@ def _pose_of(path, data, env_args):
             return check_pose_of(robot["pose_of"], name=f"{path}: data.attrs['robot']['pose_of']")
         tool = np.asarray(robot.get("tool"), float) if isinstance(robot, dict) and "tool" in robot else None
         if tool is not None and tool.shape == (4, 4) and np.isfinite(tool).all():
-            q = matrix_to_quaternion(tool[:3, :3])
-            return check_pose_of(",".join(repr(float(v)) for v in (*tool[:3, 3], *q)),
-                                 name=f"{path}: data.attrs['robot']['tool']")
+            return offset_pose_of(tool, name=f"{path}: data.attrs['robot']['tool']")
     kwargs = env_args.get("env_kwargs") or {}
     robots = kwargs.get("robots")
     robots = [robots] if isinstance(robots, str) else robots

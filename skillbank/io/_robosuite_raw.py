@@ -34,7 +34,7 @@ from ._h5 import open_h5
 from ._lerobot import select_episodes
 from ._robomimic import DEFAULT_CONTROL_FREQ, ROBOSUITE_POSE_OF, STANDARD_STREAMS
 
-__all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_robosuite"]
+__all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_robosuite", "robosuite_objects"]
 
 #: Largest distance (m) between the tool in the recorded world and in today's robosuite, same states.
 WORLD_TOLERANCE = 1e-3
@@ -129,8 +129,9 @@ def _make(path, name, world):
     return env
 
 
-def _objects(obs) -> list:
-    """Every object with a pose in the observations (``X_pos`` and ``X_quat``, not the robot's)."""
+def robosuite_objects(obs) -> list:
+    """Every object with a pose in robosuite's observations (``X_pos`` and ``X_quat``, not the robot's,
+    not the relative poses ``X_to_Y_pos``): what the readers and the recorders keep."""
     return sorted(k[:-4] for k in obs if k.endswith("_pos") and not k.startswith("robot")
                   and "_to_" not in k and f"{k[:-4]}_quat" in obs)
 
@@ -144,7 +145,7 @@ def _replay(env, states) -> dict:
         sim.forward()
         rows.append(env._get_observations(force_update=True))
     keys = [k for k in ROBOT_OBS if k in rows[0]]
-    keys += [f"{o}_{part}" for o in _objects(rows[0]) for part in ("pos", "quat")]
+    keys += [f"{o}_{part}" for o in robosuite_objects(rows[0]) for part in ("pos", "quat")]
     return {k: np.stack([np.asarray(r[k], float).reshape(-1) for r in rows]) for k in keys}
 
 

@@ -33,7 +33,6 @@ for URScript, samples otherwise), checked before anything is computed.
 from __future__ import annotations
 
 import math
-import os
 import re
 import secrets
 import shutil
@@ -42,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import Demonstration
-from ..core._validation import check_positive
+from ..core._validation import check_positive, env_bound
 from ._confine import atomic_output
 from ._tabular import write_npz
 
@@ -83,18 +82,7 @@ def max_export_samples(environ=None) -> int:
     >>> max_export_samples({}), max_export_samples({"SKILLBANK_MAX_EXPORT_SAMPLES": "10000000"})
     (2097152, 10000000)
     """
-    environ = os.environ if environ is None else environ
-    text = environ.get(MAX_EXPORT_VARIABLE, "").strip()
-    if not text:
-        return MAX_EXPORT_SAMPLES
-    try:
-        value = int(text)
-        if value <= 0:
-            raise ValueError
-    except ValueError:
-        raise ValueError(f"{MAX_EXPORT_VARIABLE}: expected a whole number of samples > 0, got "
-                         f"{text!r}") from None
-    return value
+    return env_bound(MAX_EXPORT_VARIABLE, MAX_EXPORT_SAMPLES, "samples", environ)
 
 
 def check_export_samples(n, what: str, environ=None) -> int:

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core import Demonstration, matrix_to_quaternion, quaternion_to_matrix
-from ..core._pose_point import POSE_OF, check_pose_of, parse_pose_of
+from ..core._pose_point import POSE_OF, offset_pose_of, parse_pose_of, pose_of_text
 from ..core._rotations import quaternion_multiply
 from ._bodies import GRIPPERS
 
@@ -66,7 +66,7 @@ def pose_point(value, *, name: str = "pose_of") -> PosePoint:
     0.097
     """
     parts = parse_pose_of(value, name=name)
-    text = check_pose_of(value, name=name)
+    text = pose_of_text(parts)
     if parts[0] == "flange":
         return PosePoint(text, np.eye(4), None, "flange")
     if parts[0] == "gripper":
@@ -98,8 +98,7 @@ def tool_point(model) -> str:
         for kind in ("tcp", "grip_site"):
             if getattr(g, kind) is not None and np.abs(g.tool(kind) - T).max() <= 1e-9:
                 return f"{g.name}:{kind}"
-    q = matrix_to_quaternion(T[:3, :3])
-    return check_pose_of(",".join(repr(float(v)) for v in (*T[:3, 3], *q)))
+    return offset_pose_of(T)
 
 
 def _to_tool_transform(point: PosePoint, model) -> tuple[np.ndarray, str | None]:

@@ -372,12 +372,11 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         _check_k(k, method, 1)
     duration = _check_duration(duration, t)
     check_limits(limits)
-    if branch is not None and robot is not None:
-        # an unknown branch fails before the candidates are adapted
-        (robot if isinstance(robot, RobotModel) else robot_model(robot)).branch_index(branch)
+    model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
+    if branch is not None and model is not None:
+        model.branch_index(branch)  # an unknown branch fails before the candidates are adapted
     if duration is not None:
         primitives = _retimed(primitives, duration)
-    model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
     converted = []
     if model is not None:
         # the constraints are the robot's tool's: the poses become its tool's before anything is adapted

@@ -10,7 +10,8 @@ environment variable, as ``SKILLBANK_MAX_EXPORT_SAMPLES`` does for exports).
 from __future__ import annotations
 
 import math
-import os
+
+from ..core._validation import env_bound
 
 __all__ = ["MAX_STEPS", "STEPS_VARIABLE", "MAX_FRAMES", "FRAMES_VARIABLE", "max_steps", "max_frames",
            "check_steps", "check_frames"]
@@ -25,20 +26,6 @@ MAX_FRAMES = 2 ** 14
 FRAMES_VARIABLE = "SKILLBANK_MAX_VIDEO_FRAMES"
 
 
-def _bound(variable: str, default: int, what: str, environ=None) -> int:
-    environ = os.environ if environ is None else environ
-    text = environ.get(variable, "").strip()
-    if not text:
-        return default
-    try:
-        value = int(text)
-        if value <= 0:
-            raise ValueError
-    except ValueError:
-        raise ValueError(f"{variable}: expected a whole number of {what} > 0, got {text[:40]!r}") from None
-    return value
-
-
 def max_steps(environ=None) -> int:
     """The bound on a simulation's physics steps: ``$SKILLBANK_MAX_SIMULATION_STEPS``, else 2^21.
 
@@ -47,7 +34,7 @@ def max_steps(environ=None) -> int:
     >>> max_steps({}), max_steps({"SKILLBANK_MAX_SIMULATION_STEPS": "10000000"})
     (2097152, 10000000)
     """
-    return _bound(STEPS_VARIABLE, MAX_STEPS, "steps", environ)
+    return env_bound(STEPS_VARIABLE, MAX_STEPS, "steps", environ)
 
 
 def max_frames(environ=None) -> int:
@@ -58,7 +45,7 @@ def max_frames(environ=None) -> int:
     >>> max_frames({})
     16384
     """
-    return _bound(FRAMES_VARIABLE, MAX_FRAMES, "frames", environ)
+    return env_bound(FRAMES_VARIABLE, MAX_FRAMES, "frames", environ)
 
 
 def check_steps(duration: float, timestep: float, environ=None) -> int:

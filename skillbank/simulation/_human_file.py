@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core._validation import check_positive
 from ._human import MULTI_TASKS, HumanDemonstrator
-from ._robosuite import CONTROL_FREQ, TASKS, import_robosuite, robosuite_robot
+from ._robosuite import CONTROL_FREQ, TASKS, import_robosuite, parse_env, robosuite_robot
 
 __all__ = ["record_human", "quiet_robosuite", "command_statistics"]
 
@@ -65,13 +65,7 @@ def parse_task(spec) -> str:
     >>> parse_task("robosuite:PickPlace")
     'PickPlace'
     """
-    known = sorted(TASKS) + sorted(MULTI_TASKS)
-    if not isinstance(spec, str) or not spec.startswith("robosuite:"):
-        raise ValueError(f"env: expected robosuite:TASK (TASK one of {known}), got {spec!r}")
-    task = spec.split(":", 1)[1]
-    if task not in known:
-        raise ValueError(f"env: the recorder knows robosuite tasks {known}, got {task!r}")
-    return task
+    return parse_env(spec, sorted(TASKS) + sorted(MULTI_TASKS))
 
 
 def command_statistics(actions) -> dict:

@@ -31,11 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import check_pose_of, log_map, matrix_to_quaternion
+from ..core import log_map
+from ..core._pose_point import offset_pose_of
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..io import ROBOSUITE_POSE_OF
 from ..io import import_robosuite as import_quiet_robosuite
+from ..io import robosuite_objects as _objects
 from ..robots import pose_point
 
 __all__ = ["TASKS", "record", "import_robosuite", "MISSING_ROBOSUITE", "CONTROL_FREQ", "RECORD_ROBOTS",
@@ -100,19 +102,20 @@ def import_robosuite():
     return import_quiet_robosuite(MISSING_ROBOSUITE)
 
 
-def parse_env(spec: str) -> str:
-    """The task of ``robosuite:TASK``, checked against :data:`TASKS`.
+def parse_env(spec: str, known=None) -> str:
+    """The task of ``robosuite:TASK``, checked against ``known`` (default the names of :data:`TASKS`).
 
     Examples
     --------
     >>> parse_env("robosuite:Lift")
     'Lift'
     """
+    known = sorted(TASKS) if known is None else list(known)
     if not isinstance(spec, str) or not spec.startswith("robosuite:"):
-        raise ValueError(f"env: expected robosuite:TASK (TASK one of {sorted(TASKS)}), got {spec!r}")
+        raise ValueError(f"env: expected robosuite:TASK (TASK one of {known}), got {spec!r}")
     task = spec.split(":", 1)[1]
-    if task not in TASKS:
-        raise ValueError(f"env: the recorder knows robosuite tasks {sorted(TASKS)}, got {task!r}")
+    if task not in known:
+        raise ValueError(f"env: the recorder knows robosuite tasks {known}, got {task!r}")
     return task
 
 
@@ -256,12 +259,6 @@ def _facing(tool_q, object_q, closing, neighbours=()) -> np.ndarray:
         a = min(turns, key=lambda turn: (round(along(turn), 1), abs(turn)))
     turn = np.array([0.0, 0.0, math.sin(a / 2), math.cos(a / 2)])
     return quaternion_multiply(turn, np.asarray(tool_q, float))
-
-
-def _objects(obs) -> list:
-    """Every object with a pose in the observations (``X_pos`` and ``X_quat``, not the robot's)."""
-    return sorted(k[:-4] for k in obs if k.endswith("_pos") and not k.startswith("robot")
-                  and "_to_" not in k and f"{k[:-4]}_quat" in obs)  # not the relative poses
 
 
 def _episode(env, task: Task, rng) -> tuple:
@@ -433,8 +430,7 @@ def robot_frames(env) -> dict:
     # the point by its name when robosuite's is the gripper's registered grip site (checked, not assumed)
     named = ROBOSUITE_POSE_OF.get(str(robot.name).lower())
     same = named is not None and np.abs(pose_point(named).transform - tool).max() < 1e-6
-    pose_of = named if same else check_pose_of(",".join(repr(float(v)) for v in (
-        *tool[:3, 3], *matrix_to_quaternion(tool[:3, :3]))))
+    pose_of = named if same else offset_pose_of(tool)
     return {"name": robot.name, "base": _pose(env, "body", "robot0_base").tolist(),
             "flange": "right_hand", "tool": tool.tolist(), "pose_of": pose_of}
 
