@@ -87,6 +87,9 @@ class SegmentationResult:
         the keypoints (their entry in :attr:`streams` has no events).
     constant_columns : dict of str to list of int
         Per stream, the constant columns left out of an otherwise informative stream.
+    phases : list of Phase
+        The demonstration's phases where they cut it (:func:`~skillbank.segmentation.demonstration_phases`),
+        else empty.
     """
 
     demonstration: Demonstration
@@ -99,6 +102,7 @@ class SegmentationResult:
     combine: str = "product"
     set_aside: dict = field(default_factory=dict)
     constant_columns: dict = field(default_factory=dict)
+    phases: list = field(default_factory=list)
 
     @property
     def changepoints(self) -> dict:
@@ -164,4 +168,6 @@ class SegmentationResult:
             # streams that carried no information, with the reason, and constant columns left out
             "set_aside": dict(self.set_aside),
             "constant_columns": {k: [int(c) for c in v] for k, v in self.constant_columns.items()},
+            # the phases the cut follows (a reach, a carry, a retreat, per object), where there are any
+            "phases": [p.to_dict() for p in self.phases],
         }

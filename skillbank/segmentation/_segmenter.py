@@ -23,6 +23,7 @@ from ._keypoints import (
     keypoints_sampling,
 )
 from ._motion import merge_motionless, motion_evidence, moves, turning
+from ._phases import demonstration_phases, phase_bounds
 from ._profile import _stream_jerk, speed_norm
 from ._result import SegmentationResult, StreamSegmentation
 from ._timescale import motion_time_scale
@@ -204,11 +205,19 @@ class MultimodalSegmenter(Params):
         Baseline of each stream's curve, so no stream can veto the others.
     random_state : int, Generator or None
         Seed for ``"sampling"`` mode.
+    phases : bool, default=True
+        Where the demonstration records the tool's position, one gripper and the poses of objects,
+        cut it at the phases its objects define (:func:`~skillbank.segmentation.demonstration_phases`:
+        a reach for an object, its carry from the grasp to the release, the retreat), and not again
+        inside a phase at the motion's pauses: a person's halting approach to a cube is one reach,
+        not four primitives. ``False``, or a demonstration without them, is cut by the streams alone.
 
     Attributes
     ----------
     result_ : SegmentationResult
         Set by :meth:`fit`.
+    phases_ : list of Phase
+        The phases the cut follows (empty when the streams alone cut it).
     set_aside_ : dict of str to str
         The streams set aside because they carry no information (every column
         constant, or constant to within its round-off: a force sensor reading 0
@@ -234,7 +243,7 @@ class MultimodalSegmenter(Params):
         self, *, window="auto", min_size="auto", threshold=0.4, grace="auto", scale="relative",
         normalize="robust", stop_ratio=0.5, min_turn=45.0, stream_params=None, combine="evidence",
         stream_kinds=None, mode="deterministic", min_support=None, n_samples=20, min_hits=3, floor=0.05,
-        random_state=None,
+        random_state=None, phases=True,
     ):
         self.window = window
         self.min_size = min_size
@@ -253,6 +262,7 @@ class MultimodalSegmenter(Params):
         self.min_hits = min_hits
         self.floor = floor
         self.random_state = random_state
+        self.phases = phases
 
     def _stream_settings(self, name: str, t: np.ndarray, auto_window: int) -> dict:
         raw = {k: getattr(self, k) for k in _STREAM_KEYS}
@@ -315,6 +325,8 @@ class MultimodalSegmenter(Params):
             raise ValueError(f"combine: expected one of {list(COMBINES)}, got {self.combine!r}")
         if self.stream_kinds is not None and not isinstance(self.stream_kinds, Mapping):
             raise ValueError(f"stream_kinds: expected a mapping, got {type(self.stream_kinds).__name__}")
+        if not isinstance(self.phases, bool | np.bool_):
+            raise ValueError(f"phases: expected True or False, got {self.phases!r}")
         evidence = self.combine == "evidence"
         # the paper's product rule treats every stream as motion, as the paper does
         kinds = {name: stream_kind(name, self.stream_kinds) if evidence else "motion" for name in names}
@@ -399,11 +411,16 @@ class MultimodalSegmenter(Params):
             prob, support, keypoints = np.zeros(n), np.zeros(n), np.array([], dtype=int)
         if evidence and speeds:
             keypoints = merge_motionless(keypoints, prob, demo, speeds)
+        self.phases_ = demonstration_phases(demo, stream_kinds=self.stream_kinds) if self.phases else []
+        if self.phases_:
+            # the phases are the skills' units; the motion's pauses inside one are a person's halting
+            keypoints = phase_bounds(self.phases_, n, min(p.params["min_size"] for p in per_stream.values()))
         self.set_aside_ = set_aside
         self.constant_columns_ = constant
         self.result_ = SegmentationResult(demo, per_stream, prob, support, keypoints, self.mode,
                                           {k: v.params for k, v in per_stream.items()}, self.combine,
-                                          set_aside=dict(set_aside), constant_columns=dict(constant))
+                                          set_aside=dict(set_aside), constant_columns=dict(constant),
+                                          phases=list(self.phases_))
         return self
 
     def _keypoints(self, streams: dict, kinds: dict, floor: float, n: int):

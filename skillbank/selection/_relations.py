@@ -22,6 +22,8 @@ import numpy as np
 from ..core import Demonstration, quaternion_to_matrix
 from ..core._rotations import check_quaternions, quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
+from ..segmentation import carried as moved_with
+from ..segmentation import object_streams
 
 __all__ = ["Relation", "object_streams", "acted_on", "compose"]
 
@@ -99,27 +101,6 @@ class Relation:
                 self.target_orientation.tolist()}
 
 
-def object_streams(demo: Demonstration) -> list:
-    """Names of the objects whose pose ``demo`` records (``X_pos`` (n, 3) beside ``X_quat`` (n, 4)).
-
-    Examples
-    --------
-    >>> t = np.arange(3.0)
-    >>> d = Demonstration(t, {"position": np.zeros((3, 3)), "cube_pos": np.zeros((3, 3)),
-    ...                       "cube_quat": np.tile([0.0, 0.0, 0.0, 1.0], (3, 1))})
-    >>> object_streams(d)
-    ['cube']
-    """
-    out = []
-    for name in demo.stream_names:
-        if name.endswith("_pos") and "_to_" not in name:  # robosuite's relative poses are not objects
-            base = name[:-4]
-            if f"{base}_quat" in demo.streams and demo[name].shape[1:] == (3,) \
-                    and demo[f"{base}_quat"].shape[1:] == (4,):
-                out.append(base)
-    return sorted(out)
-
-
 def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, rigid: float = 0.02):
     """The :class:`Relation` of primitive ``demo`` (with ``position`` and object poses), or None.
 
@@ -174,11 +155,11 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             offset = np.einsum("nji,nj->ni", frames, offset)
         off = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) > rigid)
         held = len(gap) if off.size == 0 else int(off[0])
-        travel = float(np.linalg.norm(where[:held] - where[0], axis=1).max()) if held else 0.0
-        carrier = float(np.linalg.norm(P[:held] - P[0], axis=1).max()) if held else 0.0
-        # both moved, together, for most of the primitive (an object that settles as the tool sets off
+        # it moved, and the tool's motion explains it (a cube settling at reset while the hand waits
+        # above it moves too), for most of the primitive (an object that settles as the tool sets off
         # moves with it for a sample or two)
-        if travel > moved and carrier > moved and held >= len(gap) / 2:
+        travel = moved_with(demo, name, 0, held, moved=moved)
+        if travel > 0.0 and held >= len(gap) / 2:
             carried.append((travel, name))
         ends.append((float(gap[-1]), name))
     if carried:

@@ -248,4 +248,14 @@ def test_skillbanks_reader_takes_the_file_and_a_library_cuts_one_reach(lift, rep
     assert demo.metadata["world_check"]["agrees"]
     with Library(tmp_path / "lib.sqlite", create=True) as lib:
         lib.add_files([out])
-        assert len(lib.primitives()) >= 2  # at least a reach and a lift, cut at the grasp
+        prims = sorted(lib.primitives(), key=lambda p: p.start)
+    # the person's halting approach, with its pauses and the grasp that closed on nothing and opened
+    # again, is one reach; the lift is one carry, cut where the fingers closed on the cube
+    from skillbank.segmentation import MultimodalSegmenter, demonstration_phases
+
+    phases = demonstration_phases(demo)
+    assert [(p.kind, p.object) for p in phases] == [("reach", "cube"), ("carry", "cube")]
+    assert [(p.start, p.stop) for p in prims] == [(p.start, p.stop) for p in phases]
+    commands = demo["actions"][:phases[0].stop, 6]
+    assert (np.diff(np.sign(commands)) > 0).sum() == 2  # closed twice before the carry: the retry
+    assert MultimodalSegmenter(phases=False).fit(demo).result_.n_segments > 4  # the stops cut it
