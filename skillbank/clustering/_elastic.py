@@ -108,19 +108,21 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         Level of the test that keeps two clusters apart (``"auto"`` and
         ``"hierarchy"`` with ``n_clusters="auto"``). A fixed threshold on
         ``delta`` is not enough for few points: 7 demonstrations of one
-        letter can be cut so that ``delta`` is 5 or 50 by chance. So after the
-        search, each cluster and its nearest neighbour (smallest ``delta``)
-        are tested: their union's best split (the split ``"auto"`` makes) is
-        compared with the best splits of 200 draws of *one* Gaussian cluster
-        with the union's size and sample covariance (as SigClust does), and
-        the p-value is the fraction of draws split at least as cleanly. While
-        some pair's p-value exceeds ``significance``, the pair with the
-        largest is merged and the map refitted from the merged means; one
-        skill thus ends as one cluster however the search cut it. Clusters
-        that are clearly apart have p-values at the floor, 1/201, and are
-        never merged (so a larger data set keeps what it found). ``None``
-        keeps every cluster the search finds. Unions of more than 256 points
-        are tested on a regular sample of 256.
+        letter can be cut so that ``delta`` is 5 or 50 by chance. So after
+        the search, each cluster and its nearest neighbour (smallest
+        ``delta``) are tested: their ``delta`` is compared with the ``delta``
+        of the split ``"auto"`` makes of each of 200 draws of *one* Gaussian
+        cluster with their union's size and sample covariance (SigClust's
+        null), and the p-value is the fraction of draws split at least as
+        cleanly. While some pair's p-value exceeds ``significance`` the pair
+        with the largest is merged; then clusters of fewer than 3 members
+        are odd demonstrations, not skills (as in ``"hierarchy"``), and their
+        points join the nearest larger cluster; and the map is refitted from
+        the merged means. One skill thus ends as one cluster however the
+        search cut it. Clusters that are clearly apart have p-values at the
+        floor, 1/201, and are not merged, so what a larger data set shows is
+        kept. ``None`` keeps every cluster the search finds. Unions of more
+        than 256 points are tested on a regular sample of 256.
     max_iter : int, default=20
         EM rounds per number of nodes (the authors use 20).
     tol : float, default=1e-4

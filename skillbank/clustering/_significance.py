@@ -236,15 +236,28 @@ def _nearest(delta: np.ndarray, i: int) -> int:
     return int(others[np.argmin(delta[i, others])])
 
 
-def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng, cache: dict | None = None):
+def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng):
     """Merge neighbouring clusters until each is a significant split from its nearest neighbour.
 
-    Each cluster's nearest other cluster (smallest ``delta``) is its likeliest
-    twin; for each such pair the union of their points is tested with
-    :func:`split_p_value`. While some pair's p-value exceeds ``level`` the
-    pair with the largest is merged (the weakest evidence of two skills) and
-    the pairs of the merged cluster are tested afresh. A set of points that is
-    one skill thus ends as one cluster, however the search cut it.
+    Three steps, on the search's clusters:
+
+    1. *Pieces.* A cluster of fewer than ``MIN_MEMBERS`` points has no
+       spread of its own to measure a gap by (its ``delta`` leans on its
+       partner's). Two such clusters that are nearest to each other (by
+       distance between means, nearest pair first) are joined when the test
+       below cannot tell them apart: the search may cut one skill into
+       crumbs.
+    2. *Skills.* Each cluster of at least ``MIN_MEMBERS`` points and its
+       nearest such cluster (smallest ``delta``), its likeliest twin, are
+       judged with :func:`split_p_value` on their own split. While some
+       pair's p-value exceeds ``level`` the pair with the largest is merged
+       (the weakest evidence of two skills) and the merged cluster's pairs
+       are tested afresh. One skill thus ends as one cluster, however the
+       search cut it.
+    3. *Odd points.* What is still smaller than ``MIN_MEMBERS`` points is odd
+       demonstrations, not a skill (as ``criterion="hierarchy"`` says): each
+       point joins the nearest mean of a larger cluster. They are left out
+       of step 2, where they would widen a cluster's spread and hide its gap.
 
     Parameters
     ----------
@@ -255,9 +268,6 @@ def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng, cache:
     level : float
         Significance level in (0, 1).
     rng : numpy.random.Generator
-    cache : dict, optional
-        p-values by union of points, filled and reused across calls (a union
-        that did not change is not tested again).
 
     Returns
     -------
@@ -265,8 +275,8 @@ def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng, cache:
         Renumbered ``0 .. k - 1`` in the order of each cluster's smallest old index.
     k : int
     p_values : ndarray of shape (k,)
-        Each final cluster's largest p-value against a nearest neighbour
-        (``nan`` for a single cluster).
+        Each final cluster's largest p-value against a nearest neighbour of
+        step 2 (``nan`` for a single cluster).
 
     Examples
     --------
@@ -277,50 +287,72 @@ def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng, cache:
     (1, [0, 0, 0, 0, 0, 0, 0, 0, 0])
     """
     labels = np.asarray(labels).copy()
-    cache = {} if cache is None else cache
     alive = list(range(n_clusters))
+
+    def size(c):
+        return int(np.count_nonzero(labels == c))
+
+    def p_value(a, b):  # of the split of a's and b's points into a and b
+        members = np.flatnonzero((labels == a) | (labels == b))
+        return split_p_value(X[members], rng, labels=(labels[members] == b).astype(np.intp))[0]
+
+    # 1. pieces: mutually near crumbs, nearest pair first
+    refused: set[bytes] = set()
+    while len(alive) > 1:
+        means = np.stack([X[labels == c].mean(axis=0) for c in alive])
+        gaps = np.sqrt(((means[:, None, :] - means[None, :, :]) ** 2).sum(axis=2))
+        np.fill_diagonal(gaps, np.inf)
+        small = [i for i, c in enumerate(alive) if size(c) < MIN_MEMBERS]
+        pieces = sorted((gaps[i, j], alive[i], alive[j]) for i in small
+                        for j in [int(np.argmin(gaps[i]))] if size(alive[j]) < MIN_MEMBERS)
+        for _, a, b in pieces:
+            key = np.flatnonzero((labels == a) | (labels == b)).tobytes()
+            if key not in refused:
+                break
+        else:
+            break
+        if p_value(a, b) > level:
+            labels[labels == max(a, b)] = min(a, b)
+            alive.remove(max(a, b))
+        else:
+            refused.add(key)
+
+    # 2. skills: the weakest of the nearest pairs merged first, while one is not significant
+    centred = X - X.mean(axis=0)
+    big = [c for c in alive if size(c) >= MIN_MEMBERS]
     pairs: list[tuple[int, int]] = []
     p_of: dict[tuple[int, int], float] = {}
-    centred = X - X.mean(axis=0)
-    while len(alive) > 1:
+    while len(big) > 1:
         index = np.full(n_clusters, -1)
-        index[alive] = np.arange(len(alive))
-        delta = pairwise_separation(centred, index[labels], len(alive))
-        pairs = sorted({tuple(sorted((alive[i], alive[_nearest(delta, i)]))) for i in range(len(alive))})
+        index[big] = np.arange(len(big))
+        inside = index[labels] >= 0
+        delta = pairwise_separation(centred[inside], index[labels[inside]], len(big))
+        pairs = sorted({tuple(sorted((big[i], big[_nearest(delta, i)]))) for i in range(len(big))})
         for pair in pairs:
-            members = np.flatnonzero((labels == pair[0]) | (labels == pair[1]))
-            side = labels[members] == pair[1]
-            key = members.tobytes() + side.tobytes()
-            if key not in cache:
-                cache[key] = split_p_value(X[members], rng, labels=side.astype(np.intp))[0]
-            p_of[pair] = cache[key]
+            if pair not in p_of:  # a pair whose clusters did not change keeps its p-value
+                p_of[pair] = p_value(*pair)
         # the largest p-value, ties to the pair of lowest indices (a deterministic order)
         worst = max(pairs, key=lambda q: (p_of[q], -q[0], -q[1]))
         if p_of[worst] <= level:
             break
         keep, gone = worst
         labels[labels == gone] = keep
-        alive.remove(gone)
+        big.remove(gone)
+        p_of = {q: v for q, v in p_of.items() if keep not in q and gone not in q}
         pairs = []
-    # What is left of fewer than MIN_MEMBERS points has no spread of its own to measure a gap by (its
-    # delta leans on its partner's spread): odd demonstrations, not a skill, as the "hierarchy"
-    # criterion says. Each of their points joins the nearest mean of a larger cluster.
-    sizes = np.bincount(labels, minlength=n_clusters)
-    big = [c for c in alive if sizes[c] >= MIN_MEMBERS]
-    if len(big) < len(alive):
-        if big:
-            odd = ~np.isin(labels, big)
-            means = np.stack([X[labels == c].mean(axis=0) for c in big])
-            labels[odd] = np.asarray(big)[nearest_centre(X[odd], means)]
-            pairs = [q for q in pairs if q[0] in big and q[1] in big]
-        else:  # no cluster is large enough to be a skill of its own: the points are one
-            big, pairs = [alive[0]], []
-            labels[:] = alive[0]
-        alive = big
+
+    # 3. odd points join the nearest larger cluster (all are one when no cluster is large enough)
+    if not big:
+        big = [alive[0]]
+        labels[:] = alive[0]
+    odd = ~np.isin(labels, big)
+    if odd.any():
+        means = np.stack([X[labels == c].mean(axis=0) for c in big])
+        labels[odd] = np.asarray(big)[nearest_centre(X[odd], means)]
     index = np.full(n_clusters, -1)
-    index[alive] = np.arange(len(alive))
-    p_values = np.full(len(alive), np.nan)
+    index[big] = np.arange(len(big))
+    p_values = np.full(len(big), np.nan)
     for a, b in pairs:
         for c in (a, b):
             p_values[index[c]] = np.fmax(p_values[index[c]], p_of[(a, b)])
-    return index[labels].astype(np.intp), len(alive), p_values
+    return index[labels].astype(np.intp), len(big), p_values
