@@ -104,9 +104,11 @@ def figure(db: Path, task: str, seed: int, placement: float, out: Path) -> None:
             colour, name = styles[method]
             said = "succeeded" if row["success"] else f"failed, {row['failure']['reason']}"
             ax.plot([p[i] for p in path], [p[j] for p in path], color=colour, lw=1.8, label=f"{name}: {said}")
-        for name, where in runs["lte"]["objects"].items():
-            ax.plot(where[i], where[j], "*", color="tab:red", ms=12,
-                    label="new placement" if name == sorted(runs["lte"]["objects"])[0] else None)
+        # each object's new placement with a marker of its own and its name (two red stars were two
+        # objects nobody could tell apart)
+        for m, (name, where) in enumerate(sorted(runs["lte"]["objects"].items())):
+            ax.plot(where[i], where[j], "*^Ds"[m % 4], color=("tab:red", "tab:purple", "tab:brown")[m % 3],
+                    ms=12 if m == 0 else 8, ls="none", label=f"new placement of {name}")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
         ax.set_title(title)

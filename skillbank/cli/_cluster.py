@@ -91,6 +91,8 @@ def run(args) -> int:
     sizes = model.cluster_sizes_.tolist()
     # each cluster's separation from its nearest other cluster: why it is a cluster of its own
     separation = [None if not np.isfinite(v) else round(float(v), 3) for v in model.separation_]
+    # and the p-value of the test that kept it apart from its nearest cluster (None where none ran)
+    p_values = [None if not np.isfinite(v) else round(float(v), 4) for v in model.p_values_]
     labels = model.labels_.tolist()
     plot = None
     if args.plot is not None:
@@ -106,7 +108,8 @@ def run(args) -> int:
     if args.json:
         doc = {"labels": labels, "n_clusters": int(model.n_clusters_), "energy": float(model.energy_),
                "criterion": model.criterion, "min_separation": float(model.min_separation),
-               "sizes": sizes, "separation": separation}
+               "significance": model.significance, "sizes": sizes, "separation": separation,
+               "p_values": p_values}
         if names is not None:
             doc = {"files": names, **doc}
         if plot is not None:
@@ -121,6 +124,7 @@ def run(args) -> int:
         more = " ..." if members.size > len(shown) else ""
         # ids as in --json, the figure and 'skillbank library': 0..k-1
         why = "" if separation[k] is None else f", separation {separation[k]:.2f}"
+        why += "" if p_values[k] is None else f", p {p_values[k]:.3f}"
         print(f"  cluster {k}: {members.size} member(s){why}: {', '.join(map(str, shown))}{more}")
     if plot is not None:
         print(f"  wrote {plot}")

@@ -21,6 +21,7 @@ from ._em import (
 from ._hierarchy import MIN_MEMBERS, hierarchy_seeds
 from ._incremental import grow, keep_indices, point_stats, pooled, sample_of, separation
 from ._primitive import nearest_centre
+from ._significance import merge_insignificant
 
 __all__ = ["ElasticClustering"]
 
@@ -102,7 +103,26 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
     max_clusters : int, optional
         Upper bound on N (default: the number of samples).
     min_separation : float, default=4.0
-        Threshold on ``delta`` for ``criterion="auto"``.
+        Threshold on ``delta`` for ``criterion="auto"`` and ``"hierarchy"``.
+    significance : float or None, default=0.01
+        Level of the test that keeps two clusters apart (``"auto"`` and
+        ``"hierarchy"`` with ``n_clusters="auto"``). A fixed threshold on
+        ``delta`` is not enough for few points: 7 demonstrations of one
+        letter can be cut so that ``delta`` is 5 or 50 by chance. So after
+        the search, each cluster and its nearest neighbour (smallest
+        ``delta``) are tested: their ``delta`` is compared with the ``delta``
+        of the split ``"auto"`` makes of each of 200 draws of *one* Gaussian
+        cluster with their union's size and sample covariance (SigClust's
+        null), and the p-value is the fraction of draws split at least as
+        cleanly. While some pair's p-value exceeds ``significance`` the pair
+        with the largest is merged; then clusters of fewer than 3 members
+        are odd demonstrations, not skills (as in ``"hierarchy"``), and their
+        points join the nearest larger cluster; and the map is refitted from
+        the merged means. One skill thus ends as one cluster however the
+        search cut it. Clusters that are clearly apart have p-values at the
+        floor, 1/201, and are not merged, so what a larger data set shows is
+        kept. ``None`` keeps every cluster the search finds. Unions of more
+        than 256 points are tested on a regular sample of 256.
     max_iter : int, default=20
         EM rounds per number of nodes (the authors use 20).
     tol : float, default=1e-4
@@ -136,6 +156,13 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
     separation_ : ndarray of shape (n_clusters_,)
         ``delta`` between each cluster and its nearest other cluster
         (``inf`` with one cluster): the evidence that it is a cluster of its own.
+    p_values_ : ndarray of shape (n_clusters_,)
+        The largest p-value of the tests of ``significance`` between each
+        cluster and a nearest neighbour: the chance that one cluster of
+        their joint size and shape splits as cleanly. ``nan`` where nothing
+        was tested (one cluster, a fixed ``n_clusters``, ``"paper"``,
+        ``significance=None``, or clusters made by an incremental
+        :meth:`partial_fit`).
     n_iter_ : int
         EM rounds run for the selected map.
     n_samples_seen_ : int
@@ -155,12 +182,13 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
     """
 
     def __init__(self, *, stretch=1.2, n_clusters="auto", criterion="auto", max_clusters=None,
-                 min_separation=4.0, max_iter=20, tol=1e-4, random_state=None):
+                 min_separation=4.0, significance=0.01, max_iter=20, tol=1e-4, random_state=None):
         self.stretch = stretch
         self.n_clusters = n_clusters
         self.criterion = criterion
         self.max_clusters = max_clusters
         self.min_separation = min_separation
+        self.significance = significance
         self.max_iter = max_iter
         self.tol = tol
         self.random_state = random_state
@@ -177,11 +205,15 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
             n_fixed = check_positive(self.n_clusters, name="n_clusters", integer=True)
         cap = None if self.max_clusters is None else check_positive(
             self.max_clusters, name="max_clusters", integer=True)
+        level = None if self.significance is None else check_positive(self.significance, name="significance")
+        if level is not None and not level < 1.0:
+            raise ValueError(f"significance: expected a level in (0, 1) or None, got {self.significance!r}")
         return {
             "stretch": check_positive(self.stretch, name="stretch", allow_zero=True),
             "n_fixed": n_fixed,
             "cap": cap,
             "min_sep": check_positive(self.min_separation, name="min_separation"),
+            "level": level,
             "max_iter": check_positive(self.max_iter, name="max_iter", integer=True),
             "tol": check_positive(self.tol, name="tol", allow_zero=True),
         }
@@ -218,11 +250,37 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         return nodes, labels, energy, bool(np.all(counts > 0)), n_iter
 
     # -- growth of the map ------------------------------------------------------------------------
-    def _grow(self, X, nodes, p):
+    def _grow(self, X, nodes, p, test_rng):
         # Work centred on the data: accurate distances, and everything else is translation-invariant.
         offset = X.mean(axis=0)
         nodes, labels, energy, n_iter, path = self._search(X - offset, nodes - offset, p)
-        return nodes + offset, labels, energy, n_iter, path
+        p_values = np.full(np.unique(labels).size, np.nan)
+        if p["level"] is not None and p["n_fixed"] is None and self.criterion != "paper":
+            nodes, labels, energy, n_iter, p_values = self._merge(X - offset, nodes, labels, energy, n_iter,
+                                                                  path, p, test_rng)
+        return nodes + offset, labels, energy, n_iter, path, p_values
+
+    def _merge(self, X, nodes, labels, energy, n_iter, path, p, rng):
+        """Merge the clusters the significance test cannot tell apart, then refit the map from their means.
+
+        The tests judge the search's clusters, in which odd demonstrations
+        are still clusters of their own (they would widen the spread of the
+        cluster they join and hide its gap); they join their nearest cluster
+        after the tests, as in ``"hierarchy"``, and the refit assigns every
+        point to its nearest node. When nothing merges the map is the
+        search's, unchanged.
+        """
+        kept, compact = np.unique(labels, return_inverse=True)
+        merged, k, p_values = merge_insignificant(X, compact, kept.size, level=p["level"], rng=rng)
+        if k == kept.size:
+            return nodes, labels, energy, n_iter, p_values
+        means = np.stack([X[merged == c].mean(axis=0) for c in range(k)])
+        tol_abs = p["tol"] * float(np.mean(np.var(X, axis=0)))
+        nodes, labels, energy, _, n_iter = self._em(X, means, p, tol_abs, np.einsum("ij,ij->i", X, X))
+        path.append((nodes.shape[0], energy, closest_separation(X, labels, nodes.shape[0])))
+        if np.unique(labels).size < k:  # a node the refit left without points (no p-value of its own)
+            p_values = p_values[np.unique(labels)]
+        return nodes, labels, energy, n_iter, p_values
 
     def _search(self, X, nodes, p):
         tol_abs = p["tol"] * float(np.mean(np.var(X, axis=0)))
@@ -308,9 +366,10 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         else:
             self.separation_ = np.full(1, np.inf)
 
-    def _store(self, X, nodes, labels, energy, n_iter, path):
+    def _store(self, X, nodes, labels, energy, n_iter, path, p_values):
         self._record(nodes, labels, np.unique(labels), energy, n_iter, path,
                      lambda: pairwise_separation(X - X.mean(axis=0), self.labels_, self.n_clusters_))
+        self.p_values_ = p_values
         self.cluster_sizes_ = np.bincount(self.labels_, minlength=self.n_clusters_).astype(np.intp)
         self._lo, self._hi = X.min(axis=0), X.max(axis=0)  # for partial_fit's round-off floor of a spread
         self.n_samples_seen_ = int(X.shape[0])
@@ -332,14 +391,17 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
         rng = check_random_state(self.random_state)
         start = X[rng.randint(X.shape[0])][None, :]
         self._keys = np.random.default_rng(rng.randint(2 ** 31 - 1))  # partial_fit's sampling keys
+        # the significance test's draws: a stream of their own, drawn last so the others are as before
+        test_rng = np.random.default_rng(rng.randint(2 ** 31 - 1))
         with numerical_errors(step):
-            return self._store(X, *self._grow(X, start, p))
+            return self._store(X, *self._grow(X, start, p, test_rng))
 
     def _renumber(self, index):
         """Give cluster ``i`` the index ``index[i]`` (a permutation) in every attribute and in the state."""
         order = np.argsort(index)
         self.cluster_centers_ = self.cluster_centers_[order]
         self.cluster_sizes_, self.separation_ = self.cluster_sizes_[order], self.separation_[order]
+        self.p_values_ = self.p_values_[order]
         self.labels_ = index[self.labels_]
         if self._seen is not None:
             self._seen_labels = self.labels_.copy()
@@ -459,6 +521,7 @@ class ElasticClustering(ClusterMixin, BaseEstimator):
                 return separation(kept.shifted(centre), scale_of(centre))
 
             self._record(nodes, labels, keep, energy, n_iter, path, pair_delta)
+            self.p_values_ = np.full(self.n_clusters_, np.nan)  # an incremental call tests nothing
             self._stats = kept
             self._samples = [samples[i] for i in keep]
             self.cluster_sizes_ = np.rint(kept.counts).astype(np.intp)  # estimates after some splits

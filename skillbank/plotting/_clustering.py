@@ -16,6 +16,7 @@ from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from ..core._validation import check_array
+from ._library import n_distinct
 from ._segmentation import _save
 
 __all__ = ["plot_cluster_comparison"]
@@ -219,6 +220,9 @@ def plot_cluster_comparison(features, labelings, path, *, trajectories=None, cla
             members = np.flatnonzero(labels == cid)
             label = class_names[cid] if truth and class_names else f"cluster {ids[name][cid]}"
             count = f"{members.size}"
+            distinct = n_distinct([trajs[i] for i in members], float(np.ptp(limits, axis=1).max()))
+            if distinct < members.size:  # members drawn over each other would look like fewer
+                count += " identical" if distinct == 1 else f", {distinct} distinct"
             if name in seps and np.isfinite(seps[name][cid]):
                 count += f", separation {seps[name][cid]:.1f}"
             _trajectory_panel(fig, grid[r, j + 1], [trajs[i] for i in members],

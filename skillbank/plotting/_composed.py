@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._segmentation import _save
+from ._segmentation import _save, legend_beside
 
 __all__ = ["plot_composed"]
 
@@ -35,7 +35,7 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
     P = np.asarray(episode["path"], float).reshape(-1, 3)
     starts = list(episode.get("step_starts", [])) + [len(P)]
     steps = episode["steps"][:len(starts) - 1]
-    fig = Figure(figsize=(12, 5.2))
+    fig = Figure(figsize=(12, 5.2), layout="constrained")
     top, side = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     colours = [f"C{k % 10}" for k in range(len(steps))]
     t = np.arange(len(P)) / 20.0
@@ -63,7 +63,7 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
     top.set_ylabel("y (m)")
     top.set_aspect("equal", adjustable="datalim")
     top.set_title("tool path from above, by plan step")
-    top.legend(fontsize=7, loc="best")
+    legend_beside(top, fontsize=7)
     side.set_xlabel("time (s)")
     side.set_ylabel("tool height z (m)")
     side.set_title("tool height")

@@ -15,7 +15,7 @@ from matplotlib.patches import Polygon
 
 from ..core import Constraints, Demonstration
 from ..core._validation import check_array
-from ._segmentation import _save
+from ._segmentation import _save, legend_beside
 
 __all__ = ["draw_edit", "plot_edit"]
 
@@ -150,7 +150,7 @@ def draw_edit(ax, reproduction, *, demo=None, demos=(), constraints=None, legend
     _markers(ax, c, R[0], points)
     _extent(ax, np.concatenate(points), three_d)
     if legend:
-        ax.legend(loc="best", fontsize="small")
+        legend_beside(ax, fontsize="small")
     return ax
 
 

@@ -11,7 +11,7 @@ from matplotlib.patches import Patch
 
 from ..core import Demonstration, quaternion_to_matrix
 from ._editing import _OBSTACLE, _extent, _obstacle
-from ._segmentation import _save
+from ._segmentation import _save, legend_beside
 
 __all__ = ["plot_executable"]
 
@@ -103,7 +103,7 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
         handles.append(Line2D([], [], color="0.7", label="demonstrations"))
     handles += [Line2D([], [], color=c, label=f"tool {a}") for c, a in zip(_AXES, "xyz", strict=True)
                 if "orientation" in trajectory.streams]
-    ax.legend(handles=handles + markers, fontsize="small", loc="upper left")
+    legend_beside(ax, handles=handles + markers, fontsize="small")
     ax.set_title("pose path and tool frames")
     if joints:
         jx = fig.add_subplot(1, 2, 2)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._segmentation import _check_result, _draw_segmented_path, _save
+from ._segmentation import _check_result, _draw_segmented_path, _save, plural
 
 __all__ = ["plot_segment_grid"]
 
@@ -25,7 +25,7 @@ def plot_segment_grid(results, path, *, stream: str = "position", invert_y: bool
     invert_y : bool, default=False
         Negate the second column, for data in screen coordinates (y down).
     titles : sequence of str, optional
-        One per result; default "<n> segments".
+        One per result; default "<n> segments" ("1 segment").
 
     Returns
     -------
@@ -57,5 +57,5 @@ def plot_segment_grid(results, path, *, stream: str = "position", invert_y: bool
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(titles[i] if titles is not None else f"{r.n_segments} segments", fontsize="small")
+        ax.set_title(titles[i] if titles is not None else plural(r.n_segments, "segment"), fontsize="small")
     return _save(fig, path)

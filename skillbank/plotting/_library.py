@@ -15,13 +15,54 @@ from matplotlib.figure import Figure
 from ..core import Constraints, Sphere, ViaPoint
 from ..core._validation import check_array
 from ._editing import _REPRO, _extent, _markers, _obstacle, axis_labels
-from ._segmentation import _colour, _save
+from ._segmentation import _colour, _save, legend_beside, plural
 
 __all__ = ["plot_skills", "plot_reuse"]
 
 _STORED = "#1f77b4"  # the stored primitives: a colour of their own, never the reproduction's red
 _ADAPTED = "#404040"
 _FLAT = 1e-9  # a path whose z varies less than this (in its unit) is drawn on its plane
+# Two paths closer than this fraction of their panel's extent are drawn as one line (a panel is a few
+# hundred pixels wide: 0.2 % is under a pixel).
+_SAME_LINE = 2e-3
+
+
+def n_distinct(paths: list[np.ndarray], extent: float) -> int:
+    """How many different lines ``paths`` make on a panel ``extent`` wide: paths of one length whose
+    samples are all within ``_SAME_LINE * extent`` of each other are drawn as one.
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 1.0, 5)[:, None]
+    >>> n_distinct([s, s + 1e-9, 2 * s], 2.0)
+    2
+    """
+    tol = _SAME_LINE * max(float(extent), 1e-300)
+    seen: list[np.ndarray] = []
+    for Y in paths:
+        if not any(Y.shape == Z.shape and float(np.max(np.abs(Y - Z))) <= tol for Z in seen):
+            seen.append(Y)
+    return len(seen)
+
+
+def count_text(paths: list[np.ndarray], extent: float, word: str | None = "primitive") -> str:
+    """``"3 primitives"``, and what the eye cannot count: ``"3 primitives (identical)"``,
+    ``"5 primitives (2 distinct)"`` when some are drawn over each other (``word=None``: the number
+    alone, ``"3, identical"``).
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 1.0, 5)[:, None]
+    >>> count_text([s, s, s], 1.0), count_text([s, s, 2 * s], 2.0), count_text([s], 1.0)
+    ('3 primitives (identical)', '3 primitives (2 distinct)', '1 primitive')
+    >>> count_text([s, s], 1.0, None), count_text([s, 2 * s], 2.0, None)
+    ('2, identical', '2')
+    """
+    distinct = n_distinct(paths, extent)
+    note = "" if distinct == len(paths) else "identical" if distinct == 1 else f"{distinct} distinct"
+    if word is None:
+        return f"{len(paths)}, {note}" if note else f"{len(paths)}"
+    return plural(len(paths), word) + (f" ({note})" if note else "")
 
 
 def _paths(paths, name: str) -> list[np.ndarray]:
@@ -109,8 +150,7 @@ def plot_skills(skills, path, *, unit: str | None = "m", columns: int = 4, title
         size = float(np.ptp(stacked, axis=0).max())
         across = f"{size:.2g} {unit} across" if unit else f"{size:.2g} across"
         where = f", z = {paths[0][0, 2]:.3g}" if flat and paths[0].shape[1] == 3 else ""
-        ax.set_title(f"{name}\n{len(paths)} primitive{'s' if len(paths) != 1 else ''}, {across}{where}",
-                     fontsize="small")
+        ax.set_title(f"{name}\n{count_text(drawn, size)}, {across}{where}", fontsize="small")
     if title:
         fig.suptitle(title)
     return _save(fig, path)
@@ -162,9 +202,11 @@ def plot_reuse(reproduction, path, *, stored, candidates=(), constraints=None, s
         dims = {p.shape[0] for p in (c.start, c.goal) if p is not None} | {v.n_dims for v in c.via}
         c = _flat_constraints(c) if 3 in dims or c.obstacles else c
     fig = Figure(figsize=(11.0, 5.2), layout="constrained")
-    panels = [(stored, _STORED, f"stored primitives ({len(stored)})", f"the {len(stored)} stored primitives "
-               f"of '{skill}' and the new task", False),
-              (candidates, _ADAPTED, f"adapted by LTE ({len(candidates)})",
+    # the count of each kind says when some are drawn over each other (identical members look like one)
+    extent = float(np.ptp(np.concatenate([R, *stored, *candidates]), axis=0).max())
+    panels = [(stored, _STORED, f"stored primitives ({count_text(stored, extent, None)})",
+               f"the {len(stored)} stored primitives of '{skill}' and the new task", False),
+              (candidates, _ADAPTED, f"adapted by LTE ({count_text(candidates, extent, None)})",
                f"{len(candidates)} best adapted by LTE, then {method or 'reproduced'}", True)]
     for k, (paths, colour, label, heading, show_reproduction) in enumerate(panels):
         ax = fig.add_subplot(1, 2, k + 1, projection=None if flat else "3d")
@@ -181,7 +223,7 @@ def plot_reuse(reproduction, path, *, stored, candidates=(), constraints=None, s
         _markers(ax, c, R[0], points)
         _extent(ax, np.concatenate(points), not flat)
         axis_labels(ax, unit)
-        ax.legend(loc="best", fontsize="small")
+        legend_beside(ax, fontsize="small")
         ax.set_title(heading, fontsize="medium")
     if title:
         fig.suptitle("\n".join(textwrap.wrap(title, 100)), fontsize="medium")

@@ -9,7 +9,7 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from ._editing import _extent, _obstacle, axis_labels
-from ._segmentation import _save
+from ._segmentation import _save, legend_beside
 
 __all__ = ["draw_plan", "plot_plan"]
 
@@ -60,7 +60,7 @@ def draw_plan(ax, result, scene, *, demos=None, legend: bool = True, unit: str |
     _extent(ax, np.vstack(points), True)
     axis_labels(ax, unit)
     if legend:
-        ax.legend(fontsize=7, loc="upper left")
+        legend_beside(ax, fontsize=7)
 
 
 def plot_plan(result, scene, path, *, demos=None, title=None, unit: str | None = None) -> Path:

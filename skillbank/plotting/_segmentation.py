@@ -6,10 +6,12 @@ global state), write it to ``path`` and return that path.
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
 from matplotlib.backend_bases import FigureCanvasBase
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
@@ -24,10 +26,36 @@ _PALETTE = (
     "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
 )  # matplotlib's tab10
 _DPI = 150
+#: Units of the streams the readers name, by ROS's convention (REP 103: SI units), which every reader of
+#: robot data follows; other streams (a gripper, a position of unknown scale) are "as recorded".
+STREAM_UNITS = {"joints": "rad", "force": "N", "torque": "N m"}
 
 
 def _colour(i: int) -> str:
     return _PALETTE[i % len(_PALETTE)]
+
+
+def plural(n: int, word: str) -> str:
+    """``"1 segment"``, ``"3 segments"``.
+
+    Examples
+    --------
+    >>> plural(1, "segment"), plural(0, "keypoint"), plural(3, "primitive")
+    ('1 segment', '0 keypoints', '3 primitives')
+    """
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def unit_text(name: str, unit: str | None = None) -> str:
+    """``"(unit)"`` of stream ``name``: ``unit`` when given, else its known unit, else "(as recorded)".
+
+    Examples
+    --------
+    >>> unit_text("force"), unit_text("position", "m"), unit_text("gripper")
+    ('(N)', '(m)', '(as recorded)')
+    """
+    unit = unit or STREAM_UNITS.get(name)
+    return f"({unit})" if unit else "(as recorded)"
 
 
 def _check_result(result) -> SegmentationResult:
@@ -80,9 +108,55 @@ def figure_path(path, *, name: str = "path") -> Path:
     return path
 
 
+def _titles(fig: Figure) -> list:
+    """The figure's title and every axes' titles, with the width each may take (in pixels)."""
+    out = [(fig._suptitle, fig.bbox.width)] if fig._suptitle is not None else []
+    for ax in fig.axes:
+        # an axes' title may span its own axes (and no more: beyond, it runs over its neighbours')
+        width = max(ax.get_position().width * fig.bbox.width, 0.25 * fig.bbox.width)
+        out += [(t, width) for t in (ax.title, ax._left_title, ax._right_title)]
+    return [(t, w) for t, w in out if t.get_visible() and t.get_text()]
+
+
+def wrap_titles(fig: Figure) -> None:
+    """Wrap every title wider than the room it has, so that no title widens the saved figure.
+
+    Saved with ``bbox_inches="tight"``, a figure grows to hold its widest
+    text: one long title made a 12-inch figure 2,516 px wide. Each line of a
+    title too wide is refilled at the number of characters that fits, measured
+    with the figure's own renderer, until it fits.
+    """
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    renderer = canvas.get_renderer()
+    for text, room in _titles(fig):
+        for _ in range(4):  # refilling shortens lines; a few rounds settle any font's widths
+            width = text.get_window_extent(renderer).width
+            if width <= room:
+                break
+            lines = text.get_text().split("\n")
+            chars = max(12, int(max(len(line) for line in lines) * room / width) - 1)
+            text.set_text("\n".join(textwrap.fill(line, chars) or line for line in lines))
+
+
+def legend_beside(ax, **kwargs):
+    """The legend of ``ax`` where it hides no data: beside a 3-D axes, at the emptiest corner of a 2-D one.
+
+    A 3-D axes has no free corner (its panes fill the box and ``loc="best"``
+    does not apply to it), so its legend goes to the right of the axes; the
+    figure's constrained layout makes room for it.
+    """
+    if getattr(ax, "name", "") == "3d":
+        return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
+    return ax.legend(loc="best", **kwargs)
+
+
 def _save(fig: Figure, path) -> Path:
-    """Write ``fig`` (parents created) and return the file written; every plotting module saves here."""
+    """Write ``fig`` (parents created) and return the file written; every plotting module saves here.
+
+    Titles are wrapped first (:func:`wrap_titles`).
+    """
     path = figure_path(path)
+    wrap_titles(fig)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(path, name="plot") as tmp:  # whole or not at all; never onto a FIFO or a device
         fig.savefig(tmp, dpi=_DPI, bbox_inches="tight")
@@ -193,9 +267,9 @@ def _draw_stream_below(ax, t, Y, result: SegmentationResult, name: str) -> None:
     Y = np.asarray(Y, dtype=float).reshape(t.size, -1)
     if Y.shape[1] > 1:
         Y = np.linalg.norm(Y, axis=1)[:, None]
-        ax.set_ylabel(f"|{name}|\n(as recorded)", fontsize="small")
+        ax.set_ylabel(f"|{name}|\n{unit_text(name)}", fontsize="small")
     else:
-        ax.set_ylabel(f"{name}\n(as recorded)", fontsize="small")
+        ax.set_ylabel(f"{name}\n{unit_text(name)}", fontsize="small")
     for label, a, b in _runs(result.labels):
         stop = min(b + 1, t.size)
         ax.plot(t[a:stop], Y[a:stop, 0], color=_colour(label), lw=1.3)
@@ -234,7 +308,8 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
 
     unit : str, optional
         The stream's unit, written on the path's axes (e.g. ``"m"``); not
-        given: "as recorded".
+        given: the stream's known unit (``STREAM_UNITS``), else "as recorded".
+        The streams below are labelled with their known units the same way.
 
     Returns
     -------
@@ -276,9 +351,9 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         P[:, 1] = -P[:, 1]
 
     size = (6.0, 6.0) if dims == 2 else (7.0, 6.5)
-    fig = Figure(figsize=(size[0], size[1] + 1.2 * len(below)))
-    grid = fig.add_gridspec(1 + len(below), 1, height_ratios=[size[1] / 1.6] + [1.0] * len(below),
-                            hspace=0.15 if dims == 2 else 0.05)
+    # constrained layout: each panel's axis labels get their room, none is clipped by the panel below
+    fig = Figure(figsize=(size[0] + 1.6, size[1] + 1.2 * len(below)), layout="constrained")
+    grid = fig.add_gridspec(1 + len(below), 1, height_ratios=[size[1] / 1.6] + [1.0] * len(below))
     ax = fig.add_subplot(grid[0], projection="3d" if dims == 3 else None)
     shared = None
     for i, name in enumerate(below):
@@ -294,7 +369,7 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
     if result.keypoints.size:
         handles.append(Line2D([], [], ls="none", marker="o", color="k", label="Keypoints"))
     handles.append(Line2D([], [], ls="none", marker="^", color="0.2", ms=7, label="Start"))
-    tail = f" ({unit})" if unit else " (as recorded)"
+    tail = " " + unit_text(stream, unit)
     if dims == 2:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(f"{stream}[0]{tail}")
@@ -307,6 +382,7 @@ def plot_segments(result, path, *, stream: str = "position", dims=None, invert_y
         ax.set_zlabel(f"{stream}[2]{tail}")
         for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
             axis.set_major_locator(MaxNLocator(5))  # a short axis gets a few legible ticks, not a crowd
-    ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
-    ax.set_title(f"{result.n_segments} segments of {stream}")
+    # beside the axes, not on them: a 3-D axes has no free corner ("best" does not apply to it)
+    fig.legend(handles=handles, loc="outside right upper", fontsize="small")
+    ax.set_title(f"{plural(result.n_segments, 'segment')} of {stream}")
     return _save(fig, path)

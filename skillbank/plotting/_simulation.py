@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._editing import _extent, _obstacle, axis_labels
-from ._segmentation import _save
+from ._segmentation import _save, legend_beside
 
 __all__ = ["plot_simulation"]
 
@@ -33,7 +33,7 @@ def plot_simulation(result, scene, path, *, title=None) -> Path:
     >>> out.name
     'sim.png'
     """
-    fig = Figure(figsize=(12, 5.2))
+    fig = Figure(figsize=(13, 5.2), layout="constrained")
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     Y, R = np.asarray(result.tool_), np.asarray(result.tool_ref_)
     ax.plot(*R.T, color="#a8a8a8", linewidth=1.0, linestyle="--", label="commanded tool path")
@@ -58,7 +58,7 @@ def plot_simulation(result, scene, path, *, title=None) -> Path:
             ax.text(*p, f" {c['robot_body']}-{c['other']} {c['t']:.2f} s", fontsize=7, color="tab:red")
     _extent(ax, np.vstack(points), True)
     axis_labels(ax, "m")
-    ax.legend(fontsize=7, loc="upper left")
+    legend_beside(ax, fontsize=7)
     ax.set_title("tool path")
     ax2 = fig.add_subplot(1, 2, 2)
     t = np.asarray(result.t_)
@@ -71,7 +71,7 @@ def plot_simulation(result, scene, path, *, title=None) -> Path:
         ax2.text(0.5, 0.5, "no buttons in the scene", ha="center", va="center", transform=ax2.transAxes)
     else:
         ax2.plot([], [], color="black", linestyle=":", label="first pressed")
-        ax2.legend(fontsize=8, loc="upper right")
+        legend_beside(ax2, fontsize=8)
     ax2.set_xlabel("time (s)")
     ax2.set_ylabel("robot force on the button (N)")
     ax2.set_title("button forces")

@@ -13,7 +13,17 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..segmentation import SegmentationResult
-from ._segmentation import _check_result, _check_segmented_stream, _colour, _runs, _save, _scaled
+from ..segmentation._segmenter import KEYPOINT_PROBABILITY
+from ._segmentation import (
+    _check_result,
+    _check_segmented_stream,
+    _colour,
+    _runs,
+    _save,
+    _scaled,
+    plural,
+    unit_text,
+)
 
 __all__ = ["plot_keypoint_probability", "plot_segmentation_summary"]
 
@@ -21,6 +31,7 @@ __all__ = ["plot_keypoint_probability", "plot_segmentation_summary"]
 # stream panels always means a segment (tab10, as in plot_segments) and never a stream.
 _STREAM_PALETTE = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666")
 _KEYPOINT = "crimson"
+_THRESHOLD = "0.45"
 
 
 def _stream_colour(i: int) -> str:
@@ -40,8 +51,8 @@ def _signal(result: SegmentationResult, seg) -> tuple[np.ndarray, str]:
         return np.asarray(seg.profile, dtype=float), f"{seg.name} jerk\n(1 = {scale})"
     Y = np.asarray(result.demonstration[seg.name], dtype=float).reshape(result.demonstration.n_steps, -1)
     if seg.kind == "contact" or Y.shape[1] > 1:
-        return np.linalg.norm(Y, axis=1), f"|{seg.name}|\n(as recorded)"
-    return Y[:, 0], f"{seg.name}\n(as recorded)"
+        return np.linalg.norm(Y, axis=1), f"|{seg.name}|\n{unit_text(seg.name)}"
+    return Y[:, 0], f"{seg.name}\n{unit_text(seg.name)}"
 
 
 def _draw_signal(ax, t, y, labels, changepoints) -> None:
@@ -58,14 +69,41 @@ def _draw_signal(ax, t, y, labels, changepoints) -> None:
         ax.set_ylim(lo - pad, hi + pad)
 
 
+def threshold(result: SegmentationResult) -> float | None:
+    """The combined probability a keypoint must exceed, or None when the segmenter used none.
+
+    With ``combine="evidence"`` (the default) and ``mode="deterministic"`` a
+    keypoint is a mode of the combined probability above
+    ``KEYPOINT_PROBABILITY`` (one half). ``mode="sampling"`` draws keypoints
+    from the curve and ``combine="product"`` thresholds the number of
+    agreeing streams, not this curve.
+    """
+    if result.combine == "evidence" and result.mode == "deterministic":
+        return KEYPOINT_PROBABILITY
+    return None
+
+
 def _draw_probability(ax, result: SegmentationResult) -> None:
-    """Each stream's keypoint curve (thin) and the combined one (thick black), scaled to a maximum of 1."""
+    """Each stream's keypoint curve (thin) and the combined one (thick black), with the keypoint threshold.
+
+    With ``combine="evidence"`` the curves are probabilities, drawn on their
+    own 0..1 scale, so a peak under the threshold is seen to be one. The
+    product rule's combined curve is a distribution over the samples (its
+    values sum to 1) and its stream curves sit on a floor: those are scaled
+    to a maximum of 1 and the axis says so.
+    """
     t = result.demonstration.t
+    true_scale = result.combine == "evidence"
+    scale = (lambda y: np.asarray(y, dtype=float)) if true_scale else _scaled
     for i, seg in enumerate(result.streams.values()):
-        ax.plot(t, _scaled(seg.probability), lw=1.0, alpha=0.85, color=_stream_colour(i), label=seg.name)
-    ax.plot(t, _scaled(result.probability), lw=2.4, color="k", label="combined")
+        ax.plot(t, scale(seg.probability), lw=1.0, alpha=0.85, color=_stream_colour(i), label=seg.name)
+    ax.plot(t, scale(result.probability), lw=2.4, color="k", label="combined")
+    level = threshold(result)
+    if level is not None:
+        ax.axhline(level, color=_THRESHOLD, ls="--", lw=1.0, label=f"threshold {level:g}")
     ax.set_ylim(-0.03, 1.05)
-    ax.set_ylabel("keypoint\nprobability\n(scaled to max 1)", fontsize="small")
+    ax.set_ylabel("keypoint\nprobability" if true_scale else "keypoint\nprobability\n(scaled to max 1)",
+                  fontsize="small")
 
 
 def _draw_support(ax, result: SegmentationResult) -> None:
@@ -95,16 +133,24 @@ def _keypoint_lines(axes, result: SegmentationResult) -> None:
 
 
 def _title(result: SegmentationResult) -> str:
+    """What the figure shows, in words that agree with it: a peak under the threshold is named as such."""
     if not result.keypoints.size:
-        return "1 segment, no keypoints"
+        level = threshold(result)
+        top = float(np.max(result.probability)) if result.probability.size else 0.0
+        if level is not None and top > 0.0:
+            return f"1 segment, no keypoint (highest probability {top:.2f}, under the threshold {level:g})"
+        return "1 segment, no keypoint"
     times = ", ".join(f"{x:.2f}" for x in result.keypoint_times)
-    return f"{result.n_segments} segments, keypoints at {times} s"
+    return f"{plural(result.n_segments, 'segment')}, {plural(result.keypoints.size, 'keypoint')} at {times} s"
 
 
 def _legend_handles(result: SegmentationResult, *, changepoints: bool) -> list:
     handles = [Line2D([], [], color=_stream_colour(i), lw=1.0, label=name)
                for i, name in enumerate(result.streams)]
     handles.append(Line2D([], [], color="k", lw=2.4, label="combined"))
+    level = threshold(result)
+    if level is not None:
+        handles.append(Line2D([], [], color=_THRESHOLD, ls="--", lw=1.0, label=f"threshold {level:g}"))
     if changepoints:
         handles.append(Line2D([], [], color="0.35", ls="--", lw=0.9, label="stream's changepoint"))
     handles.append(Line2D([], [], color=_KEYPOINT, ls=":", lw=1.2, label="keypoint"))
@@ -114,7 +160,10 @@ def _legend_handles(result: SegmentationResult, *, changepoints: bool) -> list:
 def plot_keypoint_probability(result, path) -> Path:
     """Plot each stream's keypoint curve, the combined keypoint probability and each keypoint's support.
 
-    Each curve is scaled to a maximum of 1. Stream curves are thin lines, the
+    With ``combine="evidence"`` (the default) the curves are drawn on their
+    0..1 scale with the segmenter's threshold dashed (keypoints are the peaks
+    above it); the product rule's curves are scaled to a maximum of 1. Stream
+    curves are thin lines, the
     combined curve is thick and black, keypoints are dotted vertical lines;
     under it, one row per stream marks the keypoints that stream supported,
     a larger dot for more evidence.

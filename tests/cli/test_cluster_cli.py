@@ -53,8 +53,10 @@ def test_feature_matrix_npy_json(cli, tmp_path):
     code, out, _ = cli("cluster", path, "--json", "--seed", "0")
     assert code == 0
     doc = json.loads(out)
-    assert set(doc) == {"labels", "n_clusters", "energy", "criterion", "min_separation", "sizes",
-                        "separation"}
+    assert set(doc) == {"labels", "n_clusters", "energy", "criterion", "min_separation", "significance",
+                        "sizes", "separation", "p_values"}
+    # and the significance test that kept each cluster apart from its nearest one (issue 44)
+    assert all(p <= doc["significance"] for p in doc["p_values"])
     assert doc["n_clusters"] == 3 and isinstance(doc["energy"], float)
     # the choice explained: each cluster's size and its separation from the nearest other one
     assert doc["sizes"] == [20, 20, 20] and doc["criterion"] == "hierarchy"

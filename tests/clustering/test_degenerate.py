@@ -109,8 +109,13 @@ def test_paper_mode_empty_node(stretch):
 def test_one_point_cluster():
     X, _ = blobs(150)
     X = np.vstack([X, [[200.0, 200.0]]])
-    auto = ElasticClustering(random_state=0).fit(X)
+    # Without the significance test the search keeps the outlier as a cluster of its own, and
+    # the capped node solve stays exact with a one-point cluster.
+    auto = ElasticClustering(significance=None, random_state=0).fit(X)
     assert auto.n_clusters_ == 4 and np.sum(auto.labels_ == auto.labels_[-1]) == 1
+    # With it (the default), one odd point is not a skill: it joins the nearest blob.
+    tested = ElasticClustering(random_state=0).fit(X)
+    assert tested.n_clusters_ == 3 and np.sum(tested.labels_ == tested.labels_[-1]) > 1
     # Paper mode: the node added on the outlier has one point against stretch * N; the system
     # is indefinite, the node is pushed past its point, the result stays finite.
     paper = ElasticClustering(criterion="paper", stretch=1.2, random_state=0).fit(X)
@@ -203,7 +208,8 @@ def test_a_point_as_far_from_two_centres_gets_the_lower_one_in_fit_and_predict()
     # (-3, -3). Next to a value of 1e3 the expanded distance form is off by ~1e-10 and the tie fell
     # one way in fit (centred on the data) and the other in predict (centred on the centres).
     X = np.array([[0.5, 0.5], [0.5, -3.0], [-3.0, 1e3]] + [[-3.0, -3.0]] * 5)
-    model = ElasticClustering(criterion="auto", random_state=0).fit(X)
+    # significance=None: the tie needs the search's one-point clusters, which the test would merge
+    model = ElasticClustering(criterion="auto", significance=None, random_state=0).fit(X)
     centres = model.cluster_centers_
     tied = np.flatnonzero(np.isclose(((X[1] - centres) ** 2).sum(axis=1), 12.25, rtol=0, atol=1e-12))
     assert tied.size == 2

@@ -243,6 +243,7 @@ def test_plot_segments_axes_have_units(result, tmp_path, drawn):
     path, force = drawn[-1].axes
     assert [path.get_xlabel(), path.get_ylabel(), path.get_zlabel()] == [
         "position[0] (m)", "position[1] (m)", "position[2] (m)"]
-    assert force.get_ylabel() == "|force|\n(as recorded)" and force.get_xlabel() == "Time [s]"
+    # a force is in newtons (ROS's SI convention, which the readers follow), not "as recorded"
+    assert force.get_ylabel() == "|force|\n(N)" and force.get_xlabel() == "Time [s]"
     plot_segments(result, tmp_path / "flat.png", dims=2, invert_y=True)
     assert drawn[-1].axes[0].get_ylabel() == "-position[1] (as recorded)"
