@@ -43,7 +43,7 @@ CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-veloc
                       "--start-orientation", "--goal-orientation", "--via-orientation", "--robot-base")
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.eE+\-,:]*$")
 _SEGMENTER_KEYS = ("window", "min_size", "threshold", "grace", "stop_ratio", "min_turn", "combine",
-                  "stream_kinds", "mode")
+                  "stream_kinds", "mode", "phases")
 
 
 def _size(value: str, *, zero: bool):
@@ -280,6 +280,10 @@ def add_segmentation_options(p) -> None:
     p.add_argument("--mode", choices=["deterministic", "sampling"], default=keep,
                    help="deterministic (default): keypoints where the streams agree; sampling: the paper's "
                         "random draws, reproducible with --seed")
+    p.add_argument("--no-phases", dest="phases", action="store_false", default=keep,
+                   help="cut by the streams alone, also where the demonstration records a gripper and "
+                        "objects (default: there, cut at its phases, a reach, a carry and a retreat per "
+                        "object, and not again at the pauses inside one)")
     p.add_argument("--seed", type=int, default=None, help="random seed for --mode sampling")
 
 

@@ -133,3 +133,22 @@ def test_what_cannot_be_replayed_is_one_line(human, tmp_path, change, match):
     path = _copy(human, tmp_path / "bad.hdf5", **change)
     with pytest.raises(FormatError, match=f"^cannot read '{path}': {match}"):
         read_robosuite_raw(path)
+
+
+def test_each_real_persons_lift_is_one_halting_reach_and_one_lift(human, demos, cli):
+    """The people's approaches stop a dozen times; each is one reach ending where the fingers close on
+    the cube, then one carry: the phases, not the pauses, cut them (`segment --no-phases`: the pauses)."""
+    from skillbank.segmentation import demonstration_phases
+
+    for d in demos:
+        phases = demonstration_phases(d)
+        assert [(p.kind, p.object) for p in phases] == [("reach", "cube"), ("carry", "cube")]
+        reach = phases[0]
+        # the cut is where the command to close is given (a switch, mid-way through the closing)
+        closing = np.flatnonzero(d["actions"][:, 6] > 0)
+        assert 0 <= reach.stop - closing[0] <= 10
+    code, out, _ = cli("segment", human, "--demo", "0", "--json")
+    assert code == 0 and json.loads(out)["n_segments"] == 2
+    assert [p["kind"] for p in json.loads(out)["phases"]] == ["reach", "carry"]
+    code, out, _ = cli("segment", human, "--demo", "0", "--json", "--no-phases")
+    assert code == 0 and json.loads(out)["n_segments"] > 4 and json.loads(out)["phases"] == []
