@@ -30,8 +30,7 @@ from ..core import Demonstration, quaternion_to_matrix
 from ..core._rotations import check_quaternions
 from ._events import discrete_events, stream_kind
 
-__all__ = ["Phase", "PHASE_KINDS", "object_streams", "carried", "demonstration_phases", "phase_bounds",
-           "final_approach"]
+__all__ = ["Phase", "PHASE_KINDS", "object_streams", "carried", "demonstration_phases", "phase_bounds"]
 
 #: What a phase does: reach for an object, carry it, or leave the last one let go of.
 PHASE_KINDS = ("reach", "carry", "retreat")
@@ -217,34 +216,3 @@ def phase_bounds(phases, n: int, min_size: int = 1) -> np.ndarray:
         else:
             del edges[k if sizes[k - 1] <= sizes[k + 1] else k + 1]
     return np.asarray(edges[1:-1], dtype=int)
-
-
-#: How far (m) the tool may move away from where a reach ends and still be on its final approach: a
-#: person's single key tap of jitter; a larger move away is a fresh try (a finger came down on the object,
-#: up, line up again), and what came before it is the way there, not the approach.
-APPROACH_SLACK = 0.01
-
-
-def final_approach(position, *, slack: float = APPROACH_SLACK) -> int:
-    """The sample where the final approach of a reach begins: from there to its end the tool never moves
-    away from where it ends by more than ``slack`` metres.
-
-    A person's reach holds detours (an overshoot, a grasp that closed on nothing, a finger that came down
-    on the object and went up again); only the last, uninterrupted closing-in says how the object is
-    approached. Before it, the way there is free space.
-
-    Examples
-    --------
-    >>> z = np.r_[np.linspace(0.3, 0.03, 10), np.linspace(0.03, 0.08, 4), np.linspace(0.08, 0.0, 9)]
-    >>> P = np.column_stack([0 * z, 0 * z, z])
-    >>> final_approach(P)  # down, a finger on the object, up 5 cm, down again: from the top of the retry
-    13
-    """
-    P = np.asarray(position, float)
-    d = np.linalg.norm(P - P[-1], axis=1)
-    farthest = -np.inf  # the farthest the tool is, later on, from where it ends
-    for i in range(len(d) - 1, -1, -1):
-        if d[i] < farthest - slack:
-            return i + 1
-        farthest = max(farthest, d[i])
-    return 0

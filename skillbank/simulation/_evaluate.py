@@ -39,7 +39,6 @@ import numpy as np
 from ..core import Constraints, ViaPoint, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
-from ..segmentation._phases import final_approach
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
 from ._robosuite import (
@@ -90,8 +89,6 @@ NEIGHBOUR = 0.06  # m: a fingertip nearer another object's centre than this may 
 HELD = 0.01  # m: how far a held object may shift in the tool's frame and still be where the tool holds it
 CARRIED = 0.02  # m: how much a carried object's distance to the tool may change before it is lost
 OVER = 0.01  # m: how far above an object's top the fingertips pass while an approach travels
-MIN_APPROACH = CONTROL_FREQ // 2  # samples: a reach's final approach shorter than half a second is too
-# short to show how the object is approached (a last nudge of the hand): the whole reach is adapted
 
 
 def binomial_interval(successes: int, n: int) -> tuple:
@@ -625,19 +622,8 @@ def _path_rigid(seg, obs):
 
 
 def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
-    """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate.
-
-    A reach is adapted from its final approach (:func:`~skillbank.segmentation.final_approach`): a
-    person's detours on the way (an overshoot, a grasp closed on nothing, a finger that came down on the
-    object) are not how the object is approached, and replayed beside another gripper's fingers they
-    push it away; the way to the approach is the representation's, lifted over what stands in the
-    scene (:func:`_over_tops`).
-    """
+    """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate."""
     demo = seg.primitive.demo
-    if seg.relation is not None and not seg.relation.moves_with:
-        k = final_approach(demo["position"])
-        if demo.n_steps - k >= MIN_APPROACH:
-            demo = demo.slice(k, demo.n_steps)
     goal_p, goal_q = _goal(seg, obs, fingers)
     # the second half closes in as the source did: its path moved rigidly so that its end is the goal,
     # pinned by via points; the first half is the representation's to adapt from where the robot is
@@ -667,7 +653,7 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
     n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
     ts = np.linspace(t[0], t[-1], n)
     P = np.column_stack([np.interp(ts, t, traj["position"][:, j]) for j in range(3)])
-    Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12), goal_q, demo)
+    Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12), goal_q)
     commands = traj["actions"][:, 6] if "actions" in traj.streams else demo["actions"][:, 6]
     src_t = np.linspace(t[0], t[-1], len(commands))
     grip = _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
@@ -722,15 +708,15 @@ def _over_tops(P, G, env, obs):
     return out
 
 
-def _oriented(seg, obs, u, goal, demo=None):
+def _oriented(seg, obs, u, goal):
     """The tool's orientation at phases ``u``: the source's rotation profile turned to end at ``goal``,
     the robot's start orientation blended into it over the first half (minimum jerk).
 
     The wrist turns to the new frame while it travels, and closes in on the goal the way the
     demonstration did: a correction spread over the whole path would still be turning the fingers
-    as they reach what they grasp. ``demo``: the part of the primitive adapted (default all of it).
+    as they reach what they grasp.
     """
-    demo = seg.primitive.demo if demo is None else demo
+    demo = seg.primitive.demo
     src = slerp(demo.t, demo["orientation"], demo.t[0] + u * (demo.t[-1] - demo.t[0]))
     turn = quaternion_multiply(goal, quaternion_conjugate(src[-1]))
     src = quaternion_multiply(np.broadcast_to(turn, src.shape), src)
