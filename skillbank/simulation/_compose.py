@@ -265,7 +265,11 @@ def _phases(source) -> list:
         else:
             phases.append(_Phase(source, [seg], "reach", obj, None))
     for phase in phases:
-        labels = {seg.primitive.label for seg in phase.segments} - {None}
+        # the segments that do what the phase does name it (for a carry, those that carry): a retreat
+        # after the release, which clustering may group with the reaches, does not vote
+        doing = [seg for seg in phase.segments if phase.kind != "carry"
+                 or (seg.relation is not None and seg.relation.moves_with)]
+        labels = {seg.primitive.label for seg in doing} - {None}
         # one label names the phase; none, or several (an ambiguity), name nothing
         phase.label = labels.pop() if len(labels) == 1 else None
     return phases
