@@ -152,3 +152,21 @@ def test_each_real_persons_lift_is_one_halting_reach_and_one_lift(human, demos, 
     assert [p["kind"] for p in json.loads(out)["phases"]] == ["reach", "carry"]
     code, out, _ = cli("segment", human, "--demo", "0", "--json", "--no-phases")
     assert code == 0 and json.loads(out)["n_segments"] > 4 and json.loads(out)["phases"] == []
+
+
+def test_a_persons_lift_runs_to_success_in_a_new_scene_on_another_arm(human, tmp_path):
+    """One real person's Lift (Panda, halting, off centre), learned and run on the UR5e in a scene its
+    demonstration did not show: the environment's own check holds."""
+    from skillbank.pipeline import Library
+    from skillbank.simulation import evaluate
+
+    db = tmp_path / "person.sqlite"
+    with Library(db, create=True) as lib:
+        lib.add_files([human], index=0)
+    report = evaluate(db, "robosuite:Lift", episodes=1, seed=31, placement=0.1, robot="UR5e")
+    row = report["per_episode"][0]
+    assert report["robot"] == "UR5e" and report["recorded_on"] == ["Panda"]
+    assert row["success"], row.get("failure")
+    # the cube stood elsewhere than in the demonstration
+    start = read_robosuite_raw(human)[0]["cube_pos"][0]
+    assert np.linalg.norm(np.asarray(row["objects"]["cube"][:2]) - start[:2]) > 0.03
