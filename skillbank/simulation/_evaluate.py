@@ -334,7 +334,38 @@ def _sources(store):
             src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
         sources.append(src)
     _choose_frames(sources)
-    return sources
+    return [part for src in sources for part in _parts(src)]
+
+
+def _parts(src) -> list:
+    """``src`` cut into one source per object it picks and places, or ``[src]`` if it moves one.
+
+    A demonstration that moves several objects (a PickPlace of all four, both nuts) is several parts, each
+    the reach for one object, its carry and what follows until the next object is reached for; a part
+    knows only the objects it acts on (the one carried and where it is put), so that a task with that
+    object alone runs it and a composed task binds it. The segments keep their samples of the whole
+    demonstration (a replay plays its actions).
+    """
+    parts = []  # [object, carried, segments]
+    for seg in src.segments:
+        r = seg.relation
+        obj = None if r is None else r.object
+        if parts and (obj is None or obj == parts[-1][0] or not parts[-1][1] or parts[-1][0] is None):
+            parts[-1][0] = parts[-1][0] or obj
+        else:
+            parts.append([obj, False, []])
+        parts[-1][1] = parts[-1][1] or bool(r is not None and r.moves_with and r.object == parts[-1][0])
+        parts[-1][2].append(seg)
+    if len(parts) < 2:
+        return [src]
+    out = []
+    for obj, _, segments in parts:
+        acted = {obj} | {s.relation.target for s in segments
+                         if s.relation is not None and s.relation.moves_with}
+        acted.discard(None)
+        out.append(_Source(src.id, {o: src.start[o] for o in sorted(acted) if o in src.start}, src.actions,
+                           segments, src.robot))
+    return out
 
 
 def _spelled(name: str) -> str:
@@ -352,9 +383,11 @@ def driven_robot(sources, robot: str = DRIVEN_ROBOT) -> dict:
     recorded = sorted({_spelled(s.robot) for s in sources if s.robot is not None}, key=str.lower)
     other = [r for r in recorded if r.lower() != robot.lower()]
     notes = [f"library recorded on {' and '.join(recorded)}; driven on {robot}"] if other else []
-    unknown = sum(s.robot is None for s in sources)
+    # a demonstration of several objects is several parts (sources) of one id
+    arms = {s.id: s.robot for s in sources}
+    unknown = sum(arm is None for arm in arms.values())
     if unknown and recorded:
-        notes.append(f"{unknown} of the library's {len(sources)} demonstrations say no arm")
+        notes.append(f"{unknown} of the library's {len(arms)} demonstrations say no arm")
     return {"robot": robot, "recorded_on": recorded, "notes": notes}
 
 
@@ -622,8 +655,15 @@ def _path_rigid(seg, obs):
 
 
 def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
-    """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate."""
+    """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate.
+
+    A reach is adapted from its last try (:func:`_last_try`): a grasp the person closed on nothing and
+    opened again is not part of the skill, and replayed by another gripper, whose fingers reach lower,
+    it closes on the object and pushes it away.
+    """
     demo = seg.primitive.demo
+    if seg.relation is not None and not seg.relation.moves_with:
+        demo = demo.slice(_last_try(demo), demo.n_steps)
     goal_p, goal_q = _goal(seg, obs, fingers)
     # the second half closes in as the source did: its path moved rigidly so that its end is the goal,
     # pinned by via points; the first half is the representation's to adapt from where the robot is
@@ -658,6 +698,17 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
     src_t = np.linspace(t[0], t[-1], len(commands))
     grip = _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
     return P, Q, grip
+
+
+def _last_try(demo) -> int:
+    """The sample a reach's last try begins at: after the last time its gripper command opened again
+    (a grasp that held nothing: the phases put it inside the reach), if a try of at least half a
+    second follows; else 0."""
+    closed = np.asarray(demo["actions"][:, 6], float) > 0
+    reopened = np.flatnonzero(closed[:-1] & ~closed[1:]) + 1
+    if reopened.size and demo.n_steps - reopened[-1] >= CONTROL_FREQ // 2:
+        return int(reopened[-1])
+    return 0
 
 
 def _over_tops(P, G, env, obs):
@@ -949,22 +1000,30 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     if placement is not None:
         _widen(environment, placement)
     rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0}
+    driven = driven_robot(sources, robot)
+    notes = driven["notes"]
     try:
         for k in range(episodes):
             _reseed(environment, int(seed) + k)
             episode = _Episode(environment, environment.reset(), horizon, trace=paths)
-            objects = sorted({o for src in sources for o in src.start})
-            missing = [o for o in objects if f"{o}_pos" not in episode.obs]
-            if missing:
+            # the parts whose objects the task has: one object's pick and place of a demonstration that
+            # moved several runs alone in a task of that object (PickPlaceCan from PickPlace)
+            runnable = [part for part in order if all(f"{o}_pos" in episode.obs for o in part)]
+            if not runnable:
+                missing = sorted({o for part in order for o in part if f"{o}_pos" not in episode.obs})
                 raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
                                  "evaluate the library in the task it was recorded in")
+            if k == 0 and len(runnable) < len(order):
+                notes.append(f"the task has no {sorted({o for p in order if p not in runnable for o in p})}: "
+                             f"their parts of the demonstrations are left out")
+            objects = sorted({o for part in runnable for o in part})
             episode.rest(objects)
             episode.fingers = _fingers(environment, episode.obs)
             scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in objects}
             # one part of the task after the other (one, unless the library's demonstrations each
             # move other objects), each from the nearest of its sources in the state the last one left
             chain, failure = [], None
-            for part in order:
+            for part in runnable:
                 source = _nearest(groups[part], episode.obs, episode.fingers)
                 failure = _run_segments(episode, source.segments, source.actions, method, random_state,
                                         timings)
@@ -1003,7 +1062,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         environment.close()
     successes = sum(r["success"] for r in rows)
-    return {"env": env, **driven_robot(sources, robot), "method": method, "seed": int(seed),
+    return {"env": env, **driven, "method": method, "seed": int(seed),
             "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
