@@ -36,11 +36,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Constraints, ViaPoint, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
+from ..core import (
+    POSE_OF,
+    Constraints,
+    ViaPoint,
+    exp_map,
+    log_map,
+    quaternion_angle,
+    quaternion_to_matrix,
+    slerp,
+)
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
+from ._arms import pose_points
 from ._robosuite import (
     CONTROL_FREQ,
     _box,
@@ -132,6 +142,7 @@ class _Source:
     actions: np.ndarray | None
     segments: list = field(default_factory=list)
     robot: str | None = None  # the arm it was recorded on, where the recording says
+    pose_of: str | None = None  # the point of that arm its poses are of (metadata["pose_of"]), if said
 
 
 def _pose(demo, obj, k):
@@ -328,7 +339,8 @@ def _sources(store):
                              f"{demo['actions'].shape[1]} columns; expected robosuite's 7 (OSC pose deltas "
                              "and the gripper) of a one-arm robot")
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
-                      np.asarray(demo["actions"], float), robot=recorded_robot(demo))
+                      np.asarray(demo["actions"], float), robot=recorded_robot(demo),
+                      pose_of=demo.metadata.get(POSE_OF))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
             src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
@@ -356,6 +368,14 @@ def driven_robot(sources, robot: str = DRIVEN_ROBOT) -> dict:
     if unknown and recorded:
         notes.append(f"{unknown} of the library's {len(sources)} demonstrations say no arm")
     return {"robot": robot, "recorded_on": recorded, "notes": notes}
+
+
+def running_arm(sources, robot: str = DRIVEN_ROBOT) -> dict:
+    """:func:`driven_robot` with notes on how the sources' poses are taken on ``robot``
+    (:func:`~skillbank.simulation._arms.pose_points`, which raises for a point it cannot take). Called
+    before an episode runs, so a library the arm cannot run costs no simulation."""
+    arm = driven_robot(sources, robot)
+    return {**arm, "notes": arm["notes"] + pose_points(sources, robot)}
 
 
 def _fingers(env, obs):
@@ -938,6 +958,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         if store is not library:
             store.close()
+    arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
     groups = {}
     for src in sources:  # the parts of a task: the sources that act on the same objects
         groups.setdefault(tuple(sorted(src.start)), []).append(src)
@@ -1003,7 +1024,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         environment.close()
     successes = sum(r["success"] for r in rows)
-    return {"env": env, **driven_robot(sources, robot), "method": method, "seed": int(seed),
+    return {"env": env, **arm, "method": method, "seed": int(seed),
             "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
