@@ -164,14 +164,14 @@ def test_which_points_an_arm_takes():
     # another arm's grip site, named or as robosuite reports it: taken as this arm's, one note per kind
     assert pose_points([src("UR5e", "robotiq_2f85:grip_site")] * 2, "Panda") == [UR5E_TO_PANDA]
     assert pose_points([src("Sawyer", "0,0,0.12")], "Jaco") == [
-        "pose_of: poses of Sawyer's grip site as robosuite reports it (0,0,0.12,0,0,0,1) taken as Jaco's grip site: "
-        "where the hand holds is kept, not its flange"]
+        "pose_of: poses of Sawyer's grip site as robosuite reports it (0,0,0.12,0,0,0,1) taken as Jaco's "
+        "grip site: where the hand holds is kept, not its flange"]
     # never a guess: no grip site, or an offset of an arm nobody named
     with pytest.raises(ValueError, match=r"^pose_of: demonstration 4's poses are of the flange; robosuite "
                                          r"drives Panda by its gripper's grip site, which a flange is not"):
         pose_points([src("UR5e", "flange")], "Panda")
     with pytest.raises(ValueError, match=r"which a tcp is not"):
         pose_points([src("UR5e", "robotiq_2f85:tcp")], "UR5e")
-    with pytest.raises(ValueError, match=r"^pose_of: demonstration 4's poses are of the offset 0,0,0.12,0,0,0,1 "
-                                         r"of an arm it does not name"):
+    with pytest.raises(ValueError, match=r"^pose_of: demonstration 4's poses are of the offset "
+                                         r"0,0,0.12,0,0,0,1 of an arm it does not name"):
         pose_points([src(None, "0,0,0.12")], "UR5e")
