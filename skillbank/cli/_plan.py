@@ -273,7 +273,7 @@ def _robosuite_arm(name) -> str:
     """``--robot`` with a robosuite scene: robosuite's arm (its spelling), default the UR5e; a
     description file, which names a kinematic model for skillbank's own scenes, is refused."""
     from ..simulation._evaluate import DRIVEN_ROBOT  # robosuite's names, when a plan runs
-    from ..simulation._robosuite import robosuite_robot
+    from ..simulation._robosuite import robosuite_robot  # the same, as sim evaluate checks them
 
     if name is None:
         return DRIVEN_ROBOT
