@@ -62,8 +62,8 @@ def add_parser(sub):
                             "(default UR5e); another than --robot runs the skills on an arm that did not "
                             "show them, through the grip site's pose (a note says so)")
         c.add_argument("--json", action="store_true",
-                       help="print episodes, successes, success_rate, interval, failures, per_episode as "
-                            "JSON")
+                       help="print robot, recorded_on, notes, episodes, successes, success_rate, interval, "
+                            "failures, per_episode as JSON")
         c.set_defaults(func=_composition)
     return p
 
