@@ -20,7 +20,7 @@ from ..io import ROBOSUITE_POSE_OF
 from ..robots import pose_point
 from ..robots._points import HOW_TO_SAY
 
-__all__ = ["pose_points"]
+__all__ = ["pose_points", "check_pads"]
 
 
 def _same(a, b) -> bool:
@@ -90,3 +90,22 @@ def pose_points(sources, robot: str) -> list:
         notes.setdefault((what, where), f"pose_of: poses of {what}{where} taken as {target}: where the hand "
                                         "holds is kept, not its flange")
     return list(notes.values())
+
+
+def check_pads(env, robot: str) -> None:
+    """Refuse an arm whose gripper names finger-pad geoms its model lacks.
+
+    The executor reads which way the fingers close from the pads, and robosuite's own grasp check
+    (a pick's effect, ``Stack3``'s success) looks for contacts with them. robosuite 1.5.2's XArm7
+    gripper names ``finger1_pad_collision`` geoms its model does not have: without this check an
+    episode would stop inside robosuite with a list of every geom of the scene.
+    """
+    gripper = env.robots[0].gripper
+    gripper = gripper["right"] if isinstance(gripper, dict) else gripper
+    names = set(env.sim.model.geom_names)
+    missing = sorted({g for side in ("left_fingerpad", "right_fingerpad")
+                      for g in gripper.important_geoms.get(side, []) if g not in names})
+    if missing:
+        raise ValueError(f"robot: robosuite's {robot} comes with a gripper ({type(gripper).__name__}) whose "
+                         f"finger pads name geoms its model lacks ({', '.join(missing)}), so no grasp can be "
+                         "seen or checked on it; choose another of robosuite's arms")

@@ -50,7 +50,7 @@ from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
-from ._arms import pose_points
+from ._arms import check_pads, pose_points
 from ._robosuite import (
     CONTROL_FREQ,
     _box,
@@ -878,9 +878,15 @@ def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
                          f"{sorted(suite.ALL_ENVIRONMENTS)}")
     # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
     # widened ranges and the episode's generator stay where they were put
-    return suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
-                      has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
-                      ignore_done=True, reward_shaping=False, hard_reset=False)
+    env = suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+                     has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
+                     ignore_done=True, reward_shaping=False, hard_reset=False)
+    try:
+        check_pads(env, robot)
+    except ValueError:
+        env.close()
+        raise
+    return env
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
