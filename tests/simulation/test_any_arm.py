@@ -178,3 +178,31 @@ def test_which_points_an_arm_takes():
     with pytest.raises(ValueError, match=r"^pose_of: demonstration 4's poses are of the offset "
                                          r"0,0,0.12,0,0,0,1 of an arm it does not name"):
         pose_points([src(None, "0,0,0.12")], "UR5e")
+
+
+def test_the_experiment_text_says_both_arms(cli, monkeypatch):
+    """The command line hands both arms to the experiment as given and prints what its report says."""
+    import skillbank.experiments as experiments
+
+    asked = {}
+    report = {"experiment": "unload", "scene": "robosuite:PickPlace", "robot": "Panda",
+              "recorded_on": ["Sawyer"], "notes": ["library recorded on Sawyer; driven on Panda"],
+              "method": "lte", "seed": 0, "demos": 1, "episodes": 1, "successes": 0, "success_rate": 0.0,
+              "interval": [0.0, 0.8],
+              "failures": {"not held": 1}, "labelled": {"pick": 1, "place": 2},
+              "library": {"demonstrations": 4, "primitives": 16, "skills": 3},
+              "per_episode": [{"seed": 1000, "plan": ["(pick Milk)"], "success": False,
+                               "failure": {"step": 1, "reason": "not held"}}]}
+
+    def experiment(name, **options):
+        asked.update(options)
+        return report
+
+    monkeypatch.setattr(experiments, "composition_experiment", experiment)
+    code, out, err = cli("experiment", "unload", "--episodes", "1", "--robot", "PANDA", "--record-robot",
+                         "sawyer")
+    assert code == 0, err
+    assert asked["robot"] == "PANDA" and asked["record_robot"] == "sawyer"  # spelled by the experiment
+    lines = out.splitlines()
+    assert "robosuite:PickPlace (lte, on Panda): 0/1 = 0 % [0.0, 80.0] (Wilson 95 %)" in lines
+    assert "  note: library recorded on Sawyer; driven on Panda" in lines
