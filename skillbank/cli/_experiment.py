@@ -53,9 +53,17 @@ def add_parser(sub):
                             "planned order (the baseline)")
         c.add_argument("--replan", action="store_true", help="plan again from the observed facts when a "
                                                              "step's effect did not happen")
+        c.add_argument("--robot", default="UR5e", metavar="ARM",
+                       help="robosuite's arm that carries the plans out, with its default gripper: UR5e "
+                            "(default), Panda, Sawyer, IIWA, Jaco, Kinova3, XArm7 (any case), as 'sim "
+                            "evaluate --robot'")
+        c.add_argument("--record-robot", default="UR5e", metavar="ARM",
+                       help="robosuite's arm the demonstrations are recorded on, as 'sim record --robot' "
+                            "(default UR5e); another than --robot runs the skills on an arm that did not "
+                            "show them, through the grip site's pose (a note says so)")
         c.add_argument("--json", action="store_true",
-                       help="print episodes, successes, success_rate, interval, failures, per_episode as "
-                            "JSON")
+                       help="print robot, recorded_on, notes, episodes, successes, success_rate, interval, "
+                            "failures, per_episode as JSON")
         c.set_defaults(func=_composition)
     return p
 
@@ -109,7 +117,7 @@ def _composition(args) -> int:
     from ..experiments import check_options, composition_experiment
 
     check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                  method=args.method, replan=args.replan)
+                  method=args.method, replan=args.replan, robot=args.robot, record_robot=args.record_robot)
 
     progress = None
     if show_progress(args):
@@ -122,7 +130,8 @@ def _composition(args) -> int:
                 bars[stage] = tqdm(total=total, desc=stage, unit="task" if stage == "record" else "episode")
             bars[stage].update(done - bars[stage].n)
     report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                                    method=args.method, replan=args.replan, progress=progress)
+                                    method=args.method, replan=args.replan, progress=progress,
+                                    robot=args.robot, record_robot=args.record_robot)
     if args.json:
         print(json.dumps(report, allow_nan=False))
         return 0
@@ -138,6 +147,8 @@ def _composition(args) -> int:
     print(f"{report['scene']} ({report['method']}, on {report['robot']}): {report['successes']}/"
           f"{report['episodes']} = "
           f"{100 * report['success_rate']:.0f} % [{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %)")
+    for note in report.get("notes", []):
+        print(f"  note: {note}")
     if report["failures"]:
         print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(report["failures"].items())))
     return 0

@@ -47,6 +47,13 @@ def add_parser(sub):
                    help="a PDDL domain to use as it is (default: built from the skills' descriptions, see "
                         "'library describe')")
     add_robot_options(p, what="each step")  # --robot, --max-joint-velocity/-acceleration, --branch
+    # one option, one meaning per scene kind: the shared help speaks of a kinematic model only, so plan's
+    # --robot says what it names with a robosuite scene too
+    robot = next(a for a in p._actions if a.dest == "robot")
+    robot.metavar = "NAME|FILE|ARM"
+    robot.help = (f"with a scene FILE: {robot.help}. With --scene robosuite:TASK: robosuite's arm that "
+                  "carries the plan out, with its default gripper, as 'sim evaluate --robot': UR5e "
+                  "(default), Panda, Sawyer, IIWA, Jaco, Kinova3, XArm7 (any case; no description FILE)")
     p.add_argument("--seed", type=int, default=None, help="random seed (for methods that sample)")
     p.add_argument("--max-groundings", type=int, default=None, metavar="N",
                    help="ground actions (an action bound to objects) the planner may build before it "
@@ -262,17 +269,35 @@ def _disturbance(text):
     return {"after": after, "object": obj, "position": xyz}
 
 
+def _robosuite_arm(name) -> str:
+    """``--robot`` with a robosuite scene: robosuite's arm (its spelling), default the UR5e; a
+    description file, which names a kinematic model for skillbank's own scenes, is refused."""
+    from ..simulation._evaluate import DRIVEN_ROBOT  # robosuite's names, when a plan runs
+    from ..simulation._robosuite import robosuite_robot  # the same, as sim evaluate checks them
+
+    if name is None:
+        return DRIVEN_ROBOT
+    if Path(name).suffix.lower() in (".urdf", ".xml", ".mjcf") or Path(name).is_file():
+        raise ValueError(f"robot: with a robosuite scene --robot names robosuite's arm that carries the plan "
+                         f"out (UR5e, Panda, Sawyer, IIWA, Jaco, Kinova3, XArm7), not a description file "
+                         f"({name!r}); a description is for a scene FILE")
+    return robosuite_robot(name)
+
+
 def _plan_physics(args) -> int:
     """``plan LIB --scene robosuite:TASK --simulate``: plan over the described skills and carry it out."""
     import re
 
     from ..simulation import execute_plan  # robosuite and the planner, when a plan runs
 
-    given = [f"--{n.replace('_', '-')}" for n in ("out", "format", "domain", "robot", "clearance", "view")
-             if getattr(args, n, None) is not None]
+    # what a kinematic model or a written trajectory needs: robosuite's controller drives its own arm
+    kinematic = ("out", "format", "domain", "clearance", "view", "tool_frame", "tool", "robot_base", "branch",
+                 "max_joint_velocity", "max_joint_acceleration")
+    given = [f"--{n.replace('_', '-')}" for n in kinematic if getattr(args, n, None) is not None]
     if given:
-        raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's UR5e in its own world and writes "
-                         "no trajectory; leave it out")
+        raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's arm (--robot) in its own world, "
+                         "with its own controller, and writes no trajectory; leave it out")
+    robot = _robosuite_arm(args.robot)
     if not args.simulate:
         raise ValueError(f"scene: {args.scene} is a robosuite task: its plan is carried out in the "
                          "simulation; add --simulate")
@@ -298,7 +323,7 @@ def _plan_physics(args) -> int:
     report = execute_plan(_target(args.db), args.scene, episodes=args.episodes,
                           seed=0 if args.seed is None else args.seed, goal=goal, method=args.method,
                           replan=args.replan, placement=args.placement, disturb=disturb, search=args.search,
-                          paths=args.plot is not None, progress=progress)
+                          paths=args.plot is not None, progress=progress, robot=robot)
     written = []
     if args.plot is not None:
         from ..plotting import plot_composed  # matplotlib only when a figure is asked for

@@ -28,6 +28,8 @@ from ..pipeline import Library
 from ..selection import METHODS
 from ..simulation import BASELINES, binomial_interval, execute_plan, record
 from ..simulation._compose import tally
+from ..simulation._evaluate import DRIVEN_ROBOT
+from ..simulation._robosuite import robosuite_robot
 from ..simulation._stack3 import CUBES
 
 __all__ = ["composition_experiment", "check_options", "COMPOSITIONS", "PICK", "PLACE"]
@@ -48,7 +50,8 @@ EPISODE_SEEDS = 1000  # episode k is placed from seed + EPISODE_SEEDS + k: never
 LAST_SEED = 2 ** 32 - 1
 
 
-def check_options(name: str, *, episodes, seed, demos, method, replan=False) -> dict:
+def check_options(name: str, *, episodes, seed, demos, method, replan=False, robot=DRIVEN_ROBOT,
+                  record_robot=DRIVEN_ROBOT) -> dict:
     """Every option of a composition experiment checked, before anything is recorded; the checked values.
 
     Each is a one-line ValueError naming its own option (``demos``, not ``episodes``), so that a bad
@@ -76,7 +79,13 @@ def check_options(name: str, *, episodes, seed, demos, method, replan=False) -> 
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
     if not isinstance(replan, bool):
         raise ValueError(f"replan: expected True or False, got {replan!r}")
-    return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan}
+    robot = robosuite_robot(robot)
+    try:
+        record_robot = robosuite_robot(record_robot)
+    except ValueError as e:  # the same rule, named by its own option
+        raise ValueError(str(e).replace("robot:", "record_robot:", 1)) from None
+    return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan,
+            "robot": robot, "record_robot": record_robot}
 
 
 def _label_one_each(lib) -> dict:
@@ -102,7 +111,8 @@ def _goal(rng) -> list:
 
 def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demos: int = 10,
                            method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
-                           progress=None) -> dict:
+                           progress=None, robot: str = DRIVEN_ROBOT,
+                           record_robot: str = DRIVEN_ROBOT) -> dict:
     """Record, build, label, describe, plan and execute: the whole loop of a composed task.
 
     Parameters
@@ -124,13 +134,22 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         Keep each episode's tool path (for :func:`skillbank.plotting.plot_composed`).
     progress : callable, optional
         ``progress(stage, done, total)``.
+    robot : str, default="UR5e"
+        robosuite's arm that carries the plans out (any of its single arms, any case: ``panda``), as
+        :func:`~skillbank.simulation.execute_plan`'s.
+    record_robot : str, default="UR5e"
+        robosuite's arm the demonstrations are recorded on (:func:`~skillbank.simulation.record`'s).
+        When it is not ``robot``, the skills run on another arm than showed them, through the grip
+        site's pose (a note says so).
 
     Returns
     -------
     dict
-        ``{"experiment", "scene", "robot", "method", "seed", "demos", "episodes", "successes",
-        "success_rate", "interval", "failures", "per_episode", "labelled", "library"}``; ``robot`` is the
-        arm that recorded the demonstrations and ran the plans (robosuite's UR5e).
+        ``{"experiment", "scene", "robot", "recorded_on", "notes", "method", "seed", "demos", "episodes",
+        "successes", "success_rate", "interval", "failures", "per_episode", "labelled", "library"}``;
+        ``robot`` is the arm that ran the plans, ``recorded_on`` the arms the library's demonstrations
+        say they were recorded on, ``notes`` what :func:`~skillbank.simulation.execute_plan` says of
+        them (another arm, the poses taken as its grip site's).
 
     Raises
     ------
@@ -144,15 +163,17 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     ...
     ValueError: experiment: expected one of ['stack3', 'unload'], got 'dishes'
     """
-    checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan)
+    checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan,
+                            robot=robot, record_robot=record_robot)
     episodes, seed, demos = checked["episodes"], checked["seed"], checked["demos"]
+    robot, record_robot = checked["robot"], checked["record_robot"]
     tasks, scene = COMPOSITIONS[name]
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp if folder is None else folder)
         files = []
         for i, task in enumerate(tasks):
             out = where / f"{task}.hdf5"
-            record(f"robosuite:{task}", episodes=demos, out=out, seed=int(seed) + i)
+            record(f"robosuite:{task}", episodes=demos, out=out, seed=int(seed) + i, robot=record_robot)
             files.append(out)
             if progress is not None:
                 progress("record", i + 1, len(tasks))
@@ -169,19 +190,20 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
             for k in range(episodes):
                 goal = _goal(np.random.default_rng(first + k))
                 report = execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
-                                      replan=replan, paths=paths)
+                                      replan=replan, paths=paths, robot=robot)
                 rows += report["per_episode"]
                 if progress is not None:
                     progress("episodes", k + 1, episodes)
         else:
             report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
-                                  paths=paths, progress=None if progress is None else
+                                  paths=paths, robot=robot, progress=None if progress is None else
                                   (lambda done, _: progress("episodes", done, episodes)))
             rows = report["per_episode"]
     successes, failures = tally(rows)
-    # recorded and driven on the same arm (sim record's default, robosuite's UR5e): no note to carry
-    return {"experiment": name, "scene": scene, "robot": report["robot"], "method": method, "seed": int(seed),
-            "demos": demos,
+    # every episode's report says the same of the arms (one library, one arm): the last one's is kept
+    return {"experiment": name, "scene": scene, "robot": report["robot"],
+            "recorded_on": report["recorded_on"], "notes": report["notes"], "method": method,
+            "seed": int(seed), "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
             "per_episode": rows, "labelled": labelled, "library": library}

@@ -46,6 +46,7 @@ from ..selection import METHODS
 from ..store import open_store
 from ._evaluate import (
     BASELINES,
+    DRIVEN_ROBOT,
     NEIGHBOUR,
     REASONS,
     SETTLE,
@@ -61,10 +62,10 @@ from ._evaluate import (
     _sources,
     _widen,
     binomial_interval,
-    driven_robot,
+    running_arm,
 )
 from ._reach import Reach
-from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite
+from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite, robosuite_robot
 from ._stack3 import CUBES, stack3_class
 
 __all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
@@ -467,7 +468,7 @@ def _plan(domain, world, facts, goal, search, name):
 
 def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=None, method: str = "lte",
                  replan: bool = False, horizon: int = 600, placement=None, disturb=None, search="satisficing",
-                 random_state=None, paths: bool = False, progress=None) -> dict:
+                 random_state=None, paths: bool = False, progress=None, robot: str = DRIVEN_ROBOT) -> dict:
     """Plan a task over the library's described skills and carry it out in ``episodes`` robosuite scenes.
 
     Parameters
@@ -499,6 +500,11 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         The planner's search (:data:`skillbank.planning.SEARCHES`).
     paths : bool, default=False
         Add each episode's tool positions (``path``, one per control step) and each step's first index.
+    robot : str, default="UR5e"
+        robosuite's arm that carries the plan out, with its default gripper (any case: ``panda``), as
+        :func:`~skillbank.simulation.evaluate`'s: the library's poses are of its recording arm's grip
+        site, taken as this arm's (a note says so when it is another arm; a pose of an unknown point
+        recorded on another arm is refused before anything runs).
 
     Returns
     -------
@@ -526,6 +532,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         raise ValueError(f"goal: expected a list of facts such as '(on cubeA cubeB)', got {goal!r}")
     if disturb is not None:
         disturb = _check_disturb(disturb)
+    robot = robosuite_robot(robot)
     store = open_store(library, create=False)
     try:
         domain = skill_domain(store)
@@ -536,6 +543,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
             store.close()
     bindings = {a: check_binding(bindings.get(a), domain.actions[a].parameters, name=f"binding of {a!r}")
                 for a in domain.actions}
+    arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
     every = [ph for src in sources for ph in _phases(src)]
     phases = _agreeing(every)
     phases += _described(every, phases, domain)
@@ -548,7 +556,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     suite = import_robosuite()
     if spec.env == "Stack3":
         stack3_class()
-    environment = _make(suite, spec.env, seed, 10 ** 6)
+    environment = _make(suite, spec.env, seed, 10 ** 6, robot)
     if placement is not None:
         _widen(environment, placement)
     rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0, "plan": 0.0}
@@ -562,7 +570,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     finally:
         environment.close()
     successes, failures = tally(rows)
-    return {"scene": scene, **driven_robot(sources), "method": method, "seed": int(seed),
+    return {"scene": scene, **arm, "method": method, "seed": int(seed),
             "placement": placement, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,

@@ -32,15 +32,25 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..core import Constraints, ViaPoint, exp_map, log_map, quaternion_angle, quaternion_to_matrix, slerp
+from ..core import (
+    POSE_OF,
+    Constraints,
+    ViaPoint,
+    exp_map,
+    log_map,
+    quaternion_angle,
+    quaternion_to_matrix,
+    slerp,
+)
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
+from ._arms import check_pads, pose_points
 from ._robosuite import (
     CONTROL_FREQ,
     _box,
@@ -132,6 +142,7 @@ class _Source:
     actions: np.ndarray | None
     segments: list = field(default_factory=list)
     robot: str | None = None  # the arm it was recorded on, where the recording says
+    pose_of: str | None = None  # the point of that arm its poses are of (metadata["pose_of"]), if said
 
 
 def _pose(demo, obj, k):
@@ -328,7 +339,8 @@ def _sources(store):
                              f"{demo['actions'].shape[1]} columns; expected robosuite's 7 (OSC pose deltas "
                              "and the gripper) of a one-arm robot")
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
-                      np.asarray(demo["actions"], float), robot=recorded_robot(demo))
+                      np.asarray(demo["actions"], float), robot=recorded_robot(demo),
+                      pose_of=demo.metadata.get(POSE_OF))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
             src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
@@ -363,8 +375,8 @@ def _parts(src) -> list:
         acted = {obj} | {s.relation.target for s in segments
                          if s.relation is not None and s.relation.moves_with}
         acted.discard(None)
-        out.append(_Source(src.id, {o: src.start[o] for o in sorted(acted) if o in src.start}, src.actions,
-                           segments, src.robot))
+        out.append(replace(src, start={o: src.start[o] for o in sorted(acted) if o in src.start},
+                           segments=segments))
     return out
 
 
@@ -389,6 +401,14 @@ def driven_robot(sources, robot: str = DRIVEN_ROBOT) -> dict:
     if unknown and recorded:
         notes.append(f"{unknown} of the library's {len(arms)} demonstrations say no arm")
     return {"robot": robot, "recorded_on": recorded, "notes": notes}
+
+
+def running_arm(sources, robot: str = DRIVEN_ROBOT) -> dict:
+    """:func:`driven_robot` with notes on how the sources' poses are taken on ``robot``
+    (:func:`~skillbank.simulation._arms.pose_points`, which raises for a point it cannot take). Called
+    before an episode runs, so a library the arm cannot run costs no simulation."""
+    arm = driven_robot(sources, robot)
+    return {**arm, "notes": arm["notes"] + pose_points(sources, robot)}
 
 
 def _fingers(env, obs):
@@ -909,9 +929,15 @@ def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
                          f"{sorted(suite.ALL_ENVIRONMENTS)}")
     # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
     # widened ranges and the episode's generator stay where they were put
-    return suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
-                      has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
-                      ignore_done=True, reward_shaping=False, hard_reset=False)
+    env = suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+                     has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
+                     ignore_done=True, reward_shaping=False, hard_reset=False)
+    try:
+        check_pads(env, robot)
+    except ValueError:
+        env.close()
+        raise
+    return env
 
 
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
@@ -989,6 +1015,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         if store is not library:
             store.close()
+    arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
     groups = {}
     for src in sources:  # the parts of a task: the sources that act on the same objects
         groups.setdefault(tuple(sorted(src.start)), []).append(src)
@@ -1000,8 +1027,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     if placement is not None:
         _widen(environment, placement)
     rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0}
-    driven = driven_robot(sources, robot)
-    notes = driven["notes"]
+    notes = arm["notes"]
     try:
         for k in range(episodes):
             _reseed(environment, int(seed) + k)
@@ -1062,7 +1088,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     finally:
         environment.close()
     successes = sum(r["success"] for r in rows)
-    return {"env": env, **driven, "method": method, "seed": int(seed),
+    return {"env": env, **arm, "method": method, "seed": int(seed),
             "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),

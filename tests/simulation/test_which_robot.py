@@ -160,7 +160,11 @@ def test_sim_evaluate_says_it_drove_the_ur5e_a_library_recorded_on_the_panda(cli
     assert code == 0, err
     doc = json.loads(out)
     assert doc["robot"] == "UR5e" and doc["recorded_on"] == ["Panda"]
-    assert doc["notes"] == ["library recorded on Panda; driven on UR5e"]
+    # and how its poses are taken on the UR5e (issue 42, item 4): the Panda hand's grip site as the 2F-85's
+    assert doc["notes"] == [
+        "library recorded on Panda; driven on UR5e",
+        "pose_of: poses of the panda_hand's grip site (recorded on Panda) taken as UR5e's grip site "
+        "(robotiq_2f85:grip_site): where the hand holds is kept, not its flange"]
     code, out, err = cli(*argv)
     assert code == 0, err
     assert out.splitlines()[0].endswith(", on UR5e")
