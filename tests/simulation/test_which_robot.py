@@ -109,7 +109,7 @@ def test_a_note_only_when_the_library_was_recorded_on_another_arm():
     from skillbank.simulation._evaluate import driven_robot
 
     def sources(*names):
-        return [SimpleNamespace(robot=n) for n in names]
+        return [SimpleNamespace(id=i, robot=n) for i, n in enumerate(names)]
 
     assert driven_robot(sources("UR5e", "ur5e")) == {"robot": "UR5e", "recorded_on": ["UR5e"], "notes": []}
     assert driven_robot(sources(None)) == {"robot": "UR5e", "recorded_on": [], "notes": []}
