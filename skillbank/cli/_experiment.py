@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._options import show_progress
+from ._options import add_episode_options, parallel_params, show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -56,6 +56,7 @@ def add_parser(sub):
         c.add_argument("--json", action="store_true",
                        help="print episodes, successes, success_rate, interval, failures, per_episode as "
                             "JSON")
+        add_episode_options(c)  # --workers, --scheduler, -v: the episodes on Dask
         c.set_defaults(func=_composition)
     return p
 
@@ -108,8 +109,9 @@ def _composition(args) -> int:
     # the whole stack, when it runs; every option checked before anything is recorded
     from ..experiments import check_options, composition_experiment
 
+    parallel = parallel_params(args)
     check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                  method=args.method, replan=args.replan)
+                  method=args.method, replan=args.replan, **parallel)
 
     progress = None
     if show_progress(args):
@@ -122,7 +124,8 @@ def _composition(args) -> int:
                 bars[stage] = tqdm(total=total, desc=stage, unit="task" if stage == "record" else "episode")
             bars[stage].update(done - bars[stage].n)
     report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                                    method=args.method, replan=args.replan, progress=progress)
+                                    method=args.method, replan=args.replan, progress=progress,
+                                    verbose=args.verbose, **parallel)
     if args.json:
         print(json.dumps(report, allow_nan=False))
         return 0

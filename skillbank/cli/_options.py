@@ -31,7 +31,8 @@ __all__ = [
     "add_repair_option", "add_reader_options", "reader_options",
     "add_pose_of_option", "show_progress", "check_folder",
     "add_execution_options",
-    "execution_params", "add_parallel_options", "add_episode_options", "parallel_params", "SCHEDULER_VARIABLE", "add_robot_options",
+    "execution_params", "add_parallel_options", "add_episode_options", "parallel_params",
+    "SCHEDULER_VARIABLE", "add_robot_options",
     "robot_params", "add_export_options", "export_params",
 ]
 
@@ -142,7 +143,8 @@ def add_parallel_options(p, *, work: str = "read and segment",
     g = p.add_argument_group(f"parallel, on Dask (pip install 'skillbank[dask]'; see {doc})")
     g.add_argument("--workers", type=_workers, default=None, metavar="N",
                    help=f"{work} on a new local Dask cluster of N worker processes (at most 2 per core, or "
-                        f"$SKILLBANK_MAX_WORKERS), {here}; 0: in this process, ignoring ${SCHEDULER_VARIABLE}")
+                        f"$SKILLBANK_MAX_WORKERS), {here}; 0: in this process, ignoring "
+                        f"${SCHEDULER_VARIABLE}")
     g.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help=f"{work} on an existing Dask cluster, {there} (default: ${SCHEDULER_VARIABLE} when "
                         "set and --workers is not given)")

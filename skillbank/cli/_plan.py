@@ -13,10 +13,12 @@ from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
 from ._library_view import check_view, write_library_view
 from ._options import (
+    add_episode_options,
     add_export_options,
     add_robot_options,
     check_folder,
     export_params,
+    parallel_params,
     robot_params,
     show_progress,
 )
@@ -91,6 +93,7 @@ def add_parser(sub):
                    help="widen every object's x and y placement range to +-HALF_WIDTH metres")
     g.add_argument("--disturb", default=None, metavar="K:OBJECT:X,Y,Z",
                    help="after step K, put OBJECT at X,Y,Z (m): the world changing behind the plan's back")
+    add_episode_options(p)  # --workers, --scheduler, -v: the robosuite episodes on Dask
     p.set_defaults(func=_plan)
     return p
 
@@ -298,7 +301,8 @@ def _plan_physics(args) -> int:
     report = execute_plan(_target(args.db), args.scene, episodes=args.episodes,
                           seed=0 if args.seed is None else args.seed, goal=goal, method=args.method,
                           replan=args.replan, placement=args.placement, disturb=disturb, search=args.search,
-                          paths=args.plot is not None, progress=progress)
+                          paths=args.plot is not None, progress=progress, verbose=args.verbose,
+                          **parallel_params(args))
     written = []
     if args.plot is not None:
         from ..plotting import plot_composed  # matplotlib only when a figure is asked for

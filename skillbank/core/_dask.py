@@ -59,10 +59,10 @@ def check_parallel(workers=None, scheduler=None):
     --------
     >>> check_parallel(2), check_parallel(None, "tcp://h:8786")
     (2, None)
-    >>> check_parallel(1, "tcp://h:8786")
+    >>> check_parallel(1, "tcp://h:8786")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: workers: give workers (a new local cluster) or scheduler (an existing one), not both; got workers=1 and scheduler='tcp://h:8786'
+    ValueError: workers: give workers (a new local cluster) or scheduler (an existing one), not both; ...
     """
     if workers is not None and scheduler is not None:
         raise ValueError(f"workers: give workers (a new local cluster) or scheduler (an existing one), not "

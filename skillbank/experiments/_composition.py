@@ -23,11 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._cluster_address import probe_scheduler
 from ..core._validation import check_positive
 from ..pipeline import Library
 from ..selection import METHODS
 from ..simulation import BASELINES, binomial_interval, execute_plan, record
 from ..simulation._compose import tally
+from ..simulation._episodes import check_episode_cluster
 from ..simulation._stack3 import CUBES
 
 __all__ = ["composition_experiment", "check_options", "COMPOSITIONS", "PICK", "PLACE"]
@@ -48,7 +50,8 @@ EPISODE_SEEDS = 1000  # episode k is placed from seed + EPISODE_SEEDS + k: never
 LAST_SEED = 2 ** 32 - 1
 
 
-def check_options(name: str, *, episodes, seed, demos, method, replan=False) -> dict:
+def check_options(name: str, *, episodes, seed, demos, method, replan=False, workers=None,
+                  scheduler=None) -> dict:
     """Every option of a composition experiment checked, before anything is recorded; the checked values.
 
     Each is a one-line ValueError naming its own option (``demos``, not ``episodes``), so that a bad
@@ -76,7 +79,11 @@ def check_options(name: str, *, episodes, seed, demos, method, replan=False) -> 
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
     if not isinstance(replan, bool):
         raise ValueError(f"replan: expected True or False, got {replan!r}")
-    return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan}
+    workers = check_episode_cluster(workers, scheduler)
+    if isinstance(scheduler, str):
+        probe_scheduler(scheduler)  # a cluster out of reach is found before the recordings, not after
+    return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan,
+            "workers": workers, "scheduler": scheduler}
 
 
 def _label_one_each(lib) -> dict:
@@ -100,9 +107,14 @@ def _goal(rng) -> list:
     return [f"(on {upper} {lower})" for upper, lower in zip(order[:-1], order[1:], strict=True)]
 
 
+def _tower_goal(seed) -> list:
+    """The tower an episode of ``stack3`` asks for, drawn from the episode's seed (on any worker alike)."""
+    return _goal(np.random.default_rng(seed))
+
+
 def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demos: int = 10,
                            method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
-                           progress=None) -> dict:
+                           progress=None, workers=None, scheduler=None, verbose: bool = False) -> dict:
     """Record, build, label, describe, plan and execute: the whole loop of a composed task.
 
     Parameters
@@ -124,6 +136,10 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         Keep each episode's tool path (for :func:`skillbank.plotting.plot_composed`).
     progress : callable, optional
         ``progress(stage, done, total)``.
+    workers, scheduler, verbose
+        The episodes on Dask (:func:`~skillbank.simulation.execute_plan`): a new local cluster of
+        ``workers`` processes or an existing one; the rows are those of a run in this process, in seed
+        order. Checked (and the scheduler reached) before anything is recorded.
 
     Returns
     -------
@@ -144,7 +160,8 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     ...
     ValueError: experiment: expected one of ['stack3', 'unload'], got 'dishes'
     """
-    checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan)
+    checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan,
+                            workers=workers, scheduler=scheduler)
     episodes, seed, demos = checked["episodes"], checked["seed"], checked["demos"]
     tasks, scene = COMPOSITIONS[name]
     with tempfile.TemporaryDirectory() as tmp:
@@ -164,24 +181,18 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         library = {"demonstrations": summary["n_demonstrations"], "primitives": len(summary["primitives"]),
                    "skills": len(summary["skills"])}
         first = int(seed) + EPISODE_SEEDS
-        if name == "stack3":  # the tower's order is drawn per episode: a goal no demonstration showed
-            rows = []
-            for k in range(episodes):
-                goal = _goal(np.random.default_rng(first + k))
-                report = execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
-                                      replan=replan, paths=paths)
-                rows += report["per_episode"]
-                if progress is not None:
-                    progress("episodes", k + 1, episodes)
-        else:
-            report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
-                                  paths=paths, progress=None if progress is None else
-                                  (lambda done, _: progress("episodes", done, episodes)))
-            rows = report["per_episode"]
+        # stack3: the tower's order is drawn per episode from its seed, a goal no demonstration showed
+        report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
+                              goal=_tower_goal if name == "stack3" else None, paths=paths,
+                              workers=checked["workers"], scheduler=scheduler, verbose=verbose,
+                              progress=None if progress is None else
+                              (lambda done, _: progress("episodes", done, episodes)))
+        rows = report["per_episode"]
     successes, failures = tally(rows)
     # recorded and driven on the same arm (sim record's default, robosuite's UR5e): no note to carry
     return {"experiment": name, "scene": scene, "robot": report["robot"], "method": method, "seed": int(seed),
             "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
-            "per_episode": rows, "labelled": labelled, "library": library}
+            "per_episode": rows, "labelled": labelled, "library": library,
+            **({"scheduler": report["scheduler"]} if "scheduler" in report else {})}
