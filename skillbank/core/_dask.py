@@ -104,27 +104,33 @@ def dask_client(dist, workers=None, scheduler=None, *, verbose: bool = False):
 
 
 def map_in_order(function, items, *, workers=None, scheduler=None, what: str = "parallel work",
-                 name=repr, doing: str = "running it", progress=None, verbose: bool = False) -> tuple:
+                 name=repr, doing: str = "running it", progress=None, verbose: bool = False,
+                 window=None) -> tuple:
     """``([function(item) for item in items], scheduler address)``, each call a task on a Dask cluster.
 
     Parameters
     ----------
     function : callable
-        Called once per item on a worker; it and the items travel to the workers by pickle (a function
-        of a module is sent by its name: the workers must be able to import it).
+        Called once per item on a worker; it and the items travel to the workers by pickle with each
+        task (a function of a module is sent by its name: the workers must be able to import it). A
+        task carries all it needs, so a worker that dies loses nothing another cannot redo.
     items : sequence
     workers, scheduler
         The cluster (see the module docstring); exactly one is given.
     what : str
         The work, for the one-line error when Dask is missing ("parallel episodes").
     name : callable
-        ``name(item)``: how an error names the item whose workers all died ("seed 503").
+        ``name(item)``: how an error names the item whose workers all died ("episode of seed 503").
     doing : str
         What the dead worker was doing with it ("running it").
     progress : callable, optional
         ``progress(index, result)`` as each task finishes (in the order they finish).
     verbose : bool, default=False
         Let a local cluster's log lines below ERROR through.
+    window : int, optional
+        Tasks in flight at once (default: the cluster's threads, so that a worker holds only the task
+        it runs, and a worker that dies takes only that one down). More are sent as tasks finish; what
+        waits here costs the scheduler nothing.
 
     Returns
     -------
@@ -149,22 +155,39 @@ def map_in_order(function, items, *, workers=None, scheduler=None, what: str = "
     workers = check_parallel(workers, scheduler)
     if workers is None and scheduler is None:
         raise ValueError("workers: give workers (a new local cluster) or scheduler (an existing one)")
+    if window is not None:
+        window = check_positive(window, name="window", integer=True)
     dist = distributed(what)
     items = list(items)
+    results = [None] * len(items)
     with dask_client(dist, workers, scheduler, verbose=verbose) as client:
-        futures = [client.submit(function, item, pure=False) for item in items]
-        index = {future.key: k for k, future in enumerate(futures)}
-        results = [None] * len(items)
+        window = window or max(1, sum(client.nthreads().values()))
+        queue = dist.as_completed(loop=client.loop)
+        inflight = {}
+
+        def top_up(sent):
+            while sent < len(items) and len(inflight) < window:
+                future = client.submit(function, items[sent], pure=False)
+                inflight[future.key] = (sent, future)
+                queue.add(future)
+                sent += 1
+            return sent
+
         try:
-            for future in dist.as_completed(futures, loop=client.loop):
-                k = index[future.key]
+            sent = top_up(0)
+            for future in queue:
+                k, _ = inflight.pop(future.key)
                 try:
                     results[k] = future.result()
                 except dist.KilledWorker:
                     raise ValueError(f"{name(items[k])}: " + DIED.format(doing=doing)) from None
+                finally:
+                    future.release()
                 if progress is not None:
                     progress(k, results[k])
+                sent = top_up(sent)
         finally:
-            # stopped early (an error, an interrupt): the tasks still running are not wanted
-            client.cancel([f for f in futures if not f.done()])
+            queue.clear()
+            if inflight:  # stopped early (an error, an interrupt): the tasks still running are not wanted
+                client.cancel([future for _, future in inflight.values()])
         return results, client.scheduler.address

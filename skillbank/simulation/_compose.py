@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
-from functools import partial
 
 import numpy as np
 
@@ -557,7 +556,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
                    method=method, replan=replan, horizon=horizon, placement=placement, disturb=disturb,
                    search=search, random_state=random_state, paths=paths)
     # each episode builds its own environment from its seed: the same rows here and on any worker
-    results, address = run_episodes(partial(_plan_episode, job), [int(seed) + k for k in range(episodes)],
+    results, address = run_episodes(_plan_episode, job, [int(seed) + k for k in range(episodes)],
                                     workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
     rows = [row for row, _ in results]
     timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments", "plan")}

@@ -58,30 +58,33 @@ def _verbose_robosuite():
         root.setLevel(level)
 
 
-def _quietly(episode, verbose, seed):
-    """``episode(seed)`` with robosuite's log off (on, to stderr, with ``verbose``)."""
+def _quietly(episode, verbose, job, seed):
+    """``episode(job, seed)`` with robosuite's log off (on, to stderr, with ``verbose``)."""
     with _verbose_robosuite() if verbose else quiet_robosuite():
-        return episode(seed)
+        return episode(job, seed)
 
 
-def _on_worker(episode, verbose, seed):
+def _on_worker(episode, verbose, job, seed):
     """A Dask task: one episode; the worker's stdout (shared with the command that started the cluster,
     whose report it is) goes to stderr, whatever writes to it, Python or C."""
     with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
         sys.stdout.flush()
         os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
-    return _quietly(episode, verbose, seed)
+    return _quietly(episode, verbose, job, seed)
 
 
-def run_episodes(episode, seeds, *, workers=None, scheduler=None, progress=None, verbose: bool = False):
-    """``([episode(seed) for seed in seeds], scheduler address or None)``: here, or on Dask.
+def run_episodes(episode, job, seeds, *, workers=None, scheduler=None, progress=None, verbose: bool = False):
+    """``([episode(job, seed) for seed in seeds], scheduler address or None)``: here, or on Dask.
 
     Parameters
     ----------
     episode : callable
-        ``episode(seed) -> (row, ...)``, ``row`` a dict with ``"success"``. It must build everything it
-        uses from its seed and its own arguments (a ``functools.partial`` of a module's function, sent
-        to the workers by pickle); nothing it changes may outlive the call.
+        ``episode(job, seed) -> (row, ...)``, ``row`` a dict with ``"success"``: a function of a module
+        (the workers import it by its name). It must build everything it uses from ``job`` and its
+        seed; nothing it changes may outlive the call.
+    job : object
+        What every episode needs (the library's demonstrations, the options): sent with each task, so
+        that an episode whose worker died can run on another.
     seeds : sequence of int
     workers : int, optional
         Run on a new local Dask cluster of this many worker processes.
@@ -99,11 +102,11 @@ def run_episodes(episode, seeds, *, workers=None, scheduler=None, progress=None,
 
     Examples
     --------
-    >>> def episode(seed):
-    ...     return {"seed": seed, "success": seed % 2 == 0}, None
-    >>> rows, where = run_episodes(episode, [4, 5])
-    >>> [r["seed"] for r, _ in rows], where
-    ([4, 5], None)
+    >>> def episode(job, seed):
+    ...     return {"seed": seed, "success": seed % job == 0}, None
+    >>> rows, where = run_episodes(episode, 2, [4, 5])
+    >>> [(r["seed"], r["success"]) for r, _ in rows], where
+    ([(4, True), (5, False)], None)
     """
     seeds = [int(s) for s in seeds]
     done = {"n": 0, "successes": 0}
@@ -117,12 +120,12 @@ def run_episodes(episode, seeds, *, workers=None, scheduler=None, progress=None,
     if check_episode_cluster(workers, scheduler) is None and scheduler is None:
         results = []
         for seed in seeds:
-            results.append(_quietly(episode, verbose, seed))
+            results.append(_quietly(episode, verbose, job, seed))
             tick(len(results) - 1, results[-1])
         return results, None
-    return map_in_order(partial(_on_worker, episode, verbose), seeds, workers=workers, scheduler=scheduler,
-                        what="parallel episodes", name=lambda seed: f"episode of seed {seed}",
-                        progress=tick, verbose=verbose)
+    return map_in_order(partial(_on_worker, episode, verbose, job), seeds, workers=workers,
+                        scheduler=scheduler, what="parallel episodes",
+                        name=lambda seed: f"episode of seed {seed}", progress=tick, verbose=verbose)
 
 
 def fresh(value):

@@ -33,7 +33,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from functools import partial
 
 import numpy as np
 
@@ -1043,7 +1042,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     job = _Evaluation(task=task, sources=sources, groups=groups, order=order, horizon=horizon, robot=robot,
                       placement=placement, method=method, random_state=random_state, paths=paths)
     # each episode builds its own environment from its seed: the same rows here and on any worker
-    results, address = run_episodes(partial(_evaluate_episode, job), [int(seed) + k for k in range(episodes)],
+    results, address = run_episodes(_evaluate_episode, job, [int(seed) + k for k in range(episodes)],
                                     workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
     rows = [row for row, _ in results]
     timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments")}
