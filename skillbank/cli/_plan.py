@@ -102,6 +102,10 @@ def _plan(args) -> int:
     if args.scene.startswith("robosuite:"):
         return _plan_physics(args)
     args.scene = Path(args.scene)
+    if args.workers is not None or args.scheduler is not None:  # the episodes of a robosuite scene only
+        given = "workers" if args.workers is not None else "scheduler"
+        raise ValueError(f"--{given}: runs the episodes of a robosuite scene (--scene robosuite:TASK "
+                         "--simulate) in parallel; leave it out")
     from .. import io  # the writers, only when a result is written
     from ..planning import load_scene, plan_task, write_pddl  # the planner's layers, when a plan runs
     from ..store import open_store  # the store, when a plan runs (not for --help)

@@ -183,6 +183,15 @@ def test_a_negative_worker_count_is_a_usage_error(lift, command, capsys):
     assert err.count("\n") == 1 and "argument --workers: expected an integer >= 0, got '-1'" in err
 
 
+def test_a_plan_of_a_scene_file_has_no_episodes_to_share(lift, tmp_path):
+    scene = tmp_path / "scene.json"
+    scene.write_text("{}")
+    code, out, err = run("plan", lift, "--scene", scene, "--workers", "2")
+    assert code == 2 and out == ""
+    assert err == ("skillbank plan: error: --workers: runs the episodes of a robosuite scene (--scene "
+                   "robosuite:TASK --simulate) in parallel; leave it out\n")
+
+
 def test_bad_arguments_are_value_errors(lift):
     with pytest.raises(ValueError, match=r"^workers: expected an integer > 0, got 0$"):
         evaluate(lift, "robosuite:Lift", workers=0)
