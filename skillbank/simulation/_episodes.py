@@ -64,12 +64,14 @@ def _quietly(episode, verbose, job, seed):
         return episode(job, seed)
 
 
-def _on_worker(episode, verbose, job, seed):
-    """A Dask task: one episode; the worker's stdout (shared with the command that started the cluster,
-    whose report it is) goes to stderr, whatever writes to it, Python or C."""
-    with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
-        sys.stdout.flush()
-        os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+def _on_worker(episode, verbose, home, job, seed):
+    """A Dask task: one episode; a worker's stdout (shared with the command that started the cluster,
+    whose report it is) goes to stderr, whatever writes to it, Python or C. A worker thread in the
+    process ``home`` that asked for the episodes (a cluster of threads) leaves its stdout alone."""
+    if os.getpid() != home:
+        with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
+            sys.stdout.flush()
+            os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
     return _quietly(episode, verbose, job, seed)
 
 
@@ -123,7 +125,7 @@ def run_episodes(episode, job, seeds, *, workers=None, scheduler=None, progress=
             results.append(_quietly(episode, verbose, job, seed))
             tick(len(results) - 1, results[-1])
         return results, None
-    return map_in_order(partial(_on_worker, episode, verbose, job), seeds, workers=workers,
+    return map_in_order(partial(_on_worker, episode, verbose, os.getpid(), job), seeds, workers=workers,
                         scheduler=scheduler, what="parallel episodes",
                         name=lambda seed: f"episode of seed {seed}", progress=tick, verbose=verbose)
 
