@@ -59,10 +59,9 @@ def serial(lift):
 
 @pytest.fixture(scope="module")
 def dask_cluster():
-    # a worker that dies once fails its task: the test of a dead worker needs no retries; and a worker
-    # holds one task at a time (as --workers makes them), so the task that killed it is the one blamed
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                          "distributed.scheduler.worker-saturation": 1.0}):
+    # a worker that dies once fails its task: the test of a dead worker needs no retries (the episodes
+    # send a worker only the task it runs, so the task that killed it is the one blamed)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                            dashboard_address=":0", silence_logs=logging.ERROR)
     try:
