@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._options import show_progress
+from ._options import add_episode_options, parallel_params, show_progress
 
 __all__ = ["add_parser", "run"]
 
@@ -64,6 +64,7 @@ def add_parser(sub):
         c.add_argument("--json", action="store_true",
                        help="print robot, recorded_on, notes, episodes, successes, success_rate, interval, "
                             "failures, per_episode as JSON")
+        add_episode_options(c)  # --workers, --scheduler, -v: the episodes on Dask
         c.set_defaults(func=_composition)
     return p
 
@@ -116,8 +117,10 @@ def _composition(args) -> int:
     # the whole stack, when it runs; every option checked before anything is recorded
     from ..experiments import check_options, composition_experiment
 
+    parallel = parallel_params(args)
     check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                  method=args.method, replan=args.replan, robot=args.robot, record_robot=args.record_robot)
+                  method=args.method, replan=args.replan, robot=args.robot, record_robot=args.record_robot,
+                  **parallel)
 
     progress = None
     if show_progress(args):
@@ -131,7 +134,8 @@ def _composition(args) -> int:
             bars[stage].update(done - bars[stage].n)
     report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
                                     method=args.method, replan=args.replan, progress=progress,
-                                    robot=args.robot, record_robot=args.record_robot)
+                                    robot=args.robot, record_robot=args.record_robot,
+                                    verbose=args.verbose, **parallel)
     if args.json:
         print(json.dumps(report, allow_nan=False))
         return 0

@@ -31,7 +31,8 @@ __all__ = [
     "add_repair_option", "add_reader_options", "reader_options",
     "add_pose_of_option", "show_progress", "check_folder",
     "add_execution_options",
-    "execution_params", "add_parallel_options", "parallel_params", "SCHEDULER_VARIABLE", "add_robot_options",
+    "execution_params", "add_parallel_options", "add_episode_options", "parallel_params",
+    "SCHEDULER_VARIABLE", "add_robot_options",
     "robot_params", "add_export_options", "export_params",
 ]
 
@@ -129,16 +130,40 @@ def _workers(value: str) -> int:
     return number
 
 
-def add_parallel_options(p) -> None:
-    """``--workers`` and ``--scheduler``: prepare inputs on a Dask cluster (see :func:`parallel_params`)."""
-    g = p.add_argument_group("parallel, on Dask (pip install 'skillbank[dask]'; see docs/scaling.md)")
+def add_parallel_options(p, *, work: str = "read and segment",
+                         here: str = "writing here (with --keep-going, in transactions of 50 demonstrations)",
+                         there: str = "whose workers must see the files",
+                         doc: str = "docs/scaling.md"):
+    """``--workers`` and ``--scheduler``: do ``work`` on a Dask cluster (see :func:`parallel_params`).
+
+    ``here`` says what this process does meanwhile, ``there`` what an
+    existing cluster needs, ``doc`` where the options are explained: the
+    one wording of the options for every command that has them.
+    """
+    g = p.add_argument_group(f"parallel, on Dask (pip install 'skillbank[dask]'; see {doc})")
     g.add_argument("--workers", type=_workers, default=None, metavar="N",
-                   help="read and segment on a new local Dask cluster of N worker processes, writing here "
-                        "(with --keep-going, in transactions of 50 demonstrations); 0: in this process, "
-                        f"ignoring ${SCHEDULER_VARIABLE}")
+                   help=f"{work} on a new local Dask cluster of N worker processes (at most 2 per core, or "
+                        f"$SKILLBANK_MAX_WORKERS), {here}; 0: in this process, ignoring "
+                        f"${SCHEDULER_VARIABLE}")
     g.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
-                   help="read and segment on an existing Dask cluster, whose workers must see the files "
-                        f"(default: ${SCHEDULER_VARIABLE} when set and --workers is not given)")
+                   help=f"{work} on an existing Dask cluster, {there} (default: ${SCHEDULER_VARIABLE} when "
+                        "set and --workers is not given)")
+    return g
+
+
+def add_episode_options(p) -> None:
+    """``--workers``, ``--scheduler`` and ``-v``: robosuite episodes in parallel, as a parallel add's files.
+
+    Each episode builds its own environment from its seed, so the report is
+    the one a run in this process gives, episode for episode, in seed order.
+    """
+    g = add_parallel_options(p, work="run the episodes",
+                             here="each in its own environment from its seed; the report is the one this "
+                                  "process gives, in seed order",
+                             there="whose workers have skillbank[sim] installed", doc="docs/simulation.md")
+    g.add_argument("-v", "--verbose", action="store_true",
+                   help="let robosuite's, MuJoCo's and Dask's log lines through (off by default, in the "
+                        "workers too)")
 
 
 def parallel_params(args, environ=None) -> dict:
@@ -156,7 +181,7 @@ def parallel_params(args, environ=None) -> dict:
     workers, scheduler = args.workers, args.scheduler
     if workers == 0:
         if scheduler is not None:
-            raise ValueError(f"workers: --workers 0 adds in this process, --scheduler on a cluster: give "
+            raise ValueError(f"workers: --workers 0 works in this process, --scheduler on a cluster: give "
                              f"one, got --workers 0 and --scheduler {scheduler!r}")
         return {"workers": None, "scheduler": None}
     if workers is None and scheduler is None:

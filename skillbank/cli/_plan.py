@@ -13,10 +13,12 @@ from ._library import check_robot, output_format, print_execution
 from ._library_location import _DB_READ, _location, _target
 from ._library_view import check_view, write_library_view
 from ._options import (
+    add_episode_options,
     add_export_options,
     add_robot_options,
     check_folder,
     export_params,
+    parallel_params,
     robot_params,
     show_progress,
 )
@@ -98,6 +100,7 @@ def add_parser(sub):
                    help="widen every object's x and y placement range to +-HALF_WIDTH metres")
     g.add_argument("--disturb", default=None, metavar="K:OBJECT:X,Y,Z",
                    help="after step K, put OBJECT at X,Y,Z (m): the world changing behind the plan's back")
+    add_episode_options(p)  # --workers, --scheduler, -v: the robosuite episodes on Dask
     p.set_defaults(func=_plan)
     return p
 
@@ -106,6 +109,10 @@ def _plan(args) -> int:
     if args.scene.startswith("robosuite:"):
         return _plan_physics(args)
     args.scene = Path(args.scene)
+    if args.workers is not None or args.scheduler is not None:  # the episodes of a robosuite scene only
+        given = "workers" if args.workers is not None else "scheduler"
+        raise ValueError(f"--{given}: runs the episodes of a robosuite scene (--scene robosuite:TASK "
+                         "--simulate) in parallel; leave it out")
     from .. import io  # the writers, only when a result is written
     from ..planning import load_scene, plan_task, write_pddl  # the planner's layers, when a plan runs
     from ..store import open_store  # the store, when a plan runs (not for --help)
@@ -323,7 +330,8 @@ def _plan_physics(args) -> int:
     report = execute_plan(_target(args.db), args.scene, episodes=args.episodes,
                           seed=0 if args.seed is None else args.seed, goal=goal, method=args.method,
                           replan=args.replan, placement=args.placement, disturb=disturb, search=args.search,
-                          paths=args.plot is not None, progress=progress, robot=robot)
+                          paths=args.plot is not None, progress=progress, robot=robot, verbose=args.verbose,
+                          **parallel_params(args))
     written = []
     if args.plot is not None:
         from ..plotting import plot_composed  # matplotlib only when a figure is asked for

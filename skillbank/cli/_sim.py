@@ -2,7 +2,8 @@
 layout; ``evaluate`` runs a library's skills in new scenes and counts the environment's successes.
 
 Exit status: ``record`` 0 when the file was written, 2 on bad input or when too few episodes succeeded
-(nothing is written then); ``evaluate`` 0 when it ran (whatever the success rate), 2 on bad input.
+(nothing is written then); ``evaluate`` 0 when it ran (whatever the success rate), 2 on bad input or when
+an episode's Dask workers all died (``--workers``, ``--scheduler``: no report then).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ._library_location import _DB_READ, _location, _target
-from ._options import check_folder, show_progress
+from ._options import add_episode_options, check_folder, parallel_params, show_progress
 
 __all__ = ["add_parser"]
 
@@ -80,7 +81,8 @@ def add_parser(sub):
                         "order in which their parts run, by object name (default: by name)")
     e.add_argument("--json", action="store_true",
                    help="print env, robot, recorded_on, notes, episodes, successes, success_rate, interval "
-                        "and per_episode as JSON")
+                        "and per_episode as JSON (with --workers or --scheduler, scheduler too)")
+    add_episode_options(e)  # --workers, --scheduler, -v
     e.set_defaults(func=_evaluate)
     return p
 
@@ -98,7 +100,8 @@ def _evaluate(args) -> int:
 
         report = evaluate(_target(args.db), args.env, episodes=args.episodes, seed=args.seed,
                           placement=args.placement, method=args.method, horizon=args.horizon,
-                          order=args.order, progress=tick, robot=args.robot)
+                          order=args.order, progress=tick, robot=args.robot, verbose=args.verbose,
+                          **parallel_params(args))
     if args.json:
         print(json.dumps(report))
         return 0

@@ -23,11 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._cluster_address import probe_scheduler
 from ..core._validation import check_positive
 from ..pipeline import Library
 from ..selection import METHODS
 from ..simulation import BASELINES, binomial_interval, execute_plan, record
 from ..simulation._compose import tally
+from ..simulation._episodes import check_episode_cluster
 from ..simulation._evaluate import DRIVEN_ROBOT
 from ..simulation._robosuite import robosuite_robot
 from ..simulation._stack3 import CUBES
@@ -51,7 +53,7 @@ LAST_SEED = 2 ** 32 - 1
 
 
 def check_options(name: str, *, episodes, seed, demos, method, replan=False, robot=DRIVEN_ROBOT,
-                  record_robot=DRIVEN_ROBOT) -> dict:
+                  record_robot=DRIVEN_ROBOT, workers=None, scheduler=None) -> dict:
     """Every option of a composition experiment checked, before anything is recorded; the checked values.
 
     Each is a one-line ValueError naming its own option (``demos``, not ``episodes``), so that a bad
@@ -84,8 +86,11 @@ def check_options(name: str, *, episodes, seed, demos, method, replan=False, rob
         record_robot = robosuite_robot(record_robot)
     except ValueError as e:  # the same rule, named by its own option
         raise ValueError(str(e).replace("robot:", "record_robot:", 1)) from None
+    workers = check_episode_cluster(workers, scheduler)
+    if isinstance(scheduler, str):
+        probe_scheduler(scheduler)  # a cluster out of reach is found before the recordings, not after
     return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan,
-            "robot": robot, "record_robot": record_robot}
+            "robot": robot, "record_robot": record_robot, "workers": workers, "scheduler": scheduler}
 
 
 def _label_one_each(lib) -> dict:
@@ -109,10 +114,15 @@ def _goal(rng) -> list:
     return [f"(on {upper} {lower})" for upper, lower in zip(order[:-1], order[1:], strict=True)]
 
 
+def _tower_goal(seed) -> list:
+    """The tower an episode of ``stack3`` asks for, drawn from the episode's seed (on any worker alike)."""
+    return _goal(np.random.default_rng(seed))
+
+
 def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demos: int = 10,
                            method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
-                           progress=None, robot: str = DRIVEN_ROBOT,
-                           record_robot: str = DRIVEN_ROBOT) -> dict:
+                           progress=None, robot: str = DRIVEN_ROBOT, record_robot: str = DRIVEN_ROBOT,
+                           workers=None, scheduler=None, verbose: bool = False) -> dict:
     """Record, build, label, describe, plan and execute: the whole loop of a composed task.
 
     Parameters
@@ -141,6 +151,10 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         robosuite's arm the demonstrations are recorded on (:func:`~skillbank.simulation.record`'s).
         When it is not ``robot``, the skills run on another arm than showed them, through the grip
         site's pose (a note says so).
+    workers, scheduler, verbose
+        The episodes on Dask (:func:`~skillbank.simulation.execute_plan`): a new local cluster of
+        ``workers`` processes or an existing one; the rows are those of a run in this process, in seed
+        order. Checked (and the scheduler reached) before anything is recorded.
 
     Returns
     -------
@@ -164,7 +178,7 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     ValueError: experiment: expected one of ['stack3', 'unload'], got 'dishes'
     """
     checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan,
-                            robot=robot, record_robot=record_robot)
+                            robot=robot, record_robot=record_robot, workers=workers, scheduler=scheduler)
     episodes, seed, demos = checked["episodes"], checked["seed"], checked["demos"]
     robot, record_robot = checked["robot"], checked["record_robot"]
     tasks, scene = COMPOSITIONS[name]
@@ -185,20 +199,13 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         library = {"demonstrations": summary["n_demonstrations"], "primitives": len(summary["primitives"]),
                    "skills": len(summary["skills"])}
         first = int(seed) + EPISODE_SEEDS
-        if name == "stack3":  # the tower's order is drawn per episode: a goal no demonstration showed
-            rows = []
-            for k in range(episodes):
-                goal = _goal(np.random.default_rng(first + k))
-                report = execute_plan(db, scene, episodes=1, seed=first + k, goal=goal, method=method,
-                                      replan=replan, paths=paths, robot=robot)
-                rows += report["per_episode"]
-                if progress is not None:
-                    progress("episodes", k + 1, episodes)
-        else:
-            report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
-                                  paths=paths, robot=robot, progress=None if progress is None else
-                                  (lambda done, _: progress("episodes", done, episodes)))
-            rows = report["per_episode"]
+        # stack3: the tower's order is drawn per episode from its seed, a goal no demonstration showed
+        report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
+                              goal=_tower_goal if name == "stack3" else None, paths=paths, robot=robot,
+                              workers=checked["workers"], scheduler=scheduler, verbose=verbose,
+                              progress=None if progress is None else
+                              (lambda done, _: progress("episodes", done, episodes)))
+        rows = report["per_episode"]
     successes, failures = tally(rows)
     # every episode's report says the same of the arms (one library, one arm): the last one's is kept
     return {"experiment": name, "scene": scene, "robot": report["robot"],
@@ -206,4 +213,5 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
             "seed": int(seed), "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
-            "per_episode": rows, "labelled": labelled, "library": library}
+            "per_episode": rows, "labelled": labelled, "library": library,
+            **({"scheduler": report["scheduler"]} if "scheduler" in report else {})}

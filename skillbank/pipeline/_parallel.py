@@ -38,24 +38,22 @@ system).
 
 from __future__ import annotations
 
-import contextlib
-import logging
 from pathlib import Path
 
 from tqdm import tqdm
 
 from ..clustering import nearest_centre, primitive_features
 from ..core import Demonstration, __version__
+from ..core._dask import DIED, INSTALL, check_parallel, dask_client
+from ..core._dask import distributed as dask_distributed
 from ..core._validation import check_positive
 from ..io import FormatError, load, load_all
 from ..segmentation import MultimodalSegmenter
 from ..selection import acted_on, object_streams
-from ._cluster_address import check_workers, connect_timeout, probe_scheduler
 
 __all__ = ["INSTALL", "check_demo", "file_reason", "read_file", "bounds", "assignment", "prepare",
            "prepare_file", "prepare_files", "files_per_task", "distributed", "add_in_parallel", "BATCH_SIZE"]
 
-INSTALL = "pip install 'skillbank[dask]'"
 #: Demonstrations written per transaction by a parallel add with keep_going (whole files).
 BATCH_SIZE = 50
 
@@ -248,43 +246,7 @@ def files_per_task(n_files: int, n_threads: int) -> int:
 
 def distributed():
     """The ``distributed`` module; a one-line ImportError saying what to install when it is missing."""
-    try:
-        import distributed as module  # optional: the dask extra, only for parallel adds
-    except ImportError:
-        raise ImportError(f"parallel adds (workers, scheduler) need Dask: {INSTALL}") from None
-    return module
-
-
-@contextlib.contextmanager
-def _client(dist, workers, scheduler):
-    """A ``distributed.Client`` on a new local cluster of ``workers`` processes, or on ``scheduler``."""
-    if isinstance(scheduler, dist.Client):
-        yield scheduler
-        return
-    if scheduler is not None:
-        probe_scheduler(scheduler)  # fails fast, before Dask's client waits or misreads another protocol
-        try:
-            client = dist.Client(scheduler, set_as_default=False, timeout=connect_timeout())
-        except Exception as exc:  # whatever the peer did: one line, never Dask's traceback
-            raise OSError(f"scheduler: cannot reach the Dask scheduler at {scheduler!r}: "
-                          f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
-        with client:
-            yield client
-        return
-    # One single-threaded process per worker: segmenting holds the GIL, so threads would not help.
-    # A worker holds one task at a time, so one that dies takes no other file down with it.
-    with dask_config().set({"distributed.scheduler.worker-saturation": 1.0}):
-        cluster = dist.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                    dashboard_address=":0", silence_logs=logging.ERROR)
-    with cluster, dist.Client(cluster, set_as_default=False) as client:
-        yield client
-
-
-def dask_config():
-    """``dask.config`` (installed with ``distributed``)."""
-    import dask.config  # optional: the dask extra, only for parallel adds
-
-    return dask.config
+    return dask_distributed("parallel adds")
 
 
 def add_in_parallel(lib, paths, *, read: dict, options: dict, keep_going: bool, progress: bool,
@@ -297,11 +259,7 @@ def add_in_parallel(lib, paths, *, read: dict, options: dict, keep_going: bool, 
     threads (at least 4) are in flight. Returns the report of
     :meth:`Library.add_files`, with ``"scheduler"``: the cluster's address.
     """
-    if workers is not None and scheduler is not None:
-        raise ValueError(f"workers: give workers (a new local cluster) or scheduler (an existing one), not "
-                         f"both; got workers={workers!r} and scheduler={scheduler!r}")
-    if workers is not None:
-        workers = check_workers(check_positive(workers, name="workers", integer=True))
+    workers = check_parallel(workers, scheduler)
     batch_size = check_positive(batch_size, name="batch_size", integer=True)
     if chunk is not None:
         chunk = check_positive(chunk, name="chunk", integer=True)
@@ -309,7 +267,7 @@ def add_in_parallel(lib, paths, *, read: dict, options: dict, keep_going: bool, 
     snapshot = lib._snapshot() if options["assign"] == "incremental" else None
     # the absolute path for a worker in another folder; the source recorded is the path as given
     files = [(str(Path(p).absolute()), str(p)) for p in paths]
-    with _client(dist, workers, scheduler) as client:
+    with dask_client(dist, workers, scheduler) as client:
         threads = sum(client.nthreads().values())
         job = _Job(lib, client, dist, files, (read, options, snapshot), keep_going=keep_going,
                    batch_size=batch_size, chunk=chunk or files_per_task(len(files), threads),
@@ -360,8 +318,7 @@ class _Job:
                 for k in range(first, first + count):
                     self.submit(k, 1)
                 return
-            results = [(None, "the Dask worker preparing it died, and again on every retry (a crash, or "
-                              "more memory than a worker has)")]
+            results = [(None, DIED.format(doing="preparing it"))]
         finally:
             future.release()
         self.done.update(zip(range(first, first + count), results, strict=True))

@@ -44,6 +44,7 @@ from ..planning._binding import check_binding
 from ..planning._pddl import atoms_of
 from ..selection import METHODS
 from ..store import open_store
+from ._episodes import check_episode_cluster, fresh, run_episodes
 from ._evaluate import (
     BASELINES,
     DRIVEN_ROBOT,
@@ -468,7 +469,8 @@ def _plan(domain, world, facts, goal, search, name):
 
 def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=None, method: str = "lte",
                  replan: bool = False, horizon: int = 600, placement=None, disturb=None, search="satisficing",
-                 random_state=None, paths: bool = False, progress=None, robot: str = DRIVEN_ROBOT) -> dict:
+                 random_state=None, paths: bool = False, progress=None, robot: str = DRIVEN_ROBOT,
+                 workers=None, scheduler=None, verbose: bool = False) -> dict:
     """Plan a task over the library's described skills and carry it out in ``episodes`` robosuite scenes.
 
     Parameters
@@ -480,9 +482,10 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         ``robosuite:TASK``, TASK a key of :data:`COMPOSED`.
     episodes : int, default=1
         Scenes; episode ``k`` is placed by robosuite's sampler from seed ``seed + k``.
-    goal : list of str, optional
+    goal : list of str or callable, optional
         The goal's facts, e.g. ``["(on cubeB cubeA)", "(on cubeA cubeC)"]``; default the task's (every
-        object in its place; the cubes A on B on C).
+        object in its place; the cubes A on B on C). A function ``goal(seed)`` gives each episode its own
+        (a function of a module, where the episodes run on Dask workers).
     method : str, default="lte"
         How each segment is adapted (:data:`skillbank.selection.METHODS`), or ``"replay"``: the phases'
         recorded actions, open loop, in the planned order (the baseline), or ``"rigid"``.
@@ -505,6 +508,11 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         :func:`~skillbank.simulation.evaluate`'s: the library's poses are of its recording arm's grip
         site, taken as this arm's (a note says so when it is another arm; a pose of an unknown point
         recorded on another arm is refused before anything runs).
+    progress : callable, optional
+        ``progress(done, successes)`` after each episode.
+    workers, scheduler, verbose
+        The episodes on Dask, as :func:`~skillbank.simulation.evaluate` runs them: each builds its own
+        environment from its seed, and the rows are those of a run in this process, in seed order.
 
     Returns
     -------
@@ -517,7 +525,8 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         (per step: ``action``, ``args``, ``planned`` effect, ``observed`` facts of its predicates and
         the poses of its objects, ``source`` and ``primitives``, ``ok``, and for a failure ``reason``
         and ``detail``), ``facts`` (observed at the start and at the end), ``objects`` (at rest,
-        before the first step) and, for a failure, ``failure``.
+        before the first step) and, for a failure, ``failure``. With ``workers`` or ``scheduler``,
+        ``"scheduler"``: the address of the cluster used.
     """
     name, spec = _task(scene)
     episodes = check_positive(episodes, name="episodes", integer=True)
@@ -528,11 +537,13 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
     if placement is not None:
         placement = check_positive(placement, name="placement")
-    if goal is not None and (isinstance(goal, str) or not all(isinstance(g, str) for g in goal) or not goal):
+    if goal is not None and not callable(goal) and (isinstance(goal, str) or not goal
+                                                    or not all(isinstance(g, str) for g in goal)):
         raise ValueError(f"goal: expected a list of facts such as '(on cubeA cubeB)', got {goal!r}")
     if disturb is not None:
         disturb = _check_disturb(disturb)
     robot = robosuite_robot(robot)
+    workers = check_episode_cluster(workers, scheduler)  # before the library is read, and no process starts
     store = open_store(library, create=False)
     try:
         domain = skill_domain(store)
@@ -553,22 +564,14 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         raise ValueError(f"library: no phase of a demonstration (a reach, or a carry and its release) is "
                          f"labelled {missing}; phases are labelled {named}. Label a primitive of each skill "
                          "(skillbank library label DB --primitive ID NAME)")
-    suite = import_robosuite()
-    if spec.env == "Stack3":
-        stack3_class()
-    environment = _make(suite, spec.env, seed, 10 ** 6, robot)
-    if placement is not None:
-        _widen(environment, placement)
-    rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0, "plan": 0.0}
-    try:
-        for k in range(episodes):
-            row = _episode(environment, spec, name, domain, bindings, phases, int(seed) + k, goal, method,
-                           replan, horizon, disturb, search, random_state, paths, timings)
-            rows.append(row)
-            if progress is not None:
-                progress(k + 1, sum(r["success"] for r in rows))
-    finally:
-        environment.close()
+    job = _PlanJob(spec=spec, name=name, domain=domain, bindings=bindings, phases=phases, goal=goal,
+                   method=method, replan=replan, horizon=horizon, placement=placement, disturb=disturb,
+                   search=search, random_state=random_state, paths=paths, robot=robot)
+    # each episode builds its own environment from its seed: the same rows here and on any worker
+    results, address = run_episodes(_plan_episode, job, [int(seed) + k for k in range(episodes)],
+                                    workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
+    rows = [row for row, _ in results]
+    timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments", "plan")}
     successes, failures = tally(rows)
     return {"scene": scene, **arm, "method": method, "seed": int(seed),
             "placement": placement, "episodes": episodes, "successes": successes,
@@ -576,7 +579,48 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
             "timing": {"plan_seconds": timings["plan"], "adapt_seconds": timings["adapt"],
                        "driven_seconds": timings["driven"], "segments": timings["segments"]},
-            "per_episode": rows}
+            "per_episode": rows, **({} if address is None else {"scheduler": address})}
+
+
+@dataclass(frozen=True)
+class _PlanJob:
+    """What every episode of :func:`execute_plan` needs, sent to the workers as it is."""
+
+    spec: Composed
+    name: str
+    domain: object
+    bindings: dict
+    phases: list
+    goal: object  # the goal's facts, a function of the episode's seed that gives them, or None
+    method: str
+    replan: bool
+    horizon: int
+    placement: float | None
+    disturb: dict | None
+    search: str
+    random_state: object
+    paths: bool
+    robot: str = DRIVEN_ROBOT  # robosuite's arm that carries the plan out
+
+
+def _plan_episode(job, seed):
+    """``(row, timings)`` of one episode of :func:`execute_plan`, in an environment of its own made from
+    ``seed``; nothing outlives the call (the environment is closed, the random state is a copy)."""
+    suite = import_robosuite()
+    if job.spec.env == "Stack3":
+        stack3_class()
+    environment = _make(suite, job.spec.env, seed, 10 ** 6, job.robot)
+    timings = {"adapt": 0.0, "driven": 0.0, "segments": 0, "plan": 0.0}
+    goal = job.goal(seed) if callable(job.goal) else job.goal
+    try:
+        if job.placement is not None:
+            _widen(environment, job.placement)
+        row = _episode(environment, job.spec, job.name, job.domain, job.bindings, job.phases, seed, goal,
+                       job.method, job.replan, job.horizon, job.disturb, job.search, fresh(job.random_state),
+                       job.paths, timings)
+    finally:
+        environment.close()
+    return row, timings
 
 
 def _check_disturb(disturb):

@@ -51,6 +51,7 @@ from ..core._validation import check_positive
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
 from ._arms import check_pads, pose_points
+from ._episodes import check_episode_cluster, fresh, run_episodes
 from ._robosuite import (
     CONTROL_FREQ,
     _box,
@@ -940,9 +941,94 @@ def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
     return env
 
 
+@dataclass(frozen=True)
+class _Evaluation:
+    """What every episode of :func:`evaluate` needs, sent to the workers as it is."""
+
+    task: str
+    sources: list
+    groups: dict
+    order: list
+    horizon: int
+    robot: str
+    placement: float | None
+    method: str
+    random_state: object
+    paths: bool
+
+
+def _evaluate_episode(job, seed):
+    """``(row, timings)`` of one episode of :func:`evaluate`, in an environment of its own made from ``seed``.
+
+    Nothing outlives the call: the environment is closed, and the random state is the episode's own copy.
+    """
+    groups, horizon, paths = job.groups, job.horizon, job.paths
+    random_state = fresh(job.random_state)
+    timings = {"adapt": 0.0, "driven": 0.0, "segments": 0}
+    suite = import_robosuite()
+    environment = _make(suite, job.task, seed, horizon, job.robot)
+    try:
+        if job.placement is not None:
+            _widen(environment, job.placement)
+        _reseed(environment, seed)
+        episode = _Episode(environment, environment.reset(), horizon, trace=paths)
+        # the parts whose objects the task has: one object's pick and place of a demonstration that
+        # moved several runs alone in a task of that object (PickPlaceCan from PickPlace)
+        runnable = [part for part in job.order if all(f"{o}_pos" in episode.obs for o in part)]
+        if not runnable:
+            missing = sorted({o for part in job.order for o in part if f"{o}_pos" not in episode.obs})
+            raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
+                             "evaluate the library in the task it was recorded in")
+        objects = sorted({o for part in runnable for o in part})
+        episode.rest(objects)
+        episode.fingers = _fingers(environment, episode.obs)
+        scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in objects}
+        # one part of the task after the other (one, unless the library's demonstrations each
+        # move other objects), each from the nearest of its sources in the state the last one left
+        chain, failure = [], None
+        for part in runnable:
+            source = _nearest(groups[part], episode.obs, episode.fingers)
+            failure = _run_segments(episode, source.segments, source.actions, job.method, random_state,
+                                    timings)
+            timings["segments"] += len(source.segments)
+            if failure is not None:
+                failure = (len(chain) + failure[0], *failure[1:])
+            chain.extend((source, seg) for seg in source.segments)
+            if failure is not None or episode.over:
+                break
+        for _ in range(SETTLE):  # a last second for the objects to come to rest
+            if episode.over:
+                break
+            episode.act(np.r_[np.zeros(6), episode.driver.grip])
+    finally:
+        environment.close()
+    used = list(dict.fromkeys(src.id for src, _ in chain))
+    row = {"seed": int(seed), "success": episode.success, "steps": episode.steps,
+           "source": used[0], "sources": used, "objects": scene,
+           "left_out": sorted({o for part in job.order if part not in runnable for o in part})}
+    row["arm_contact"] = None if episode.contact is None else \
+        {"segment": episode.contact[0], "detail": episode.contact[1]}
+    if paths:
+        row["path"] = np.round(np.array(episode.path), 6).tolist()
+    if not episode.success:
+        if failure is None:
+            last = len(chain) - 1
+            failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
+                       (last, "misplaced", "the environment's success check fails"))
+        i, reason, detail = failure
+        if episode.contact is not None and episode.contact[0] <= i and reason != "timeout":
+            # an arm link hit something on the way to this failure: that is what went wrong first
+            reason, detail = "collision", (f"{episode.contact[1]} in segment {episode.contact[0]}; "
+                                           f"then {reason}: {detail}")
+        row["failure"] = {"segment": i, "primitive": chain[i][1].primitive.id,
+                          "source": chain[i][0].id, "reason": reason, "detail": detail}
+    return row, timings
+
+
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
              horizon: int | None = None, order=None, random_state=None, paths: bool = False,
-             progress=None, robot: str = DRIVEN_ROBOT) -> dict:
+             progress=None, robot: str = DRIVEN_ROBOT, workers=None, scheduler=None,
+             verbose: bool = False) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -981,6 +1067,17 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         library's poses are of its recorded gripper's grip site, which robosuite's observations and
         controller speak of on every arm: the skills run on another arm through the tool's pose (a note
         says so when the library was recorded on another).
+    workers : int, optional
+        Run the episodes on a new local Dask cluster of this many worker processes (at most 2 per core,
+        or ``SKILLBANK_MAX_WORKERS``; the extra ``skillbank[dask]``).
+    scheduler : str or distributed.Client, optional
+        Run them on an existing Dask cluster, ``tcp://HOST:PORT``, whose workers have ``skillbank[sim]``.
+        Each episode builds its own environment from its seed, wherever it runs: the rows are those of a
+        run in this process, in seed order (``random_state``: each episode starts from its own copy).
+        A worker that dies is replaced and its episode run again; an episode whose workers all died is
+        a ValueError naming its seed, and no report is made.
+    verbose : bool, default=False
+        Let robosuite's log (and a local cluster's) through, on stderr.
 
     Returns
     -------
@@ -994,7 +1091,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         ``source`` (the demonstration it followed; ``sources``, one per part), ``objects`` (each
         object's position at rest before the first segment), ``arm_contact`` and, for a failure,
         ``failure`` with the ``segment`` (from 0, counted along every part), its ``primitive`` and
-        ``source`` ids, the ``reason`` (a key of :data:`REASONS`) and a ``detail``.
+        ``source`` ids, the ``reason`` (a key of :data:`REASONS`) and a ``detail``. With ``workers`` or
+        ``scheduler``, ``"scheduler"``: the address of the cluster used.
     """
     if not isinstance(env, str) or not env.startswith("robosuite:") or not env.split(":", 1)[1]:
         raise ValueError(f"env: expected robosuite:TASK, got {env!r}")
@@ -1009,6 +1107,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     if method not in METHODS and method not in BASELINES:
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
     robot = robosuite_robot(robot)
+    workers = check_episode_cluster(workers, scheduler)  # before the library is read, and no process starts
     store = open_store(library, create=False)
     try:
         sources = _sources(store)
@@ -1022,71 +1121,19 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     order = _order(groups, order)
     if horizon is None:
         horizon = _horizon(groups)
-    suite = import_robosuite()
-    environment = _make(suite, task, seed, horizon, robot)
-    if placement is not None:
-        _widen(environment, placement)
-    rows, timings = [], {"adapt": 0.0, "driven": 0.0, "segments": 0}
-    notes = arm["notes"]
-    try:
-        for k in range(episodes):
-            _reseed(environment, int(seed) + k)
-            episode = _Episode(environment, environment.reset(), horizon, trace=paths)
-            # the parts whose objects the task has: one object's pick and place of a demonstration that
-            # moved several runs alone in a task of that object (PickPlaceCan from PickPlace)
-            runnable = [part for part in order if all(f"{o}_pos" in episode.obs for o in part)]
-            if not runnable:
-                missing = sorted({o for part in order for o in part if f"{o}_pos" not in episode.obs})
-                raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
-                                 "evaluate the library in the task it was recorded in")
-            if k == 0 and len(runnable) < len(order):
-                notes.append(f"the task has no {sorted({o for p in order if p not in runnable for o in p})}: "
-                             f"their parts of the demonstrations are left out")
-            objects = sorted({o for part in runnable for o in part})
-            episode.rest(objects)
-            episode.fingers = _fingers(environment, episode.obs)
-            scene = {o: [round(float(v), 6) for v in episode.obs[f"{o}_pos"]] for o in objects}
-            # one part of the task after the other (one, unless the library's demonstrations each
-            # move other objects), each from the nearest of its sources in the state the last one left
-            chain, failure = [], None
-            for part in runnable:
-                source = _nearest(groups[part], episode.obs, episode.fingers)
-                failure = _run_segments(episode, source.segments, source.actions, method, random_state,
-                                        timings)
-                timings["segments"] += len(source.segments)
-                if failure is not None:
-                    failure = (len(chain) + failure[0], *failure[1:])
-                chain.extend((source, seg) for seg in source.segments)
-                if failure is not None or episode.over:
-                    break
-            for _ in range(SETTLE):  # a last second for the objects to come to rest
-                if episode.over:
-                    break
-                episode.act(np.r_[np.zeros(6), episode.driver.grip])
-            used = list(dict.fromkeys(src.id for src, _ in chain))
-            row = {"seed": int(seed) + k, "success": episode.success, "steps": episode.steps,
-                   "source": used[0], "sources": used, "objects": scene}
-            row["arm_contact"] = None if episode.contact is None else \
-                {"segment": episode.contact[0], "detail": episode.contact[1]}
-            if paths:
-                row["path"] = np.round(np.array(episode.path), 6).tolist()
-            if not episode.success:
-                if failure is None:
-                    last = len(chain) - 1
-                    failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
-                               (last, "misplaced", "the environment's success check fails"))
-                i, reason, detail = failure
-                if episode.contact is not None and episode.contact[0] <= i and reason != "timeout":
-                    # an arm link hit something on the way to this failure: that is what went wrong first
-                    reason, detail = "collision", (f"{episode.contact[1]} in segment {episode.contact[0]}; "
-                                                   f"then {reason}: {detail}")
-                row["failure"] = {"segment": i, "primitive": chain[i][1].primitive.id,
-                                  "source": chain[i][0].id, "reason": reason, "detail": detail}
-            rows.append(row)
-            if progress is not None:
-                progress(k + 1, sum(r["success"] for r in rows))
-    finally:
-        environment.close()
+    job = _Evaluation(task=task, sources=sources, groups=groups, order=order, horizon=horizon, robot=robot,
+                      placement=placement, method=method, random_state=random_state, paths=paths)
+    # each episode builds its own environment from its seed: the same rows here and on any worker
+    results, address = run_episodes(_evaluate_episode, job, [int(seed) + k for k in range(episodes)],
+                                    workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
+    rows = [row for row, _ in results]
+    timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments")}
+    # the parts a task without some of the objects left out (a part of one object of a demonstration of
+    # several, in a task of the others): said once
+    left = sorted({o for row in rows for o in row.pop("left_out", ())})
+    if left:
+        arm = {**arm, "notes": arm["notes"] + [f"the task has no {left}: their parts of the "
+                                               "demonstrations are left out"]}
     successes = sum(r["success"] for r in rows)
     return {"env": env, **arm, "method": method, "seed": int(seed),
             "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
@@ -1094,4 +1141,4 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
             "interval": list(binomial_interval(successes, episodes)),
             "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],
                        "segments": timings["segments"]},
-            "per_episode": rows}
+            "per_episode": rows, **({} if address is None else {"scheduler": address})}

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from skillbank.cli._main import main
-from skillbank.pipeline._cluster_address import (
+from skillbank.core._cluster_address import (
     WORKERS_PER_CORE,
     check_scheduler,
     check_workers,

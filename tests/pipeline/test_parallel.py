@@ -339,7 +339,7 @@ def test_bad_parallel_options(tmp_path, capsys):
         main([*add, "--workers", "-1"])
     assert "argument --workers: expected an integer >= 0, got '-1'" in capsys.readouterr().err
     assert main([*add, "--workers", "0", "--scheduler", "tcp://h:1"]) == 2
-    assert capsys.readouterr().err == ("skillbank library add: error: workers: --workers 0 adds in this "
+    assert capsys.readouterr().err == ("skillbank library add: error: workers: --workers 0 works in this "
                                        "process, --scheduler on a cluster: give one, got --workers 0 and "
                                        "--scheduler 'tcp://h:1'\n")
     assert main([*add, "--workers", "2", "--scheduler", "tcp://h:1"]) == 2

@@ -1,10 +1,10 @@
-"""What a parallel add may ask of the machine and of the network, checked before any process starts.
+"""What parallel work (an add, simulated episodes) may ask of the machine and of the network, checked first.
 
 Two inputs of a few bytes could otherwise cost minutes or gigabytes:
 
 - ``workers``: each local worker is a process (about 100 MB before it reads a
-  file) segmenting on one core, so a thousand of them on two cores only
-  swap. At most :data:`WORKERS_PER_CORE` per core of this machine are
+  file, a few hundred with a robosuite environment) working on one core, so a
+  thousand of them on two cores only swap. At most :data:`WORKERS_PER_CORE` per core of this machine are
   started; ``SKILLBANK_MAX_WORKERS`` raises the bound (a machine whose
   workers wait on a slow file system), and a cluster of several machines is
   reached through ``scheduler`` instead.
@@ -64,7 +64,7 @@ def _positive_variable(name: str, *, integer: bool):
 
 
 def max_workers() -> int:
-    """Local workers an add may start: :data:`WORKERS_PER_CORE` per core, or ``SKILLBANK_MAX_WORKERS``.
+    """Local workers parallel work may start: :data:`WORKERS_PER_CORE` per core, or ``SKILLBANK_MAX_WORKERS``.
 
     Examples
     --------
@@ -86,7 +86,7 @@ def check_workers(workers) -> int:
     if workers > bound:
         raise ValueError(
             f"workers: at most {bound} local worker processes on this machine ({WORKERS_PER_CORE} per core "
-            f"of {_cores()}; each is a process segmenting on one core), got {workers}; set "
+            f"of {_cores()}; each is a process working on one core), got {workers}; set "
             "SKILLBANK_MAX_WORKERS to start more, or give --scheduler for a cluster of several machines")
     return workers
 
