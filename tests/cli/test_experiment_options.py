@@ -58,7 +58,7 @@ def test_the_api_checks_them_first_too(options, match, no_recording, tmp_path):
 def test_good_options_come_back_checked():
     assert check_options("unload", episodes=3, seed=5, demos=2, method="replay") == {
         "episodes": 3, "seed": 5, "demos": 2, "method": "replay", "replan": False, "workers": None,
-        "scheduler": None}
+        "scheduler": None, "robot": "UR5e", "record_robot": "UR5e"}
 
 
 @pytest.mark.parametrize("seed", ["-1", str(2 ** 32)])
