@@ -130,6 +130,7 @@ class _Segment:
     turns_with: bool = False
     #: the scene's object for each of the source's (a skill bound to other objects); absent: the same name
     names: dict = field(default_factory=dict)
+    released: bool = False  # whether it closed the gripper and opened it again by its end (a place)
 
     def scene(self, name):
         """The object of the scene that stands for the source's object ``name``."""
@@ -230,15 +231,29 @@ def _end_heading(demo, relation, turn):
     return _yaw(demo["orientation"][-1]) - (0.0 if ref is None else _yaw(ref))
 
 
-def _candidate_frames(relation):
+def _candidate_frames(relation, released=False):
+    """The frames a segment's goal may be kept in, its relation's own first (kept where the data cannot
+    tell them apart: one demonstration).
+
+    A carry that lets its object go near no other object (``released``) puts it on what the scene holds
+    fixed (a peg, a bin, a place on the table): the world, in which the fixtures stand, comes first. A
+    carry that keeps holding (a lift) is relative to where the object was picked up.
+    """
     if relation is None:
         return [("world",)]
     if not relation.moves_with:
         return [(relation.object, "end"), ("world",)]
-    frames = [(relation.object, "start"), ("world",)]
+    frames = [("world",), (relation.object, "start")] if released else [(relation.object, "start"),
+                                                                         ("world",)]
     if relation.target is not None:
         frames.insert(0, (relation.object, "target"))
     return frames
+
+
+def _released(demo) -> bool:
+    """Whether the segment ``demo`` closed the gripper and opened it by its end (a place)."""
+    commands = np.asarray(demo["actions"][:, 6], float)
+    return bool(commands[-1] <= 0 < commands.max())
 
 
 def _signature(relation):
@@ -261,7 +276,7 @@ def _choose_frames(sources):
             key = (seg.primitive.cluster, _signature(seg.relation))
             groups.setdefault(key, []).append(seg)
     for members in groups.values():
-        frames = _candidate_frames(members[0].relation)
+        frames = _candidate_frames(members[0].relation, members[0].released)
         spread = []
         for frame in frames:
             ends = [_in_frame(m.primitive.demo, m.relation, frame) for m in members]
@@ -344,7 +359,9 @@ def _sources(store):
                       pose_of=demo.metadata.get(POSE_OF))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
-            src.segments.append(_Segment(p, relation, _candidate_frames(relation)[0]))
+            released = _released(p.demo)
+            src.segments.append(_Segment(p, relation, _candidate_frames(relation, released)[0],
+                                         released=released))
         sources.append(src)
     _choose_frames(sources)
     return [part for src in sources for part in _parts(src)]
