@@ -288,6 +288,12 @@ def merge_insignificant(X, labels, n_clusters: int, *, level: float, rng):
     """
     labels = np.asarray(labels).copy()
     alive = list(range(n_clusters))
+    # the test compares separations with spreads, which one scale does not change: taken at unit scale,
+    # points near the float bound (1e99) square without overflowing
+    X = np.asarray(X, dtype=float)
+    scale = float(np.abs(X).max()) if X.size else 0.0
+    if np.isfinite(scale) and scale > 0.0:
+        X = X / scale
 
     def size(c):
         return int(np.count_nonzero(labels == c))

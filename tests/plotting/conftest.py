@@ -104,7 +104,11 @@ def build_view_library(path) -> dict:
         demos.append(_reach(start, goal, bend=0.0 if k < 6 else 0.8, seed=k))
     with Library(path) as lib:
         lib.add_many(demos, segment=False, assign="none")
+        # three pick-and-places, so their pieces are skills of their own (the clustering joins a lone
+        # demonstration's pieces to the nearest larger skill: one demonstration is no skill)
         picked = lib.add(synthetic_multistream(), assign="none")
+        for seed in (1, 2):
+            lib.add(synthetic_multistream(random_state=seed), assign="none")
         lib.cluster()
         straight = lib.primitives(demonstration=1, load=False)[0].cluster
         bowed = lib.primitives(demonstration=7, load=False)[0].cluster

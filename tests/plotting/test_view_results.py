@@ -107,5 +107,6 @@ def test_a_robosuite_scene_takes_no_view(cli, view_library, tmp_path):
     code, out, err = cli("plan", view_library["path"], "--scene", "robosuite:Stack3", "--simulate", "--view",
                          tmp_path / "view")
     assert code == 2 and out == "" and err.count("\n") == 1
-    assert err.startswith("skillbank plan: error: --view: a robosuite scene runs robosuite's UR5e in its own")
+    assert err.startswith("skillbank plan: error: --view: a robosuite scene runs robosuite's arm (--robot) "
+                          "in its own")
     assert not (tmp_path / "view").exists()
