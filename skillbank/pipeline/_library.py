@@ -229,7 +229,8 @@ class Library(Adding):
             params = {"stretch": float(stretch), "features": features, "n_points": int(n_points),
                       "n_components": int(pca.components_.shape[0]), "random_state": random_state,
                       "method": "ElasticClustering", "criterion": model.criterion,
-                      "min_separation": model.min_separation, "n_primitives": len(prims),
+                      "min_separation": model.min_separation, "significance": model.significance,
+                      "n_primitives": len(prims),
                       "energy": float(model.energy_), "n_dims": int(prims[0].demo["position"].shape[1])}
             new_members = {p.id: int(c) for p, c in zip(prims, model.labels_, strict=True)}
             labels = {} if old is None else carry_labels(self.store.members(old),

@@ -263,3 +263,13 @@ def test_sparse_labels_one_primitive_labels_its_cluster_and_reclustering_keeps_i
     lib.cluster(stretch=0.5, random_state=3)
     assert [p.id for p in lib.primitives(label="reach", load=False)] == [1, 2, 3, 4, 5, 6]
     assert lib.primitives(demonstration=3, load=False)[0].label_source == "given"
+
+
+def test_a_version_records_the_significance_level_it_was_clustered_with(tmp_path):
+    from skillbank.experiments._demo import synthetic_multistream
+
+    with Library(tmp_path / "lib.sqlite") as lib:
+        for seed in range(3):
+            lib.add(synthetic_multistream(random_state=seed), assign="none")
+        lib.cluster()
+        assert lib.clustering_params()["significance"] == 0.01
