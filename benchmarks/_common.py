@@ -82,3 +82,21 @@ def run_child(cmd, *, stdout=None, env=None, cwd=None) -> ChildRun:
         return ChildRun(seconds, rss_kb / 1024, proc.returncode, stderr, "GNU time")
     rss_bytes = usage.ru_maxrss * (1 if sys.platform == "darwin" else 1024)  # macOS: bytes; Linux: KiB
     return ChildRun(seconds, rss_bytes / 2**20, proc.returncode, stderr, "wait4")
+
+
+def skillbank(*args) -> str:
+    """Run ``skillbank ARGS`` as a user does (a child process); its stdout, or exit naming the command."""
+    done = subprocess.run([sys.executable, "-m", "skillbank.cli", *map(str, args)], capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"skillbank {' '.join(map(str, args))}: {done.stderr.strip()}")
+    return done.stdout
+
+
+def robosuite_library(folder: Path, task: str, seed: int, demos: int) -> Path:
+    """A library of ``demos`` scripted robosuite demonstrations of ``task`` from ``seed``, clustered."""
+    data, db = folder / f"{task}.hdf5", folder / f"{task}.db"
+    skillbank("sim", "record", f"robosuite:{task}", "--episodes", demos, "--seed", seed, "--out", data)
+    skillbank("library", "init", db)
+    skillbank("library", "add", db, data, "--assign", "recluster")
+    return db

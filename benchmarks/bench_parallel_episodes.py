@@ -26,27 +26,13 @@ import argparse
 import json
 import os
 import resource
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-
-def cli(*args) -> str:
-    done = subprocess.run([sys.executable, "-m", "skillbank.cli", *map(str, args)], capture_output=True,
-                          text=True)
-    if done.returncode != 0:
-        raise SystemExit(f"skillbank {' '.join(map(str, args))}: {done.stderr.strip()}")
-    return done.stdout
-
-
-def build(folder: Path, task: str, demos: int) -> Path:
-    data, db = folder / f"{task}.hdf5", folder / f"{task}.db"
-    cli("sim", "record", f"robosuite:{task}", "--episodes", demos, "--seed", 11, "--out", data)
-    cli("library", "init", db)
-    cli("library", "add", db, data, "--assign", "recluster")
-    return db
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import robosuite_library, skillbank  # noqa: E402
 
 
 def evaluate(db: Path, task: str, episodes: int, workers) -> tuple[float, float, dict]:
@@ -57,7 +43,7 @@ def evaluate(db: Path, task: str, episodes: int, workers) -> tuple[float, float,
         args += ["--workers", workers]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     tic = time.perf_counter()
-    doc = json.loads(cli(*args))
+    doc = json.loads(skillbank(*args))
     wall = time.perf_counter() - tic
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -75,7 +61,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     with tempfile.TemporaryDirectory() as tmp:
-        db = args.db if args.db is not None else build(Path(tmp), args.task, args.demos)
+        db = args.db if args.db is not None else robosuite_library(Path(tmp), args.task, 11, args.demos)
         runs, rows = {}, []
         for _ in range(args.repeats):
             for label, workers in (("this process", None), ("--workers 1", 1), ("--workers 2", 2)):

@@ -26,30 +26,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import robosuite_library, skillbank  # noqa: E402
+
 TASKS = ["Lift", "Stack", "PickPlaceCan", "NutAssemblySquare"]
 METHODS = ["lte", "dmp", "rigid", "replay"]
 
 
-def cli(*args) -> str:
-    done = subprocess.run([sys.executable, "-m", "skillbank.cli", *map(str, args)], capture_output=True,
-                          text=True)
-    if done.returncode != 0:
-        raise SystemExit(f"skillbank {' '.join(map(str, args))}: {done.stderr.strip()}")
-    return done.stdout
-
-
-def build(folder: Path, task: str, seed: int, demos: int) -> Path:
-    data, db = folder / f"{task}.hdf5", folder / f"{task}.db"
-    cli("sim", "record", f"robosuite:{task}", "--episodes", demos, "--seed", seed, "--out", data)
-    cli("library", "init", db)
-    cli("library", "add", db, data, "--assign", "recluster")
-    return db
 
 
 def evaluate(db: Path, task: str, method: str, episodes: int, seed: int, placement) -> dict:
@@ -58,7 +46,7 @@ def evaluate(db: Path, task: str, method: str, episodes: int, seed: int, placeme
     if placement is not None:
         args += ["--placement", placement]
     tic = time.perf_counter()
-    report = json.loads(cli(*args))
+    report = json.loads(skillbank(*args))
     report["wall_seconds"] = time.perf_counter() - tic
     return report
 
@@ -135,7 +123,7 @@ def main(argv=None) -> int:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for task in args.tasks:
-            db = build(Path(tmp), task, args.record_seed, args.demos)
+            db = robosuite_library(Path(tmp), task, args.record_seed, args.demos)
             for placement in () if args.figure_only else (None, args.wide):
                 for method in args.methods:
                     r = evaluate(db, task, method, args.episodes, args.seed, placement)
