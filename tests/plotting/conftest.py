@@ -78,6 +78,18 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
+def three_streams() -> Demonstration:
+    """A 3-D path with corners, a force that steps and a gripper that closes: keypoints from all three."""
+    n = 400
+    t = np.linspace(0.0, 4.0, n)
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 1.0, 0.4], [0.0, 1.0, 0.1]])
+    s = np.linspace(0.0, corners.shape[0] - 1, n)
+    Y = np.column_stack([np.interp(s, np.arange(corners.shape[0]), c) for c in corners.T])
+    F = np.column_stack([np.sin(2.0 * t), np.where(t > 2.0, 1.0, 0.0) + 0.1 * t])
+    G = (t > 3.0).astype(float)
+    return Demonstration(t, {"position": Y, "force": F, "gripper": G})
+
+
 def _reach(start, goal, *, bend, n=60, seed=0):
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 1.0, n)

@@ -34,6 +34,8 @@ from skillbank.plotting._summary import threshold
 from skillbank.segmentation import segment
 from skillbank.segmentation._segmenter import KEYPOINT_PROBABILITY
 
+from .conftest import three_streams
+
 
 @pytest.fixture(scope="module")
 def push(data_dir):
@@ -44,14 +46,7 @@ def push(data_dir):
 @pytest.fixture(scope="module")
 def cut():
     """A 3-D path with corners, a force that steps and a gripper that closes: keypoints from all three."""
-    n = 400
-    t = np.linspace(0.0, 4.0, n)
-    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 1.0, 0.4], [0.0, 1.0, 0.1]])
-    s = np.linspace(0.0, corners.shape[0] - 1, n)
-    Y = np.column_stack([np.interp(s, np.arange(corners.shape[0]), c) for c in corners.T])
-    F = np.column_stack([np.sin(2.0 * t), np.where(t > 2.0, 1.0, 0.0) + 0.1 * t])
-    G = (t > 3.0).astype(float)
-    return segment(skillbank.Demonstration(t, {"position": Y, "force": F, "gripper": G}), window=16)
+    return segment(three_streams(), window=16)
 
 
 def _renderer(fig):

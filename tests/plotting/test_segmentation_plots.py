@@ -16,6 +16,8 @@ from skillbank.plotting import (
 from skillbank.plotting._segmentation import _colour
 from skillbank.segmentation import segment
 
+from .conftest import three_streams
+
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
@@ -26,15 +28,7 @@ def _is_png(path) -> bool:
 
 @pytest.fixture(scope="module")
 def result():
-    n = 400
-    t = np.linspace(0.0, 4.0, n)
-    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 1.0, 0.4], [0.0, 1.0, 0.1]])
-    s = np.linspace(0.0, corners.shape[0] - 1, n)
-    Y = np.column_stack([np.interp(s, np.arange(corners.shape[0]), c) for c in corners.T])
-    F = np.column_stack([np.sin(2.0 * t), np.where(t > 2.0, 1.0, 0.0) + 0.1 * t])
-    G = (t > 3.0).astype(float)
-    demo = skillbank.Demonstration(t, {"position": Y, "force": F, "gripper": G})
-    return segment(demo, ["position", "force"], window=16)
+    return segment(three_streams(), ["position", "force"], window=16)
 
 
 def test_segmentation_has_keypoints(result):
