@@ -36,3 +36,18 @@ def sweep(q0, joint, angle, duration, n=101) -> Demonstration:
 
 
 TABLE = Box([-1.0, -1.0, -0.05], [1.0, 1.0, 0.0])
+
+
+def recorded_lift(folder, *, episodes: int, seed: int = 11):
+    """A library of ``episodes`` scripted Lift demonstrations recorded from ``seed`` in ``folder``,
+    clustered: its path."""
+    from skillbank.pipeline import Library
+    from skillbank.simulation import record  # robosuite, when a test asks for it
+
+    out = folder / "lift.hdf5"
+    record("robosuite:Lift", episodes=episodes, out=out, seed=seed)
+    db = folder / "lift.db"
+    with Library(db) as lib:
+        lib.add_files([out])
+        lib.cluster()
+    return db

@@ -18,18 +18,15 @@ pytest.importorskip("robosuite")  # the extra skillbank[sim]
 from skillbank.cli import main  # noqa: E402
 from skillbank.pipeline import Library  # noqa: E402
 from skillbank.selection import Relation, compose  # noqa: E402
-from skillbank.simulation import REASONS, binomial_interval, evaluate, record  # noqa: E402
+from skillbank.simulation import REASONS, binomial_interval, evaluate  # noqa: E402
+
+from .conftest import recorded_lift  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def lift(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("lift_eval")
-    out = folder / "lift.hdf5"
-    record("robosuite:Lift", episodes=3, out=out, seed=11)
-    db = folder / "lift.db"
-    with Library(db) as lib:
-        lib.add_files([out])
-        lib.cluster()
+    db = recorded_lift(tmp_path_factory.mktemp("lift_eval"), episodes=3)
+    with Library(db, readonly=True) as lib:
         starts = [lib.demonstration(i)["cube_pos"][0, :2] for i in lib.demonstration_ids()]
     return db, np.array(starts)
 

@@ -23,8 +23,9 @@ distributed = pytest.importorskip("distributed")  # the extra skillbank[dask]
 import dask  # noqa: E402
 
 from skillbank.cli import main  # noqa: E402
-from skillbank.pipeline import Library  # noqa: E402
-from skillbank.simulation import evaluate, execute_plan, record  # noqa: E402
+from skillbank.simulation import evaluate, execute_plan  # noqa: E402
+
+from .conftest import recorded_lift  # noqa: E402
 
 #: A run: two scenes no demonstration had, 200 control steps each at most (a lift takes about 130).
 RUN = ["--env", "robosuite:Lift", "--episodes", "2", "--seed", "500", "--placement", "0.12",
@@ -33,14 +34,7 @@ RUN = ["--env", "robosuite:Lift", "--episodes", "2", "--seed", "500", "--placeme
 
 @pytest.fixture(scope="module")
 def lift(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("lift_par")
-    out = folder / "lift.hdf5"
-    record("robosuite:Lift", episodes=2, out=out, seed=11)
-    db = folder / "lift.db"
-    with Library(db) as lib:
-        lib.add_files([out])
-        lib.cluster()
-    return db
+    return recorded_lift(tmp_path_factory.mktemp("lift_par"), episodes=2)
 
 
 def run(*args):
