@@ -30,7 +30,8 @@ from ..core import Demonstration, quaternion_to_matrix
 from ..core._rotations import check_quaternions
 from ._events import discrete_events, stream_kind
 
-__all__ = ["Phase", "PHASE_KINDS", "object_streams", "carried", "demonstration_phases", "phase_bounds"]
+__all__ = ["Phase", "PHASE_KINDS", "object_streams", "carried", "travel_with_tool", "demonstration_phases",
+           "phase_bounds"]
 
 #: What a phase does: reach for an object, carry it, or leave the last one let go of.
 PHASE_KINDS = ("reach", "carry", "retreat")
@@ -116,7 +117,23 @@ def carried(demo: Demonstration, obj: str, start: int = 0, stop: int | None = No
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         R = quaternion_to_matrix(check_quaternions(demo["orientation"][start:stop], name="orientation"))
         offset = np.einsum("nji,nj->ni", R, offset)
-    travel = np.linalg.norm(W - W[0], axis=1)
+    return travel_with_tool(W, offset, moved=moved)
+
+
+def travel_with_tool(where, offset, *, moved: float = MOVED) -> float:
+    """How far (m) an object travelled with the tool, or 0: :func:`carried`'s test on the object's
+    positions ``where`` (n, 3) and its ``offset`` from the tool in the tool's frame (n, 3).
+
+    Examples
+    --------
+    >>> where = np.array([[0.0, 0.0, 0.02], [0.0, 0.0, 0.07]])
+    >>> travel_with_tool(where, np.zeros((2, 3)))  # lifted 5 cm where the fingers hold it
+    0.05
+    """
+    where, offset = np.asarray(where, float), np.asarray(offset, float)
+    if len(where) < 2:
+        return 0.0
+    travel = np.linalg.norm(where - where[0], axis=1)
     k = int(np.argmax(travel))
     if travel[k] <= moved:
         return 0.0

@@ -22,8 +22,8 @@ import numpy as np
 from ..core import Demonstration, quaternion_to_matrix
 from ..core._rotations import check_quaternions, quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
-from ..segmentation import carried as moved_with
 from ..segmentation import object_streams
+from ..segmentation._phases import travel_with_tool
 
 __all__ = ["Relation", "object_streams", "acted_on", "compose"]
 
@@ -158,7 +158,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         # it moved, and the tool's motion explains it (a cube settling at reset while the hand waits
         # above it moves too), for most of the primitive (an object that settles as the tool sets off
         # moves with it for a sample or two)
-        travel = moved_with(demo, name, 0, held, moved=moved)
+        travel = travel_with_tool(where[:held], offset[:held], moved=moved)
         if travel > 0.0 and held >= len(gap) / 2:
             carried.append((travel, name))
         ends.append((float(gap[-1]), name))

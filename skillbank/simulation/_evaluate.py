@@ -963,7 +963,6 @@ class _Evaluation:
     """What every episode of :func:`evaluate` needs, sent to the workers as it is."""
 
     task: str
-    sources: list
     groups: dict
     order: list
     horizon: int
@@ -1138,7 +1137,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     order = _order(groups, order)
     if horizon is None:
         horizon = _horizon(groups)
-    job = _Evaluation(task=task, sources=sources, groups=groups, order=order, horizon=horizon, robot=robot,
+    job = _Evaluation(task=task, groups=groups, order=order, horizon=horizon, robot=robot,
                       placement=placement, method=method, random_state=random_state, paths=paths)
     # each episode builds its own environment from its seed: the same rows here and on any worker
     results, address = run_episodes(_evaluate_episode, job, [int(seed) + k for k in range(episodes)],
