@@ -66,6 +66,7 @@ from ._robosuite import (
     recorded_robot,
     robosuite_robot,
 )
+from ._support import fixtures, object_symmetry, support
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
 
@@ -289,7 +290,14 @@ def _choose_frames(sources):
         told = np.isfinite(spread).any() and _told_apart(members, frames, spread)
         best = frames[int(np.argmin(spread))] if told else frames[0]
         turns = ["held"] + ([best] if best != ("world",) else []) + [("world",)]
-        choice, score = ("held", 1), -1.0
+        # one member: a place on what the scene holds fixed keeps the object's orientation there (a nut
+        # square to its peg); a grasp keeps the tool's orientation on the object (MimicGen's transform);
+        # the turns either may take are the scene's to say (:func:`_in_scene`); anything else keeps the
+        # wrist as it was
+        first = members[0].relation
+        place = members[0].released and best == ("world",) and _carries(first)
+        grasp = first is not None and not first.moves_with and best == (first.object, "end")
+        choice, score = ((("world",), 1) if place else (best, 1) if grasp else ("held", 1)), -1.0
         if len(members) > 1:
             for turn in turns:
                 theta = np.array([_end_heading(m.primitive.demo, m.relation, turn) for m in members])
@@ -300,6 +308,10 @@ def _choose_frames(sources):
         turns_with = choice[1] > 1 and choice[0] == best and _turns_with(members, best, choice[1])
         for m in members:
             m.frame, (m.turn, m.symmetry), m.turns_with = best, choice, turns_with
+
+
+def _carries(relation) -> bool:
+    return relation is not None and relation.moves_with
 
 
 def _turns_with(members, frame, k) -> bool:
@@ -600,10 +612,21 @@ def _goal_orientations(seg, obs):
     demo, relation = seg.primitive.demo, seg.relation
     here = np.asarray(obs["robot0_eef_quat"], float)
     q = np.asarray(demo["orientation"][-1], float)
-    ref = _turn_reference(demo, relation, seg.turn)
-    if ref is not None:
-        now = here if seg.turn == "held" else _frame_pose(obs, seg, seg.turn)[1]
-        q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
+    if relation is not None and relation.moves_with and seg.turn != "held":
+        # what the frame keeps is the carried object's orientation (a nut square to its peg), and the tool
+        # holds the object as it holds it now: its grasp in this scene need not be the source's
+        k = _held_until(demo, relation.object)
+        goal = _pose(demo, relation.object, k)[1]
+        if seg.turn != ("world",):
+            goal = quaternion_multiply(_frame_pose(obs, seg, seg.turn)[1], quaternion_multiply(
+                quaternion_conjugate(_source_frame(demo, relation, seg.turn)[1]), goal))
+        held = np.asarray(obs[f"{seg.scene(relation.object)}_quat"], float)
+        q = quaternion_multiply(goal, quaternion_multiply(quaternion_conjugate(held), here))
+    else:
+        ref = _turn_reference(demo, relation, seg.turn)
+        if ref is not None:
+            now = here if seg.turn == "held" else _frame_pose(obs, seg, seg.turn)[1]
+            q = quaternion_multiply(now, quaternion_multiply(quaternion_conjugate(ref), q))
     options = [(_turn(q, 2 * math.pi * m / seg.symmetry), 2 * math.pi * m / seg.symmetry)
                for m in range(seg.symmetry)]
     return sorted(options, key=lambda o: float(quaternion_angle(o[0], here)))
@@ -708,8 +731,10 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
     P_src = np.asarray(demo["position"], float)
     turn = quaternion_to_matrix(quaternion_multiply(goal_q, quaternion_conjugate(demo["orientation"][-1])))
     u_src = (demo.t - demo.t[0]) / max(demo.t[-1] - demo.t[0], 1e-12)
-    at = [np.array([np.interp(u, u_src, P_src[:, j]) for j in range(3)]) for u in CLOSE_IN]
-    via = [ViaPoint(goal_p + turn @ (a - P_src[-1]), phase=u) for a, u in zip(at, CLOSE_IN, strict=True)]
+    close = _carried_path(seg, obs, demo, goal_q) if _carries(seg.relation) else \
+        goal_p + (P_src - P_src[-1]) @ turn.T
+    via = [ViaPoint(np.array([np.interp(u, u_src, close[:, j]) for j in range(3)]), phase=u)
+           for u in CLOSE_IN]
     if leave:
         # and the first part leaves as the source did, from where the robot is: a lift off the table
         # stays a lift, clear of what stands beside what was picked up
@@ -738,6 +763,56 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
     return P, Q, grip
 
 
+def _carried_path(seg, obs, demo, goal_q):
+    """The tool's path (one position per source sample) that takes the carried object along the path the
+    source took it, moved into the segment's frame, as the tool holds it now.
+
+    It is the object that must clear what it passes and come down on its place: held the other way
+    round (a nut picked up from its other side, a symmetric turn of the place), the tool's own recorded
+    path would bring the object down on the peg's top. After the source let go, the tool moves as the
+    source's did.
+    """
+    obj = seg.relation.object
+    k = _held_until(demo, obj)
+    path = np.asarray(demo[f"{obj}_pos"], float)
+    if seg.frame != ("world",):
+        path = _moved(path, np.tile([0.0, 0.0, 0.0, 1.0], (len(path), 1)),
+                      _source_frame(demo, seg.relation, seg.frame), _frame_pose(obs, seg, seg.frame))[0]
+    Q = np.asarray(demo["orientation"], float)
+    turn = quaternion_multiply(goal_q, quaternion_conjugate(Q[-1]))
+    here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
+    held = quaternion_to_matrix(here_q).T @ (np.asarray(obs[f"{seg.scene(obj)}_pos"], float) - here_p)
+    R = quaternion_to_matrix(quaternion_multiply(np.broadcast_to(turn, Q.shape), Q))
+    tool = path - R @ held
+    P = np.asarray(demo["position"], float)
+    tool[k + 1:] = tool[k] + (P[k + 1:] - P[k])
+    return tool
+
+
+def _in_scene(seg, env):
+    """``seg`` with the turns about the vertical of its goal that the scene says change nothing, where
+    its own data (one demonstration) teach none.
+
+    A place on what the scene holds fixed may take any turn the fixture there accepts
+    (:func:`support`: a square peg, a quarter turn). A grasp kept on the object may take the object's
+    turns (:func:`object_symmetry`: a cube's quarter turns, the tool's place on it turning with it), else
+    the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
+    other side, the place on the handle kept).
+    """
+    if seg.symmetry != 1 or seg.turn == "held":
+        return seg
+    relation = seg.relation
+    if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
+        demo = seg.primitive.demo
+        held = support(env, _pose(demo, relation.object, _held_until(demo, relation.object))[0])
+        return seg if held is None else replace(seg, symmetry=held[1])
+    if relation is not None and not relation.moves_with and seg.turn == seg.frame == (relation.object, "end"):
+        k = object_symmetry(env, seg.scene(relation.object))
+        return replace(seg, symmetry=k, turns_with=True) if k > 1 else \
+            replace(seg, symmetry=2, turns_with=False)
+    return seg
+
+
 def _last_try(demo) -> int:
     """The sample a reach's last try begins at: after the last time its gripper command opened again
     (a grasp that held nothing: the phases put it inside the reach), if a try of at least half a
@@ -749,40 +824,57 @@ def _last_try(demo) -> int:
     return 0
 
 
-def _over_tops(P, G, env, obs):
-    """The path ``P`` with its travel lifted over the objects' tops: an open hand does not sweep through
-    what stands in the scene.
+def _over_tops(P, G, env, obs, carried=None):
+    """The path ``P`` with its travel lifted over the tops of what stands in the scene: neither an open
+    hand nor what a closed one carries sweeps through an object or a fixture.
 
     The first half of an adapted segment (before :data:`CLOSE_IN`, where the demonstration's own close-in
     is pinned) is the representation's, from where the robot is, and knows nothing of the scene: from the
     robot's start it can cross a tall box at the height of its top and knock it over before coming down
-    on it. There, while the gripper is open, a sample within the hand's horizontal reach of an object's
-    box is raised so that the fingertips pass :data:`OVER` above the object's top (the boxes, the hand's
-    reach and the fingertips' depth below the tool point are MuJoCo's collision geoms as they lie now);
-    the raise is widened and smoothed over a quarter second, so the hand rises before it comes over the
-    object. An object the tool starts within reach of is left as the demonstration leaves it (a retreat
-    from what was just let go of).
+    on it, and a nut carried a centimetre lower than its demonstration catches the peg's top. There, while
+    the gripper is open or carries the scene's object ``carried``, a sample within horizontal reach of an
+    object's or a fixture's box (:func:`fixtures`: a peg, a bin) is raised so that the fingertips, and
+    the bottom of what they hold, pass :data:`OVER` above its top (the boxes, the hand's and the held
+    object's reach and depth below the tool point are MuJoCo's collision geoms as they lie now); the raise
+    is widened and smoothed over a quarter second, so the hand rises before it comes over the object. What
+    the tool starts within reach of (the table, what was just let go of) is left as the demonstration
+    leaves it.
     """
-    travel = (np.arange(len(P)) < CLOSE_IN[0] * (len(P) - 1)) & (np.asarray(G) <= 0)
+    G = np.asarray(G)
+    travel = (np.arange(len(P)) < CLOSE_IN[0] * (len(P) - 1)) & (G <= 0)
+    if carried is not None:
+        travel |= G > 0
     if not travel.any():
         return P
     sim = env.sim
     tool = np.asarray(obs["robot0_eef_pos"], float)
     hand_lo, hand_hi = _box(sim, _gripper(env).contact_geoms)
-    depth = tool[2] - hand_lo[2]
-    reach = float(np.abs(np.r_[hand_lo[:2] - tool[:2], hand_hi[:2] - tool[:2]]).max())
-    floor = np.full(len(P), -np.inf)
+    boxes = []
+    centre = None  # the held object's centre at each sample
     for model in env.model.mujoco_objects:
         if f"{model.name}_pos" not in obs or not model.contact_geoms:
             continue
-        lo, hi = _box(sim, model.contact_geoms)
-
+        if model.name == carried:  # it travels with the hand
+            lo, hi = _box(sim, model.contact_geoms)
+            hand_lo, hand_hi = np.minimum(hand_lo, lo), np.maximum(hand_hi, hi)
+            centre = P + (np.asarray(obs[f"{carried}_pos"], float) - tool)
+        else:
+            boxes.append(_box(sim, model.contact_geoms))
+    boxes += [_box(sim, geoms) for geoms in fixtures(env).values()]
+    depth = tool[2] - hand_lo[2]
+    reach = float(np.abs(np.r_[hand_lo[:2] - tool[:2], hand_hi[:2] - tool[:2]]).max())
+    floor = np.full(len(P), -np.inf)
+    for lo, hi in boxes:
         def gap(xy, lo=lo, hi=hi):  # horizontal distance to the object's box
             return np.linalg.norm(np.maximum(0.0, np.maximum(lo[:2] - xy, xy - hi[:2])), axis=-1)
 
         if gap(tool[:2]) < reach:
             continue
         over = travel & (gap(P[:, :2]) < reach)
+        if centre is not None:
+            # what a held object comes down onto (a nut onto its peg, a cube onto the other) does not keep
+            # it above once its centre is over it: there the demonstration's own descent is pinned
+            over &= ~((G > 0) & (gap(centre[:, :2]) == 0))
         floor[over] = np.maximum(floor[over], hi[2] + depth + OVER)
     lift = np.where(np.isfinite(floor), np.maximum(0.0, floor - P[:, 2]), 0.0)
     if not lift.any():
@@ -862,9 +954,11 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 if method == "rigid":
                     P, Q, G = _path_rigid(seg, episode.obs)
                 else:
+                    seg = _in_scene(seg, episode.env)
                     P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
                                             leave=episode.leave)
-                    P = _over_tops(P, G, episode.env, episode.obs)
+                    carried = seg.scene(seg.relation.object) if _carries(seg.relation) else None
+                    P = _over_tops(P, G, episode.env, episode.obs, carried)
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
             if episode.reach is not None:

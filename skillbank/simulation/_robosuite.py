@@ -201,14 +201,15 @@ def _gripper(env):
 
 
 def _box(sim, geoms) -> tuple:
-    """``(lo, hi)``: the world-aligned box (m) around the collision geoms ``geoms`` as they lie now.
+    """``(lo, hi)``: the world-aligned box (m) around the collision geoms ``geoms`` (names or ids) as they
+    lie now.
 
     MuJoCo keeps each geom's box in the geom's own frame (``geom_aabb``: centre and half sizes); turned
     into the world, a box's half sizes along the world's axes are the absolute rotation times its own.
     """
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for name in geoms:
-        i = sim.model.geom_name2id(name)
+        i = int(name) if isinstance(name, int | np.integer) else sim.model.geom_name2id(name)
         turn = np.asarray(sim.data.geom_xmat[i], float).reshape(3, 3)
         box = np.asarray(sim.model.geom_aabb[i], float)
         centre = np.asarray(sim.data.geom_xpos[i], float) + turn @ box[:3]

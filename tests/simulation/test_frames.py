@@ -188,3 +188,55 @@ def test_pieces_of_one_halting_approach_keep_the_objects_frame():
     _choose_frames(many)
     # placed anew, the cube's frame is told apart from the world's, and the ends agree in the cube's
     assert all(seg.frame == ("cube", "end") for src in many for seg in src.segments if seg.relation)
+
+
+def test_one_demonstration_grasps_on_the_object_and_places_on_the_fixture_as_it_showed():
+    """One demonstration teaches no symmetry: its grasp keeps the tool's orientation on the object
+    (MimicGen's transform), its place on what the scene holds fixed keeps the object's orientation in the
+    world, and a lift keeps the wrist as it was; the turns either may take are the scene's to say
+    (``_in_scene``, tests/simulation/test_support.py)."""
+    rng = np.random.default_rng(5)
+    (one,) = [_sources(rng, [0.1, 0.3, 0.95])[0]]
+    reach, carry = one.segments
+    for seg in (reach, carry):
+        seg.frame, seg.turn, seg.symmetry = ("world",), "held", 1
+    carry.released = True  # it let the cube go at the fixed place
+    _choose_frames([one])
+    assert (reach.frame, reach.turn, reach.symmetry) == (("cube", "end"), ("cube", "end"), 1)
+    assert (carry.frame, carry.turn, carry.symmetry) == (("world",), ("world",), 1)
+    (lift_source,) = [_sources(np.random.default_rng(6), None)[0]]
+    lift = lift_source.segments[1]
+    lift.turn = "held"
+    _choose_frames([lift_source])
+    assert lift.frame == ("cube", "start") and lift.turn == "held"
+
+
+def test_a_place_turns_the_tool_so_the_object_ends_as_it_did_whatever_the_grasp():
+    """The cube held a quarter turn round from the demonstration's grasp: the tool's goal turns so that
+    the cube's orientation at its place is the demonstration's, and the carried cube, not the tool,
+    follows the demonstration's path (the tool's path is the cube's less where the tool holds it now)."""
+    from skillbank.simulation._evaluate import _carried_path, _goal_orientations
+
+    n = 30
+    cube0, place = np.array([0.0, 0.0, 0.83]), np.array([0.2, 0.1, 0.9])
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    cube = cube0 + s * (place - cube0)
+    tool = cube + [0.0, 0.0, 0.01]  # held at its centre, the wrist at the cube's heading (0)
+    prim = _primitive(tool, cube, 0.0, 0.0, 0)
+    seg = _Segment(prim, acted_on(prim.demo), ("world",), ("world",), 1, released=True)
+    # now: the cube at heading 0.3 rad, the tool a quarter turn further round, 2 cm off the centre
+    cube_q = _yawed([0.0, 0.0, 0.0, 1.0], 0.3)
+    here_q = _yawed(DOWN, 0.3 + math.pi / 2)
+    here_p = np.array([-0.1, 0.1, 0.85])
+    obs = {"robot0_eef_pos": here_p, "robot0_eef_quat": here_q, "cube_pos": here_p + [0.02, 0.0, -0.01],
+           "cube_quat": cube_q}
+    ((q, _),) = _goal_orientations(seg, obs)
+    # the tool turns by -0.3 rad: the cube, turned with it, ends at heading 0
+    np.testing.assert_allclose(abs(float(np.dot(q, _yawed(DOWN, math.pi / 2)))), 1.0, atol=1e-9)
+    path = _carried_path(seg, obs, prim.demo, q)
+    from skillbank.core._rotations import quaternion_to_matrix
+
+    held = quaternion_to_matrix(here_q).T @ (obs["cube_pos"] - here_p)
+    np.testing.assert_allclose(path[-1] + quaternion_to_matrix(q) @ held, place, atol=1e-9)
+    np.testing.assert_allclose(path[0] + quaternion_to_matrix(_yawed(DOWN, math.pi / 2)) @ held, cube0,
+                               atol=1e-9)

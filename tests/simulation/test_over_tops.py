@@ -64,7 +64,7 @@ def test_a_path_above_every_top_or_with_the_gripper_closed_is_unchanged(pickplac
     high = _sweep(obs, (lo + hi) / 2, hi[2] + depth + OVER + 0.01)
     np.testing.assert_array_equal(_over_tops(high, -np.ones(len(high)), env, obs), high)
     low = _sweep(obs, (lo + hi) / 2, hi[2] - 0.03)
-    np.testing.assert_array_equal(_over_tops(low, np.ones(len(low)), env, obs), low)  # carrying
+    np.testing.assert_array_equal(_over_tops(low, np.ones(len(low)), env, obs), low)  # closed on nothing
 
 
 def test_what_the_tool_starts_over_is_left_as_the_demonstration_leaves_it(pickplace):

@@ -1,0 +1,105 @@
+"""The turns of a place and of a grasp that change nothing, from the scene's own collision geometry.
+
+``vertical_symmetry`` against point sets of known symmetry; ``support`` and ``object_symmetry`` on
+robosuite's own scenes (no mock): a square peg accepts a nut at any quarter turn, a round one too (its
+rim), a rectangular bin half turns; a cube is a quarter-turn object, a nut with its handle is none.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from skillbank.simulation._support import vertical_symmetry
+
+
+def _turned(P, angle, centre):
+    c, s = math.cos(angle), math.sin(angle)
+    out = np.array(P, float)
+    out[:, :2] = (out[:, :2] - centre) @ np.array([[c, -s], [s, c]]).T + centre
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), k=st.sampled_from([1, 2, 4]))
+def test_points_made_symmetric_are_found_so(seed, k):
+    """A random motif repeated k times about a random vertical axis has exactly that symmetry (a random
+    motif has none of its own)."""
+    rng = np.random.default_rng(seed)
+    centre = rng.uniform(-0.5, 0.5, 2)
+    motif = np.column_stack([centre + rng.uniform(0.02, 0.1, (5, 2)), rng.uniform(0.8, 1.0, 5)])
+    P = np.vstack([_turned(motif, 2 * math.pi * j / k, centre) for j in range(k)])
+    assert vertical_symmetry(P, np.zeros(len(P)), centre) == k
+
+
+def test_an_axis_off_the_centre_or_a_ball_for_a_corner_is_no_symmetry():
+    square = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (0.0, 0.1)])
+    assert vertical_symmetry(square, np.zeros(8), [0.0, 0.0]) == 4
+    assert vertical_symmetry(square, np.zeros(8), [0.02, 0.0]) == 1
+    radii = np.zeros(8)
+    radii[0] = 0.01  # one corner is a ball: turned onto a bare corner, it no longer matches
+    assert vertical_symmetry(square, radii, [0.0, 0.0]) == 1
+
+
+def test_the_match_tolerates_round_off_not_a_shift():
+    square = np.array([[x, y, 0.0] for x in (-0.1, 0.1) for y in (-0.1, 0.1)])
+    nudged = square + [[0.001, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]
+    assert vertical_symmetry(nudged, np.zeros(4), [0.0, 0.0]) == 4
+    shifted = square + [[0.03, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]
+    assert vertical_symmetry(shifted, np.zeros(4), [0.0, 0.0]) == 1
+
+
+robosuite = pytest.importorskip("robosuite")  # the extra skillbank[sim]; installed in CI
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    from skillbank.simulation._evaluate import _make
+    from skillbank.simulation._robosuite import import_robosuite
+
+    out = {}
+    for task in ("NutAssemblySquare", "PickPlace"):
+        env = _make(import_robosuite(), task, 0, 1000)
+        out[task] = (env, env.reset())
+    yield out
+    for env, _ in out.values():
+        env.close()
+
+
+def test_a_nut_is_put_on_its_peg_at_any_quarter_turn_and_in_a_bin_at_half_turns(scenes):
+    from skillbank.simulation._support import fixtures, support
+
+    env, _ = scenes["NutAssemblySquare"]
+    square = env.sim.data.body_xpos[env.peg1_body_id]
+    round_ = env.sim.data.body_xpos[env.peg2_body_id]
+    assert support(env, square + [0.003, 0.0, 0.0]) == ("peg1", 4)
+    assert support(env, round_) == ("peg2", 4)  # a cylinder: every turn, at least a quarter
+    assert support(env, [0.0, 0.0, 0.82]) == ("table", 4)  # the 0.8 m square table
+    assert support(env, [3.0, 3.0, 0.82]) is None
+    # an arm is no fixture, nor is an object
+    assert not any(name.startswith(("robot0", "gripper0", "fixed_mount0", "SquareNut"))
+                   for name in fixtures(env))
+    env, _ = scenes["PickPlace"]
+    for place in env.target_bin_placements:
+        assert support(env, place) == ("bin2", 2)
+
+
+def test_a_cube_has_quarter_turns_and_a_nut_with_its_handle_none(scenes):
+    from skillbank.simulation._support import object_symmetry
+
+    env, _ = scenes["NutAssemblySquare"]
+    assert object_symmetry(env, "SquareNut") == 1
+    assert object_symmetry(env, "no such object") == 1
+    from skillbank.simulation._evaluate import _make
+    from skillbank.simulation._robosuite import import_robosuite
+
+    stack = _make(import_robosuite(), "Stack", 0, 1000)
+    try:
+        stack.reset()
+        assert object_symmetry(stack, "cubeA") == 4
+    finally:
+        stack.close()
