@@ -31,6 +31,9 @@ TOPP-RA and not ruckig, measured).
 
 from __future__ import annotations
 
+import logging
+from contextlib import contextmanager
+
 import numpy as np
 
 from ..core._validation import check_array, check_finite_result, check_time, numerical_errors
@@ -103,11 +106,24 @@ def rate_ratio(t, joints, *, velocity=None, acceleration=None) -> float:
     return need
 
 
-def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0)) -> np.ndarray:
+@contextmanager
+def _quiet():
+    """toppra's logger held to errors: it warns of the round-off it recovers from, on every call."""
+    logger = logging.getLogger("toppra")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
+def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0), knots=None) -> np.ndarray:
     """Times (from 0) at which the fastest motion along the spline through ``q`` passes them.
 
     ``speeds``: chord length per second at the first and last sample (0: at rest), lowered towards rest
-    where the limits cannot start or end there.
+    where the limits cannot start or end there. ``knots``: the spline's parameter at the samples (the
+    given time stamps), default the chord length.
     """
     # toppra imports matplotlib.pyplot (1.6 s here): only when a path is timed
     import toppra
@@ -117,7 +133,12 @@ def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0)) -> n
     chord = np.linalg.norm(np.diff(q, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(chord)])
     speeds = np.asarray(speeds, dtype=float) / s[-1]  # chord length per second -> path parameter per second
-    s /= s[-1]  # exactly 1 at the end: toppra checks the grid spans the path's interval exactly
+    s /= s[-1]
+    if knots is not None:
+        span = knots - knots[0]
+        # the same speeds at the ends on the new parameter: d(knot)/d(chord) of the end steps
+        speeds = speeds * np.array([span[1] / s[1], (span[-1] - span[-2]) / (s[-1] - s[-2])]) / span[-1]
+        s = span / span[-1]  # exactly 1 at the end: toppra checks the grid spans the path's interval exactly
     path = toppra.SplineInterpolator(s, q)
     per_step = max(1, -(-_MIN_GRID // (len(q) - 1)))
     grid = np.concatenate([np.linspace(a, b, per_step, endpoint=False) for a, b in zip(s[:-1], s[1:],
@@ -136,13 +157,15 @@ def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0)) -> n
         with np.errstate(divide="ignore"):
             speeds = np.minimum(speeds, (velocity / slope).min(axis=1))
     # the start within what can still reach the end (toppra's controllable set, squared speeds); an end
-    # speed the acceleration limits cannot reach makes the set empty (NaN): end at rest then
-    K = solver.compute_controllable_sets(speeds[1], speeds[1])
-    if np.isnan(K).any():
-        speeds[1] = 0.0
-        K = solver.compute_controllable_sets(0.0, 0.0)
-    start = np.sqrt(np.clip(speeds[0] ** 2, K[0, 0], K[0, 1]))
-    _, sd, _ = solver.compute_parameterization(start, speeds[1])
+    # speed on a limit can make the set empty (NaN) by round-off, one the limits cannot reach does
+    # anyway: a little slower, then at rest
+    with _quiet():
+        for end in speeds[1] * np.array([1.0 - 1e-9, 0.999, 0.99, 0.9, 0.5, 0.0]):
+            K = solver.compute_controllable_sets(end, end)
+            if not np.isnan(K).any():
+                break
+        start = np.sqrt(np.clip(speeds[0] ** 2, K[0, 0], K[0, 1]))
+        _, sd, _ = solver.compute_parameterization(start, end)
     if sd is None or not np.isfinite(sd).all() or (sd[1:] + sd[:-1] <= 0).any():
         raise ValueError("time law: TOPP-RA found no parameterisation of the path (a degenerate spline); "
                          "time it with time_law='uniform'")
@@ -242,7 +265,13 @@ def time_law(joints, *, velocity=None, acceleration=None, t=None, law: str = "to
             if ends == "given":  # a piece's end at a stop is at rest anyway
                 step = np.linalg.norm(np.diff(q, axis=0), axis=1) / (np.diff(given) * stretch)
                 speeds = [step[a] if a == 0 else 0.0, step[b - 1] if b == len(moving) else 0.0]
-            dt[a:b] = np.diff(_toppra_piece(q[a:b + 1], velocity, acceleration, speeds))
+            piece = _toppra_piece(q[a:b + 1], velocity, acceleration, speeds)
+            if given is not None:
+                # chord length turns a joint's reversal into a kink the spline rounds off (and TOPP-RA
+                # nearly stops for); the given time base, smooth through it, can be faster: the faster wins
+                other = _toppra_piece(q[a:b + 1], velocity, acceleration, speeds, knots=given[a:b + 1])
+                piece = other if other[-1] < piece[-1] else piece
+            dt[a:b] = np.diff(piece)
         if given is not None:
             dt[~moving] = np.diff(given)[~moving]
         times = np.concatenate([[0.0], np.cumsum(dt)])
@@ -251,11 +280,11 @@ def time_law(joints, *, velocity=None, acceleration=None, t=None, law: str = "to
         for _ in range(8):
             need = rate_ratio(times, q, velocity=velocity, acceleration=acceleration)
             # need 0: the samples show no rate to fit (an acceleration limit on one step)
-            if need == 0.0 or (abs(need - 1.0) <= 1e-9 and need <= _MARGIN):
+            if need == 0.0 or 1.0 - 1e-9 <= need <= 1.0:
                 break
             dt[moving] *= need * _MARGIN
             times = np.concatenate([[0.0], np.cumsum(dt)])
         need = rate_ratio(times, q, velocity=velocity, acceleration=acceleration)
-        if need > _MARGIN:
+        if need > 1.0:
             times *= need * _MARGIN
     return check_finite_result(times, name="time law (toppra)")
