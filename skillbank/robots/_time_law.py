@@ -133,12 +133,12 @@ def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0), knot
     chord = np.linalg.norm(np.diff(q, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(chord)])
     speeds = np.asarray(speeds, dtype=float) / s[-1]  # chord length per second -> path parameter per second
-    s /= s[-1]
+    s /= s[-1]  # exactly 1 at the end: toppra checks the grid spans the path's interval exactly
     if knots is not None:
         span = knots - knots[0]
         # the same speeds at the ends on the new parameter: d(knot)/d(chord) of the end steps
         speeds = speeds * np.array([span[1] / s[1], (span[-1] - span[-2]) / (s[-1] - s[-2])]) / span[-1]
-        s = span / span[-1]  # exactly 1 at the end: toppra checks the grid spans the path's interval exactly
+        s = span / span[-1]
     path = toppra.SplineInterpolator(s, q)
     per_step = max(1, -(-_MIN_GRID // (len(q) - 1)))
     grid = np.concatenate([np.linspace(a, b, per_step, endpoint=False) for a, b in zip(s[:-1], s[1:],
@@ -168,7 +168,7 @@ def _toppra_piece(q: np.ndarray, velocity, acceleration, speeds=(0.0, 0.0), knot
         _, sd, _ = solver.compute_parameterization(start, end)
     if sd is None or not np.isfinite(sd).all() or (sd[1:] + sd[:-1] <= 0).any():
         raise ValueError("time law: TOPP-RA found no parameterisation of the path (a degenerate spline); "
-                         "time it with time_law='uniform'")
+                         "time it with law='uniform' (time_law='uniform' in reuse)")
     # constant path acceleration between gridpoints: each step takes 2 ds / (sd_i + sd_i+1)
     dt = 2.0 * np.diff(grid) / (sd[1:] + sd[:-1])
     times = np.concatenate([[0.0], np.cumsum(dt)])
