@@ -58,7 +58,8 @@ class ReuseResult:
         Peak velocity and acceleration of ``position``, ``orientation`` and
         ``joints`` after time scaling (see :func:`peak_rates`).
     time_scale : float
-        How much the time base was stretched to meet the limits (1.0: not at all).
+        Duration after timing over duration before (1.0: the time base met the
+        limits; with the uniform law, the factor every time was stretched by).
     notes : list of str
         Streams carried or dropped, time scaling, the representation's warnings, repairs.
     clearance : Clearance or None
