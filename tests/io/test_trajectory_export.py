@@ -429,6 +429,8 @@ def test_exports_state_the_limits_they_were_timed_for_and_keep_within_them(timed
         drift = np.abs(blended_joints(timed.t, timed.t, timed["joints"]) - timed["joints"]).max()
         assert (written_v <= vmax + drift / timed.t[-1] + 2e-9 * rate).all()
         assert (written_a <= amax * (1 + 1e-9) + 4e-9 * rate**2).all()
+    # NPZ: the metadata, as JSON
+    assert read_npz(write_trajectory(timed, tmp_path / "arm.npz")).metadata["timing"] == expected
     # ROS 2 bag: custom_data holds the timing; every JointTrajectory point's velocities and accelerations
     bag = write_trajectory(timed, tmp_path / "bag", format="rosbag")
     # rosbag2's own metadata file, read as YAML (ruamel.yaml comes with rosbags)
