@@ -58,6 +58,7 @@ bench: $(TEST_STAMP)
 	$(PY) benchmarks/bench_ik_chain.py
 	$(PY) benchmarks/bench_panda_redundancy.py
 	$(PY) benchmarks/bench_reuse_robot.py
+	$(PY) benchmarks/bench_time_law.py
 	$(PY) benchmarks/bench_planning.py
 	$(PY) benchmarks/bench_ingest.py
 	$(PY) benchmarks/bench_scale.py store

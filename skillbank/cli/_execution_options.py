@@ -128,11 +128,11 @@ def add_robot_options(p, *, what: str = "the whole result") -> None:
                         "joint velocity and acceleration limits always apply")
     add_tool_frame_option(p)
     p.add_argument("--max-joint-velocity", type=float, default=None, metavar="RAD_PER_S",
-                   help=f"slow {what} down uniformly until no joint moves faster (needs --robot; the "
-                        "robot's own limit where it is lower)")
+                   help=f"re-time {what} until no joint moves faster (needs --robot; the robot's own "
+                        "limit where it is lower; docs/robots.md, 'Time law')")
     p.add_argument("--max-joint-acceleration", type=float, default=None, metavar="RAD_PER_S2",
-                   help=f"slow {what} down uniformly until no joint accelerates faster (needs --robot; the "
-                        "robot's own limit where it is lower)")
+                   help=f"re-time {what} until no joint accelerates faster (needs --robot; the robot's own "
+                        "limit where it is lower; docs/robots.md, 'Time law')")
     p.add_argument("--branch", default=None, metavar="NAME",
                    help="the inverse-kinematics branch to follow, e.g. shoulder-left/elbow-up/wrist-up "
                         "(needs --robot; default: the branch of the recorded joints, else of the robot's "

@@ -68,7 +68,10 @@ def _looks_like_csv(head: bytes) -> bool:
     if b"\x00" in head:
         return False
     text = head.decode("utf-8", errors="ignore").lstrip("\ufeff")
+    # comment lines before the header (an export's timing) are not the table
     lines = [line for line in text.splitlines() if line.strip()]
+    while lines and lines[0].startswith("#"):
+        lines.pop(0)
     if not lines or "," not in lines[0]:
         return False
     if len(lines) < 2:

@@ -22,10 +22,11 @@ def _check_demo(demo) -> None:
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
 
 
-def _csv_problem(lines: list[str], width: int, header: bool = True) -> str:
-    """Find the first malformed data row, for an error message numpy cannot give."""
+def _csv_problem(lines: list[str], width: int, header: bool = True, skipped: int = 0) -> str:
+    """Find the first malformed data row, for an error message numpy cannot give (``skipped``: comment
+    lines before ``lines`` in the file, for the line numbers)."""
     first = 2 if header else 1
-    for lineno, line in enumerate(lines[first - 1:], start=first):
+    for lineno, line in enumerate(lines[first - 1:], start=first + skipped):
         if not line.strip():
             continue
         cells = line.split(",")
@@ -40,16 +41,16 @@ def _csv_problem(lines: list[str], width: int, header: bool = True) -> str:
     return "expected a numeric table"
 
 
-def _table(p, lines: list[str], header: bool) -> np.ndarray:
+def _table(p, lines: list[str], header: bool, skipped: int = 0) -> np.ndarray:
     """The numeric rows of a comma-separated table (after a header row when ``header``)."""
     rows = lines[1:] if header else lines
     width = len(lines[0].split(","))
     try:
         table = np.loadtxt(rows, delimiter=",", dtype=float, ndmin=2)
     except ValueError:
-        raise FormatError(p, _csv_problem(lines, width, header)) from None
+        raise FormatError(p, _csv_problem(lines, width, header, skipped)) from None
     if table.shape[1] != width:
-        raise FormatError(p, _csv_problem(lines, width, header))
+        raise FormatError(p, _csv_problem(lines, width, header, skipped))
     return table
 
 
@@ -60,6 +61,22 @@ def _text_lines(p) -> list[str]:
     while lines and not lines[-1].strip():
         lines.pop()
     return lines
+
+
+#: How an exported trajectory's comment line states the law and limits it was timed for (JSON follows).
+TIMING_COMMENT = "# skillbank timing: "
+
+
+def _timing_comment(comments: list[str]):
+    """The ``timing`` metadata a comment line states (:data:`TIMING_COMMENT`), else None."""
+    for line in comments:
+        if line.startswith(TIMING_COMMENT):
+            try:
+                value = json.loads(line[len(TIMING_COMMENT):])
+            except ValueError:
+                return None  # a comment, not ours to refuse
+            return value if isinstance(value, dict) else None
+    return None
 
 
 def read_csv(path) -> Demonstration:
@@ -73,7 +90,9 @@ def read_csv(path) -> Demonstration:
         then ``orientation_x..w``, ``gripper_0``, ``joints_<name>``, ...) is
         read back stream by stream, with ``metadata["joint_names"]``.
         Metadata holds ``source``, ``format`` (``"csv"``) and ``columns``
-        (the header names of the columns after ``t``).
+        (the header names of the columns after ``t``). Lines starting with
+        ``#`` before the header are comments; an export's timing line
+        (:data:`TIMING_COMMENT`) comes back as ``metadata["timing"]``.
 
     Raises
     ------
@@ -91,17 +110,24 @@ def read_csv(path) -> Demonstration:
     """
     p = as_file(path)
     lines = _text_lines(p)
+    # comment lines before the header: an exported trajectory states its timing there
+    comments = next((i for i, line in enumerate(lines) if not line.startswith("#")), len(lines))
+    timing = _timing_comment(lines[:comments])
+    lines = lines[comments:]
     if not lines:
         raise FormatError(p, "expected a header row starting with 't', found an empty file")
     header = [cell.strip() for cell in lines[0].split(",")]
     if header[0].lower() != "t":
-        raise FormatError(p, f"line 1: expected a header row starting with 't', found {lines[0][:60]!r}")
+        raise FormatError(p, f"line {comments + 1}: expected a header row starting with 't', found "
+                             f"{lines[0][:60]!r}")
     if len(header) < 2:
         raise FormatError(p, "line 1: expected 't' and at least one data column, found only 't'")
     if len(lines) < 2:
         raise FormatError(p, "expected at least one data row after the header, found none")
-    table = _table(p, lines, header=True)
+    table = _table(p, lines, header=True, skipped=comments)
     metadata = {"source": str(p), "format": "csv", "columns": header[1:]}
+    if timing is not None:
+        metadata["timing"] = timing
     groups = _stream_groups(header[1:])
     with reading(p, "invalid data"):
         if groups is None:

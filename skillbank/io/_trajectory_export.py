@@ -28,10 +28,21 @@ folder is never replaced).
 
 No export writes more than :func:`max_export_samples` samples (servoj steps
 for URScript, samples otherwise), checked before anything is computed.
+
+A trajectory timed for limits (``metadata["timing"]``: the time law and the
+limits, :func:`skillbank.selection.make_executable`) states them in every
+format: a comment line before the CSV header and in the URScript program's
+header (:data:`TIMING_COMMENT` then JSON), the bag's ``custom_data`` under
+``skillbank_timing`` (JSON), the NPZ's metadata. Its samples are within them
+as these formats carry them: the CSV's finite differences, the servoj steps
+(:func:`blended_joints`) and the bag's ``JointTrajectory`` velocities and
+accelerations (:func:`joint_rates`); :func:`skillbank.robots.time_law` meets
+both measures.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import secrets
@@ -43,11 +54,11 @@ import numpy as np
 from ..core import Demonstration
 from ..core._validation import check_positive, env_bound
 from ._confine import atomic_output
-from ._tabular import write_npz
+from ._tabular import TIMING_COMMENT, write_npz
 
 __all__ = ["TRAJECTORY_FORMATS", "write_trajectory", "trajectory_format", "trajectory_columns",
            "max_export_samples", "blended_joints", "check_export_samples", "check_control_rate",
-           "check_topic",
+           "check_topic", "timing_lines", "LIMIT_UNITS",
            "MAX_EXPORT_SAMPLES", "MAX_EXPORT_VARIABLE", "CONTROL_RATES", "ROS_TOPICS"]
 
 #: Export formats, as ``--format`` names them.
@@ -203,9 +214,35 @@ def _temporary_folder(target: Path) -> Path:
     return tmp
 
 
+#: Units of each kind of limit, as the timing line states them.
+LIMIT_UNITS = {"velocity": "m/s", "acceleration": "m/s^2", "angular_velocity": "rad/s",
+               "angular_acceleration": "rad/s^2", "joint_velocity": "rad/s per joint",
+               "joint_acceleration": "rad/s^2 per joint"}
+
+
+def timing_lines(demo: Demonstration) -> list[str]:
+    """The comment lines stating the time law and limits a trajectory was timed for (none if untimed).
+
+    Examples
+    --------
+    >>> d = Demonstration([0.0, 1.0], {"position": [[0.0], [1.0]]},
+    ...                   {"timing": {"law": "toppra", "limits": {"joint_velocity": [3.1, 3.1]}}})
+    >>> timing_lines(d)[0]
+    '# skillbank timing: {"law": "toppra", "limits": {"joint_velocity": [3.1, 3.1]}}'
+    """
+    timing = demo.metadata.get("timing")
+    if not isinstance(timing, dict):
+        return []
+    limits = timing.get("limits") or {}
+    words = "; ".join(f"{key} {value} {LIMIT_UNITS.get(key, '')}".rstrip() for key, value in limits.items())
+    return [TIMING_COMMENT + json.dumps(timing, sort_keys=True),
+            f"# timed by the {timing.get('law')} time law within: {words or 'no limits'} (joints in the "
+            "order of the joint columns)"]
+
+
 def _csv(demo: Demonstration, path: Path) -> None:
     table = np.column_stack([demo.t] + [demo.streams[s] for s in demo.streams])
-    header = ",".join(["t"] + trajectory_columns(demo))
+    header = "\n".join(timing_lines(demo) + [",".join(["t"] + trajectory_columns(demo))])
     np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.17g")
 
 
@@ -280,6 +317,7 @@ def _urscript(demo: Demonstration, path: Path, rate: float, gripper_command: str
         f"# skillbank joint trajectory: {n} servoj steps at {rate:g} Hz (t = {period:.6g} s each), "
         f"{duration:.6g} s",
         f"# joints (radians): {', '.join(names)}",
+        *timing_lines(demo),
         "def skillbank_trajectory():",
     ]
     gripper = "gripper" in demo.streams
@@ -350,6 +388,8 @@ def _rosbag(demo: Demonstration, folder: Path, start_time: float, frame_id: str,
     offsets = [int(round(float(x - demo.t[0]) * 1e9)) for x in demo.t]
     start = int(round(start_time * 1e9))
     with Writer(folder, version=8) as writer:
+        if isinstance(demo.metadata.get("timing"), dict):  # the law and the limits the points were timed for
+            writer.set_custom_data("skillbank_timing", json.dumps(demo.metadata["timing"], sort_keys=True))
         if "joints" in demo.streams:
             names = list(demo.metadata.get("joint_names") or
                          [f"joint_{j}" for j in range(demo["joints"].shape[1])])

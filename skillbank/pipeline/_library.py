@@ -394,7 +394,7 @@ class Library(Adding):
 
     def reuse(self, skill, constraints, *, method: str = "promp", k=None, rank: str = "shortlist",
               shortlist: int = SHORTLIST, random_state=None, progress: bool = False, duration=None,
-              robot=None, limits=None, branch=None, clearance_margin=None):
+              robot=None, limits=None, branch=None, clearance_margin=None, time_law: str = "toppra"):
         """Reproduce a skill under new constraints with :func:`skillbank.selection.reuse`.
 
         Every primitive of the skill is a candidate (its id is the primitive id).
@@ -403,8 +403,8 @@ class Library(Adding):
         ``"length"`` orders all of them by curve length; ``"deformation"``
         and ``"endpoints"`` by how far each candidate is from the task.
         ``progress`` shows a tqdm bar on stderr over the candidates adapted
-        (the result is the same). ``duration``, ``robot``, ``limits`` and ``branch`` make
-        the reproduction executable (time from 0, gripper and other streams
+        (the result is the same). ``duration``, ``robot``, ``limits``, ``branch`` and
+        ``time_law`` make the reproduction executable (time from 0, gripper and other streams
         of the best primitive, joints by inverse kinematics, velocity and
         acceleration limits): see :func:`skillbank.selection.reuse`. With a
         robot, ``clearance_margin`` (m, default 5 mm) is what every moving body
@@ -427,7 +427,8 @@ class Library(Adding):
             return reuse([p.demo for p in prims], constraints, method=method, k=k,
                          ids=[p.id for p in prims], rank=rank, shortlist=shortlist, random_state=random_state,
                          progress=_ticker(bar) if progress else None, duration=duration, robot=robot,
-                         limits=limits, branch=branch, clearance_margin=clearance_margin)
+                         limits=limits, branch=branch, clearance_margin=clearance_margin,
+                         time_law=time_law)
 
     # -- planning ---------------------------------------------------------------------------------
     def describe(self, label, action, binding=None) -> int:

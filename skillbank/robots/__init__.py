@@ -28,6 +28,7 @@ from ._clearing import CLEARANCE, clearing_move
 from ._description import check_description_files, enclosing_capsule, load_description
 from ._points import PosePoint, pose_point, to_tool, tool_point
 from ._registry import DESCRIPTIONS, ROBOTS, registered_name, robot_model
+from ._time_law import STILL, TIME_LAWS, rate_ratio, time_law
 from ._ur5e import UR5E_DH, UR5e
 
 __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "ROBOTS", "DESCRIPTIONS",
@@ -35,4 +36,5 @@ __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "R
            "check_description_files",
            "enclosing_capsule",
            "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "PANDA_HAND", "Clearance", "clearance",
-           "CLEARANCE", "clearing_move", "PosePoint", "pose_point", "to_tool", "tool_point"]
+           "CLEARANCE", "clearing_move", "PosePoint", "pose_point", "to_tool", "tool_point", "time_law",
+           "rate_ratio", "TIME_LAWS", "STILL"]

@@ -17,12 +17,21 @@ them with what the primitives it learned from recorded:
 - **joints** from a robot model's inverse kinematics of the pose path, when
   a robot is given, starting on the branch of the best source's recorded
   joints;
-- **timing**: time starts at 0; velocity and acceleration limits are met by
-  slowing the whole reproduction down uniformly (the path is never changed).
-  With a robot, its own joint velocity and acceleration limits
+- **timing**: time starts at 0; the path is never changed, only the time of
+  each sample. With a robot, its own joint velocity and acceleration limits
   (:attr:`~skillbank.robots.RobotModel.rate_limits`) always apply, tighter
-  given ones too. A duration that breaks a limit is stretched to the
-  shortest one that meets it, with a note saying from what to what; only a
+  given ones too. A time base that meets every limit is kept. One that
+  breaks a limit is re-timed by the ``time_law``: ``"toppra"`` (default,
+  joint trajectories) gives the joint path the fastest timing under the joint
+  limits (:func:`skillbank.robots.time_law`: TOPP-RA, from rest to rest),
+  never faster than the time base asked for, then any task-space limit it
+  still breaks is met by a uniform stretch of that timing (when that makes it
+  slower than the uniform law, the uniform law's timing is kept: both meet
+  every limit); ``"uniform"`` (and any trajectory without joints) slows the
+  whole reproduction down uniformly to the shortest duration that meets the
+  limits. A note says which law,
+  under which limits, from what duration to what; the trajectory's metadata
+  ``"timing"`` holds the law and the limits (the exports state them). Only a
   time base given as time stamps (``t``) is strict, and refused instead.
 """
 
@@ -35,9 +44,10 @@ import numpy as np
 from ..core import POSE_OF, Demonstration, check_pose_of, continuous_quaternions, slerp
 from ..core._rotations import _exp, _log, quaternion_conjugate, quaternion_multiply
 from ..core._validation import numerical_errors
-from ..editing import edit_orientation, relative_rotations
-from ..robots import KinematicsError, RobotModel, robot_model, tool_point
-from ._limits import DURATION_RANGE, LIMITS, _show, check_duration, check_limits, robot_limits
+from ..editing import edit_orientation
+from ..robots import TIME_LAWS, KinematicsError, RobotModel, robot_model, tool_point
+from ._limits import DURATION_RANGE, LIMITS, check_duration, check_limits, robot_limits
+from ._timing import _JOINT_KEYS, _check_stretch, _joint_law, _plain, _scale_needed, _uniform, peak_rates
 
 __all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
            "DISCRETE_STREAMS", "DURATION_RANGE", "check_duration", "robot_limits"]
@@ -47,11 +57,6 @@ DISCRETE_STREAMS = ("gripper",)
 #: Recorded streams that are derivatives of the path (RAIL stores them): not carried onto a new path.
 DERIVED_STREAMS = ("velocity", "acceleration", "jerk", "angular_velocity", "angular_acceleration")
 
-_STREAM_OF = {"velocity": "position", "acceleration": "position", "angular_velocity": "orientation",
-              "angular_acceleration": "orientation", "joint_velocity": "joints",
-              "joint_acceleration": "joints"}
-# A limit met to round-off: the scaled peak may exceed it by a few ulps otherwise.
-_MARGIN = 1.0 + 1e-12
 @dataclass
 class Executable:
     """A reproduction with every stream a robot needs.
@@ -69,7 +74,8 @@ class Executable:
         scaling; ``position`` in units/s (norm), ``orientation`` angular (rad/s,
         norm), ``joints`` the largest of any joint (rad/s).
     time_scale : float
-        Factor the time base was stretched by to meet the limits (1.0: none needed).
+        Duration after timing over duration before (1.0: the time base met the
+        limits; with the ``"uniform"`` law, the factor every time was stretched by).
     notes : list of str
         What was carried, dropped or changed, in words.
     """
@@ -125,72 +131,6 @@ def retime(demo: Demonstration, duration=None) -> Demonstration:
         t = t * (duration / t[-1])
         t[-1] = duration
     return Demonstration(t, demo.streams, demo.metadata)
-
-
-def _rates(values: np.ndarray, t: np.ndarray):
-    """First and second time derivatives by finite differences (uneven steps allowed)."""
-    dt = np.diff(t)
-    v = values / dt[:, None]
-    a = np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
-    return v, a
-
-
-def _steps(name: str, data: np.ndarray) -> np.ndarray:
-    """Per-step changes: rotation vectors for orientations, differences otherwise."""
-    return relative_rotations(data) if name == "orientation" else np.diff(data, axis=0)
-
-
-def peak_rates(demo: Demonstration) -> dict:
-    """Peak velocity and acceleration of ``position``, ``orientation`` and ``joints`` (those present).
-
-    Task space: the norm of the velocity (units/s) and of the acceleration;
-    orientation: of the angular velocity (rad/s, from the relative rotation
-    between samples); joints: the largest absolute value of any joint.
-
-    Examples
-    --------
-    >>> t = np.linspace(0.0, 2.0, 5)
-    >>> peak_rates(Demonstration(t, {"position": np.c_[t, 0 * t]}))["position"]
-    {'velocity': 1.0, 'acceleration': 0.0}
-    """
-    out = {}
-    if demo.n_steps < 2:
-        return out
-    for name in ("position", "orientation", "joints"):
-        if name not in demo.streams:
-            continue
-        v, a = _rates(_steps(name, demo[name]), demo.t)
-        out[name] = {"velocity": float(_size(name, v).max()),
-                     "acceleration": float(_size(name, a).max()) if len(a) else 0.0}
-    return out
-
-
-def _size(name: str, x: np.ndarray) -> np.ndarray:
-    """Per-sample size of a rate: the largest joint's for joints, the norm otherwise."""
-    return np.abs(x).max(axis=1) if name == "joints" else np.linalg.norm(x, axis=1)
-
-
-def _scale_needed(demo: Demonstration, limits: dict) -> tuple[float, str]:
-    """The smallest uniform time stretch meeting every limit, and the limit that sets it."""
-    best, why = 1.0, ""
-    for key, limit in limits.items():
-        stream = _STREAM_OF[key]
-        if stream not in demo.streams:
-            continue
-        v, a = _rates(_steps(stream, demo[stream]), demo.t)
-        x = a if key.endswith("acceleration") else v
-        if not len(x):
-            continue
-        if stream == "joints":
-            limit = np.broadcast_to(limit, (x.shape[1],))
-            ratio = float((np.abs(x) / limit).max())
-        else:
-            ratio = float(np.linalg.norm(x, axis=1).max() / limit)
-        # Time stretched by s divides velocities by s and accelerations by s^2.
-        need = np.sqrt(ratio) if key.endswith("acceleration") else ratio
-        if need * _MARGIN > best:
-            best, why = need * _MARGIN, key
-    return best, why
 
 
 def _source_times(source: Demonstration, u: np.ndarray, by_index: bool) -> np.ndarray:
@@ -257,7 +197,7 @@ def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0
 
 def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot=None, limits=None,
                     fixed_time: bool = False, by_index: bool = False, kind: str = "primitive",
-                    branch=None) -> Executable:
+                    branch=None, time_law: str = "toppra") -> Executable:
     """Complete a reproduced path with orientation, gripper, other streams, joints and timing.
 
     Parameters
@@ -276,8 +216,13 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         Adds a ``joints`` stream by inverse kinematics (``robot_model(robot)``),
         and the robot's own joint limits to ``limits`` (:func:`robot_limits`).
     limits : dict, optional
-        Keys of :data:`LIMITS`. Met by stretching time uniformly (a note says
-        by how much and the duration before and after).
+        Keys of :data:`LIMITS`. A time base that breaks one is re-timed by
+        ``time_law`` (a note says which, under which limits, and the duration
+        before and after).
+    time_law : {"toppra", "uniform"}, default="toppra"
+        How a joint trajectory (with ``robot``) is re-timed: the fastest
+        timing of its joint path (:func:`skillbank.robots.time_law`), or a
+        uniform stretch of the given one. Without joints, always uniform.
     fixed_time : bool, default=False
         The time base was given as time stamps: limits that need a longer one
         are an error instead of a stretch.
@@ -312,6 +257,8 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     (True, [0.0, 0.0, 1.0, 1.0, 1.0])
     """
     limits = check_limits(limits)
+    if time_law not in TIME_LAWS:
+        raise ValueError(f"time_law: expected one of {list(TIME_LAWS)}, got {time_law!r}")
     model = None if robot is None else _robot(robot)
     if model is not None:
         limits, limit_notes = robot_limits(model, limits)
@@ -376,33 +323,30 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     if limits and n > 1:
         with numerical_errors("reuse (time scaling)"):
             scale, key = _scale_needed(demo, limits)
+        law = "as given"  # the time base met every limit
         if scale > 1.0:
             _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
-            if (t[-1] - t[0]) * scale > DURATION_RANGE[1]:
-                raise ValueError(f"limits: {key} {_show(limits[key])} would stretch the motion to "
-                                 f"{(t[-1] - t[0]) * scale:.3g} s, more than {DURATION_RANGE[1]:g} s: give a "
-                                 "larger limit")
-            demo = Demonstration(t[0] + (t - t[0]) * scale, streams, metadata)
-            own = model is not None and key in model.rate_limits and np.array_equal(
-                np.broadcast_to(limits[key], model.rate_limits[key].shape), model.rate_limits[key])
-            whose = f" (the {model.name}'s own limit)" if own else ""
-            before = float(t[-1] - t[0])
-            notes.append(f"time stretched by {scale:.4g} to meet {key} {_show(limits[key])}{whose}: "
-                         f"{before:.6g} s -> {before * scale:.6g} s")
+            joint_limits = "joints" in streams and any(k in limits for k in _JOINT_KEYS)
+            law = "uniform"
+            stretched, note = _uniform(demo, limits, scale, key, model)
+            if time_law == "toppra" and joint_limits:
+                try:
+                    timed, law_scale, law_note = _joint_law(demo, limits, scale, model)
+                except ValueError as exc:  # the uniform stretch meets the limits: kept, with the reason
+                    timed, law_scale, law_note = None, np.inf, str(exc)
+                # task-space limits bound after the joint law can make it slower than a uniform stretch:
+                # both meet every limit, the shorter is kept
+                if law_scale <= scale:
+                    stretched, scale, note, law = timed, law_scale, law_note, "toppra"
+                elif timed is None:
+                    note += f" (the toppra time law failed: {law_note})"
+                else:
+                    note += (f" (shorter than the toppra time law's {float(timed.t[-1] - timed.t[0]):.6g} s, "
+                             "which task-space limits slowed down)")
+            demo = stretched
+            notes.append(note)
+        demo.metadata["timing"] = {"law": law, "limits": {k: _plain(v) for k, v in limits.items()}}
     with numerical_errors("reuse (peak rates)"):
         peaks = peak_rates(demo)
     demo.metadata["time_scale"] = scale
     return Executable(trajectory=demo, orientation_error=error, peaks=peaks, time_scale=scale, notes=notes)
-
-
-def _check_stretch(constraints, fixed_time, scale, t, key, limit) -> None:
-    duration = float(t[-1] - t[0])
-    if fixed_time:
-        raise ValueError(f"limits: {key} {_show(limit)} cannot be met on the {duration:.6g} s time base "
-                         f"given: it needs at least {duration * scale:.6g} s (give a duration instead of "
-                         "time stamps to slow down as needed)")
-    for name in ("start_velocity", "end_velocity"):
-        v = getattr(constraints, name)
-        if v is not None and np.any(v != 0):
-            raise ValueError(f"limits: {key} {_show(limit)} needs the motion slowed down {scale:.4g} times, "
-                             f"which would change the non-zero {name.replace('_', ' ')} {v.tolist()}")

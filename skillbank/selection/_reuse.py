@@ -58,7 +58,8 @@ class ReuseResult:
         Peak velocity and acceleration of ``position``, ``orientation`` and
         ``joints`` after time scaling (see :func:`peak_rates`).
     time_scale : float
-        How much the time base was stretched to meet the limits (1.0: not at all).
+        Duration after timing over duration before (1.0: the time base met the
+        limits; with the uniform law, the factor every time was stretched by).
     notes : list of str
         Streams carried or dropped, time scaling, the representation's warnings, repairs.
     clearance : Clearance or None
@@ -128,7 +129,7 @@ def _check_k(k, method: str, n_usable: int) -> int:
 
 def reproduce_selection(selection: Selection, constraints, *, method: str = "promp", k=None,
                         random_state=None, t=None, duration=None, robot=None, limits=None,
-                        branch=None) -> ReuseResult:
+                        branch=None, time_law: str = "toppra") -> ReuseResult:
     """Learn ``method`` from the ``k`` best candidates of a selection and reproduce the task.
 
     The second half of :func:`reuse`; call it directly to try several
@@ -139,7 +140,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     selection : Selection
         From :func:`select_candidates` with the same ``constraints``.
     constraints : Constraints
-    method, k, random_state, t, duration, robot, limits, branch
+    method, k, random_state, t, duration, robot, limits, branch, time_law
         As in :func:`reuse`. ``duration`` stretches the reproduction's time
         base uniformly here; :func:`reuse` stretches the candidates first,
         so that velocity constraints mean the same in the result.
@@ -196,7 +197,8 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     metadata = {"method": method, "used": used, "k": k, "rank": selection.rank}
     done = make_executable(Demonstration(time, {"position": out["position"]}, metadata),
                            [c.recorded() for c in chosen], constraints, ids=used, robot=robot, limits=limits,
-                           fixed_time=t is not None, by_index=t is not None, branch=branch)
+                           fixed_time=t is not None, by_index=t is not None, branch=branch,
+                           time_law=time_law)
     traj = done.trajectory
     Y = traj["position"]
     with numerical_errors(f"reuse ({method} result check)"):
@@ -259,7 +261,7 @@ def _at_tool(primitives, model, ids) -> tuple[list, list]:
 
 def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, random_state=None, t=None,
           rank: str = "shortlist", shortlist: int = SHORTLIST, progress=None, duration=None, robot=None,
-          limits=None, branch=None, clearance_margin=None) -> ReuseResult:
+          limits=None, branch=None, clearance_margin=None, time_law: str = "toppra") -> ReuseResult:
     """Reproduce a skill under new constraints from stored primitives (the paper's selection).
 
     1. Adapt every candidate with Laplacian trajectory editing to the constraints.
@@ -272,7 +274,7 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
        orientation from the candidates, turned to the orientation constraints
        keeping the rotation profile; gripper and other recorded streams of
        the best candidate, time-warped; joints by inverse kinematics with a
-       ``robot``; time from 0, stretched uniformly to meet ``limits``.
+       ``robot``; time from 0, re-timed to meet ``limits`` (``time_law``).
 
     Parameters
     ----------
@@ -339,10 +341,15 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
     limits : dict, optional
         Velocity and acceleration limits (keys ``velocity``,
         ``acceleration``, ``angular_velocity``, ``angular_acceleration``,
-        ``joint_velocity``, ``joint_acceleration``), met by slowing the whole
-        reproduction down uniformly; a ``duration`` too short for them is
-        stretched (a note says to what); with ``t`` a limit that needs more
-        time is an error.
+        ``joint_velocity``, ``joint_acceleration``). A time base that breaks
+        one is re-timed by ``time_law`` (a note says how and to what); with
+        ``t`` a limit that needs more time is an error.
+    time_law : {"toppra", "uniform"}, default="toppra"
+        With ``robot``: the joint path's fastest timing under the joint limits
+        (:func:`skillbank.robots.time_law`, never faster than the time base
+        asked for), the task-space limits then met by a uniform stretch; or the
+        whole time base stretched uniformly (``"uniform"``, the only law
+        without a robot). See :func:`make_executable`.
 
     Returns
     -------
@@ -397,7 +404,7 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
                                       rejected={**selection.rejected, **lost}, rank=again.rank)
             result = reproduce_selection(selection, task, method=method, k=k, random_state=random_state, t=t,
                                          duration=duration, robot=model if model is not None else robot,
-                                         limits=limits, branch=branch)
+                                         limits=limits, branch=branch, time_law=time_law)
             return result, result.trajectory
 
         if model is None:

@@ -26,10 +26,14 @@ def check_result(res, out):
     assert "majority" in Path(res["summary"]).read_text()
     # one reproduction a UR5e executes, as CSV: pose, gripper and joints from t = 0
     ex = res["executable"]
-    header = Path(ex["csv"]).read_text().splitlines()[0].split(",")
+    lines = Path(ex["csv"]).read_text().splitlines()
+    # the law and limits it was timed for come first, as comment lines (docs/robots.md, "Time law")
+    at = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    assert lines[0].startswith("# skillbank timing: ")
+    header = lines[at].split(",")
     assert header[0] == "t" and "orientation_w" in header and "joints_shoulder_pan_joint" in header
     assert "gripper_0" in header or "gripper" in header
-    rows = np.loadtxt(ex["csv"], delimiter=",", skiprows=1)
+    rows = np.loadtxt(ex["csv"], delimiter=",", skiprows=at + 1)
     assert rows[0, 0] == 0.0 and ex["constraint_error"] < 1e-6 and ex["orientation_error"] < 1e-9
     assert ex["peak_joint_velocity"] <= 1.0 + 1e-9
     assert "reach_ur5e.csv" in Path(res["summary"]).read_text()

@@ -361,3 +361,85 @@ def test_blended_joints_never_exceed_the_samples_peaks(steps, values, rate):
     # round-off of a second difference: ~1e-15 of the values, over the period squared
     assert wa.max() <= accel * (1 + 1e-9) + 1e-13 * rate**2
     np.testing.assert_allclose(blended_joints(t[[0, -1]], t, Q)[:, 0], Q[[0, -1], 0], atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def timed():
+    """A 2 s reach on the UR5e asked for in 0.4 s with tighter joint limits: re-timed by the time law."""
+    from skillbank import Constraints
+    from skillbank.robots import tool_point
+    from skillbank.selection import make_executable
+
+    s = np.linspace(0.0, 1.0, 60)
+    t = 0.4 * s
+    P = np.c_[0.4 + 0.1 * s, -0.2 + 0.2 * s, 0.3 - 0.1 * np.sin(np.pi * s)]
+    Q = exp_map(np.c_[0 * s, 0 * s, 0.8 * s], reference=[1.0, 0.0, 0.0, 0.0])
+    source = Demonstration(t, {"position": P, "orientation": Q, "gripper": (s > 0.5).astype(float)},
+                           {"pose_of": tool_point(UR5e())})
+    limits = {"joint_velocity": [0.8, 0.8, 0.8, 1.2, 1.2, 1.2], "joint_acceleration": 2.0}
+    done = make_executable(Demonstration(t, {"position": P}), [source], Constraints(), robot="ur5e",
+                           limits=limits)
+    assert done.trajectory.metadata["timing"]["law"] == "toppra" and done.time_scale > 1.0
+    return done.trajectory
+
+
+def _stated(timing):
+    """Per-joint velocity and acceleration limits from a stated timing (JSON)."""
+    limits = timing["limits"]
+    return np.asarray(limits["joint_velocity"]), np.asarray(limits["joint_acceleration"])
+
+
+def test_exports_state_the_limits_they_were_timed_for_and_keep_within_them(timed, tmp_path):
+    """Each format read back: the law and limits it states, and its joint rates against them."""
+    import json
+
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+    from ruamel.yaml import YAML
+
+    from skillbank.io import load
+
+    expected = {"law": "toppra", "limits": {"joint_velocity": [0.8, 0.8, 0.8, 1.2, 1.2, 1.2],
+                                            "joint_acceleration": [2.0] * 6}}
+    assert timed.metadata["timing"] == expected
+    # CSV: the comment line before the header, read back by skillbank's reader; the samples within
+    csv = write_trajectory(timed, tmp_path / "arm.csv")
+    first, second, header = csv.read_text().splitlines()[:3]
+    assert first == "# skillbank timing: " + json.dumps(expected, sort_keys=True)
+    assert second.startswith("# timed by the toppra time law within: joint_velocity [0.8, 0.8, 0.8, 1.2, "
+                             "1.2, 1.2] rad/s per joint; joint_acceleration [2.0, 2.0, 2.0, 2.0, 2.0, 2.0] "
+                             "rad/s^2")
+    assert header.startswith("t,position_0")
+    back = load(csv)
+    assert back.metadata["timing"] == expected
+    vmax, amax = _stated(back.metadata["timing"])
+    speed, accel = _peaks(back["joints"], back.t)
+    assert (speed <= vmax).all() and (accel <= amax).all()
+    assert max((speed / vmax).max(), np.sqrt((accel / amax).max())) > 0.999  # timed to the limits, not slower
+    # URScript: the header states them; the servoj steps keep within them (up to blended_joints' drift
+    # correction and the 9 printed decimals, as for any trajectory)
+    for rate in (125.0, 500.0):
+        script = write_trajectory(timed, tmp_path / f"arm{rate:g}.script", rate=rate)
+        text = script.read_text()
+        line = next(x for x in text.splitlines() if x.startswith("# skillbank timing: "))
+        vmax, amax = _stated(json.loads(line[len("# skillbank timing: "):]))
+        steps = _servoj(script)
+        times = np.minimum(np.arange(len(steps)) / rate, timed.t[-1])
+        written_v, written_a = _peaks(steps[:-1], times[:-1])
+        drift = np.abs(blended_joints(timed.t, timed.t, timed["joints"]) - timed["joints"]).max()
+        assert (written_v <= vmax + drift / timed.t[-1] + 2e-9 * rate).all()
+        assert (written_a <= amax * (1 + 1e-9) + 4e-9 * rate**2).all()
+    # NPZ: the metadata, as JSON
+    assert read_npz(write_trajectory(timed, tmp_path / "arm.npz")).metadata["timing"] == expected
+    # ROS 2 bag: custom_data holds the timing; every JointTrajectory point's velocities and accelerations
+    bag = write_trajectory(timed, tmp_path / "bag", format="rosbag")
+    # rosbag2's own metadata file, read as YAML (ruamel.yaml comes with rosbags)
+    info = YAML(typ="safe").load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert json.loads(info["custom_data"]["skillbank_timing"]) == expected
+    with AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        [(conn, _, raw)] = [m for m in reader.messages() if m[0].topic == "/joint_trajectory"]
+        traj = reader.deserialize(raw, conn.msgtype)
+    V = np.array([p.velocities for p in traj.points])
+    A = np.array([p.accelerations for p in traj.points])
+    vmax, amax = _stated(expected)
+    assert (np.abs(V) <= vmax * (1 + 1e-12)).all() and (np.abs(A) <= amax * (1 + 1e-12)).all()

@@ -8,7 +8,7 @@ import pytest
 from skillbank import Constraints, Demonstration, Sphere
 from skillbank.core import exp_map, quaternion_angle
 from skillbank.editing import relative_rotations
-from skillbank.robots import KinematicsError, UR5e
+from skillbank.robots import KinematicsError, UR5e, rate_ratio
 from skillbank.selection import METHODS, make_executable, peak_rates, reuse
 
 DOWN = [1.0, 0.0, 0.0, 0.0]  # tool z pointing down in the UR base frame
@@ -129,20 +129,34 @@ def test_a_duration_too_short_for_the_limits_is_stretched_with_a_note():
                     f"{res.trajectory.t[-1]:.6g} s")
 
 
-def test_the_robots_own_limits_always_apply():
-    """1 ns asked for: stretched to the UR5e's 180 deg/s and 180 deg/s^2, one of them met exactly."""
+@pytest.mark.parametrize("law", ["toppra", "uniform"])
+def test_the_robots_own_limits_always_apply(law):
+    """1 ns asked for: timed to the UR5e's 180 deg/s and 180 deg/s^2, one of them met exactly (the time
+    law meets it as the exports measure it: finite differences and a ROS 2 bag's numpy.gradient)."""
     task = Constraints(goal=GOAL, goal_orientation=GOAL_Q)
-    res = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9)
+    res = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9, time_law=law)
     J, t = res.trajectory["joints"], res.trajectory.t
     v = np.diff(J, axis=0) / np.diff(t)[:, None]
     a = np.diff(v, axis=0) / (0.5 * (t[2:] - t[:-2]))[:, None]
     ratio = max(np.abs(v).max() / np.pi, np.sqrt(np.abs(a).max() / np.pi))
+    if law == "toppra":
+        measured = rate_ratio(t, J, velocity=np.pi, acceleration=np.pi)
+        assert ratio <= 1.0 and measured == pytest.approx(1.0, abs=1e-9)
+        note = next(n for n in res.notes if n.startswith("time law toppra"))
+        own = "3.142 (the ur5e's own limit)"
+        head = (f"time law toppra (TOPP-RA, path kept) for joint_velocity {own} and joint_acceleration "
+                f"{own}: 1e-09 s -> {t[-1]:.6g} s (a uniform stretch: ")
+        assert note.startswith(head), note
+        assert res.trajectory.metadata["timing"] == {"law": "toppra", "limits": {
+            "joint_velocity": [np.pi] * 6, "joint_acceleration": [np.pi] * 6}}
+        return
     assert ratio <= 1.0 and ratio == pytest.approx(1.0, abs=1e-9)
     note = next(n for n in res.notes if n.startswith("time stretched"))
     assert note.endswith(f"(the ur5e's own limit): 1e-09 s -> {t[-1]:.6g} s"), note
     assert note.startswith(f"time stretched by {res.time_scale:.4g} to meet joint_")
     # a given limit above the robot's: the robot's applies, and a note says so
-    fast = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9, limits={"joint_velocity": 10.0})
+    fast = reuse(SKILL, task, method="ja", robot="ur5e", duration=1e-9, limits={"joint_velocity": 10.0},
+                 time_law=law)
     assert "joint_velocity: 10 is above the ur5e's own limit 3.142; the robot's limit applies" in fast.notes
     np.testing.assert_array_equal(fast.trajectory.t, t)
     # a tighter given limit is met as given
