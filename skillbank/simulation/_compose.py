@@ -646,7 +646,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
         raise ValueError(f"disturb.object: the scene has no object {disturb['object']!r}; it has "
                          f"{world.objects}")
     # each segment also leaves as its demonstration did: a composed scene stands beside what it picks up
-    episode = _Episode(env, obs, 10 ** 9, trace=paths, leave=True, reach=Reach(env))
+    episode = _Episode(env, obs, 10 ** 9, trace=paths, reach=Reach(env))
     episode.rest(world.objects)
     episode.fingers = _fingers(env, episode.obs)
     facts = world.facts(episode.obs)
