@@ -89,6 +89,11 @@ def test_out_and_plot_replace_a_link_on_the_command_line(option, name, outside, 
     argv = ["edit", demo, "--goal", "0.1,0.1,0.1", option, link]
     if option == "--plot":
         argv += ["--out", work / "edited.csv"]
+    else:  # a link there is an output there: replaced with --force only
+        code, out, err = cli(*argv)
+        assert code == 2 and err.startswith("skillbank edit: error: out: ") and "--force" in err, err
+        assert link.is_symlink() and secret.read_bytes() == before
+        argv.append("--force")
     code, out, err = cli(*argv)
     assert code == 0, err
     assert not link.is_symlink() and link.stat().st_size > 0
