@@ -58,7 +58,9 @@ def add_parser(sub):
     p.add_argument("--representatives", default=None,
                    help="comma-separated file indices (sorted order) of the representatives for "
                         "--features angular")
-    p.add_argument("--seed", type=int, default=None, help="random seed")
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed (first elastic node, PCA; default 0, as 'library cluster' and "
+                        "'experiment rail')")
     add_repair_option(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None,

@@ -77,8 +77,8 @@ def add_parser(sub):
                             "evaluate --robot'")
         c.add_argument("--record-robot", default="UR5e", metavar="ARM",
                        help="robosuite's arm the demonstrations are recorded on, as 'sim record --robot' "
-                            "(default UR5e); another than --robot runs the skills on an arm that did not "
-                            "show them, through the grip site's pose (a note says so)")
+                            "(default UR5e, any case); another than --robot runs the skills on an arm that "
+                            "did not show them, through the grip site's pose (a note says so)")
         c.add_argument("--out", type=Path, default=None, metavar="DIR",
                        help=f"keep what the experiment recorded and built in DIR (new or empty, else "
                             f"--force): the demonstrations (TASK.hdf5, for 'library add'), the labelled "

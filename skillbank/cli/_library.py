@@ -93,7 +93,7 @@ def add_parser(sub):
                         "featurisers only, and its default is heading, not 'cluster''s default: the library "
                         "stores its featuriser with the clustering and applies it to the primitives added "
                         "later, which these two allow ('default' is still read as heading)")
-    c.add_argument("--seed", type=int, default=0, help="random seed")
+    c.add_argument("--seed", type=int, default=0, help="random seed (first elastic node, PCA; default 0)")
     c.add_argument("--plot", type=Path, default=None,
                    help="write a figure of the clusters (features and each cluster's primitives) to this "
                         "file (.png, .pdf, .svg; no extension: .png)")
@@ -143,7 +143,8 @@ def add_parser(sub):
                         "shortest curve first; length: the paper's curve length over all)")
     c.add_argument("--shortlist", type=int, default=argparse.SUPPRESS,
                    help="shortlist size for --rank shortlist (default: skillbank.selection.SHORTLIST)")
-    c.add_argument("--seed", type=int, default=None, help="random seed")
+    c.add_argument("--seed", type=int, default=None,
+                   help="random seed for methods that sample (default: none, a fresh draw each run)")
     add_execution_options(c)
     c.add_argument("--out", type=Path, default=None,
                    help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
