@@ -376,6 +376,9 @@ def _plan_physics(args) -> int:
             if "replanned" in st:
                 print(f"     replanned: {' '.join(st['replanned']) or '(no steps)'}")
         verdict = "success" if row["success"] else f"failure ({row['failure']['reason']})"
+        # the order carried out: the moves the goal leaves free are taken tallest first, not as planned
+        done = " ".join(f"({' '.join([s['action'], *s['args']])})" for s in row["steps"] if s["ok"])
+        print(f"  carried out: {done or '(no steps)'}")
         print(f"  {verdict} by the environment's check, {row['control_steps']} control steps")
     lo, hi = report["interval"]
     print(f"{args.scene}: {report['successes']}/{report['episodes']} = {100 * report['success_rate']:.0f} % "

@@ -384,7 +384,8 @@ def _fake_composition(calls):
         if folder is not None:
             (Path(folder) / "Stack.hdf5").write_text("demonstrations")
             (Path(folder) / f"{name}.db").write_text("library")
-        steps = [{"action": "pick", "args": ["cubeB"]}, {"action": "place", "args": ["cubeB", "cubeA"]}]
+        steps = [{"action": "pick", "args": ["cubeB"], "ok": True},
+                 {"action": "place", "args": ["cubeB", "cubeA"], "ok": True}]
         row = {"seed": 1000, "success": True, "plan": ["(place cubeB cubeA)", "(pick cubeB)"], "steps": steps,
                **({"path": [[0, 0, 0]], "step_starts": [0]} if paths else {})}
         return {"experiment": name, "scene": "robosuite:Stack3", "robot": "UR5e", "recorded_on": ["UR5e"],
