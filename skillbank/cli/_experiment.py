@@ -186,7 +186,7 @@ def _composition(args) -> int:
         verdict = "success" if row["success"] else f"failure at step {row['failure']['step']}: " \
             f"{row['failure']['reason']}"
         # the order carried out (the moves the goal leaves free are taken tallest first), not the planner's
-        done = [f"({' '.join([s['action'], *s['args']])})" for s in row["steps"] if s["ok"]]
+        done = [f"({' '.join([s['action'], *s['args']])})" for s in row.get("steps", ()) if s["ok"]]
         print(f"  seed {row['seed']}: carried out {' '.join(done) or '(no steps)'}: {verdict}")
     print(f"{report['scene']} ({report['method']}, on {report['robot']}): {report['successes']}/"
           f"{report['episodes']} = "
