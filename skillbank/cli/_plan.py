@@ -89,7 +89,7 @@ def add_parser(sub):
                    help="replay the plan's joints in a MuJoCo simulation of the scene (needs --robot and "
                         "skillbank[sim]) and report the planned and the achieved goal facts side by side; "
                         "exit 1 when they disagree or the robot touches what no step targets")
-    g = p.add_argument_group("robosuite scenes (--scene robosuite:TASK --simulate)")
+    g = p.add_argument_group("robosuite scenes (--env robosuite:TASK --simulate)")
     g.add_argument("--episodes", type=int, default=1,
                    help="scenes to plan and run; episode k is placed from seed --seed + k (default 1, seed "
                         "0: one plan carried out, as with a scene FILE; 'sim evaluate' and 'experiment', "

@@ -144,8 +144,9 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
     paths : bool, default=False
         Keep each episode's tool path (for :func:`skillbank.plotting.plot_composed`).
     progress : callable, optional
-        ``progress(stage, done, total, successes)``: stage ``"record"`` after each demonstration kept
-        (``successes`` None), ``"episodes"`` after each episode (``successes`` so far).
+        ``progress(stage, done, total, successes)``: stage ``"record"`` as it starts and after each
+        demonstration kept (``successes`` None), ``"episodes"`` as they start and after each episode
+        (``successes`` so far).
     robot : str, default="UR5e"
         robosuite's arm that carries the plans out (any of its single arms, any case: ``panda``), as
         :func:`~skillbank.simulation.execute_plan`'s.
@@ -187,6 +188,8 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp if folder is None else folder)
         files = []
+        if progress is not None:  # each stage announced as it starts: a bar that times it from there
+            progress("record", 0, demos * len(tasks), None)
         for i, task in enumerate(tasks):
             out = where / f"{task}.hdf5"
             tick = None if progress is None else (lambda kept, _, before=i * demos:
@@ -202,6 +205,8 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
         library = {"demonstrations": summary["n_demonstrations"], "primitives": len(summary["primitives"]),
                    "skills": len(summary["skills"])}
         first = int(seed) + EPISODE_SEEDS
+        if progress is not None:
+            progress("episodes", 0, episodes, 0)
         # stack3: the tower's order is drawn per episode from its seed, a goal no demonstration showed
         report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
                               goal=_tower_goal if name == "stack3" else None, paths=paths, robot=robot,

@@ -427,3 +427,23 @@ def test_experiment_shows_progress_with_successes(cli, monkeypatch):
     code, _, err = cli("experiment", "stack3", "--episodes", "1")
     assert code == 0
     assert "recording" in err and "episodes" in err and "successes=1" in err
+
+
+def test_verbose_lets_robosuites_log_through_and_quiet_is_the_default(monkeypatch):
+    import argparse
+    import logging
+
+    from skillbank.cli._options import verbose_logging
+    from skillbank.io import import_robosuite
+
+    pytest.importorskip("robosuite")
+    root, logger = logging.getLogger(), logging.getLogger("robosuite_logs")
+    monkeypatch.setattr(root, "level", logging.WARNING)
+    monkeypatch.setattr(logger, "disabled", False)
+    verbose_logging(argparse.Namespace(verbose=False))
+    import_robosuite()
+    assert logger.disabled and root.level == logging.WARNING
+    logger.disabled = False
+    verbose_logging(argparse.Namespace(verbose=True))
+    import_robosuite()
+    assert not logger.disabled and root.level == logging.INFO
