@@ -148,6 +148,9 @@ def _composition(args) -> int:
                   **parallel)
 
     check_folder(args.out, "out")
+    if args.out is not None and os.path.lexists(args.out) and not Path(args.out).is_dir():
+        raise ValueError(f"out: expected a folder to keep the experiment in, got {str(args.out)!r}, which is "
+                         "a file")
     verbose_logging(args)
     bars, progress = {}, None
     if show_progress(args):

@@ -414,6 +414,9 @@ def test_experiment_out_keeps_what_it_recorded_and_built(cli, tmp_path, monkeypa
     assert f"  wrote {out / 'stack3.db'}" in text.splitlines()
     # the order carried out, not the planner's
     assert "  seed 1000: carried out (pick cubeB) (place cubeB cubeA): success" in text.splitlines()
+    # a file is no folder, --force or not
+    code, _, err = cli("experiment", "stack3", "--out", out / "stack3.json", "--force")
+    assert code == 2 and "out: expected a folder to keep the experiment in" in err and len(calls) == 1
     # without --out nothing is kept
     code, _, err = cli("experiment", "stack3", "--episodes", "1")
     assert code == 0 and calls[1]["folder"] is None and calls[1]["paths"] is False
