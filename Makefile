@@ -25,7 +25,7 @@ $(TEST_STAMP): pyproject.toml | $(PY)
 install: $(TEST_STAMP)
 
 demo: $(DEMO_STAMP)
-	$(VENV)/bin/skillbank demo --out demo_output
+	$(VENV)/bin/skillbank demo --out demo_output --force
 
 lint: $(TEST_STAMP)
 	$(PY) -m ruff check .

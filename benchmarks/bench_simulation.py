@@ -22,7 +22,7 @@ per sample. Timed, best of ``--repeats`` (``time.perf_counter``), in the same ru
 The disagreement is the largest difference of per-sample, per-pair distances where both are positive
 (MuJoCo reports overlaps as its own penetration depth). No timing is asserted.
 
-**Simulation speed**, the path a user runs: ``skillbank simulate TRAJ.npz --scene SCENE --json`` in a
+**Simulation speed**, the path a user runs: ``skillbank sim run TRAJ.npz --scene SCENE --json`` in a
 child process, on the embedded synthetic UR5e recording (``skillbank.experiments.synthetic_ur5e``,
 joints and gripper) in a scene with a table and a button under its lowest point; the real-time factor
 the command reports (simulated seconds per second of physics) and the command's wall time (start-up
@@ -196,7 +196,7 @@ def main(argv=None) -> int:
         print(f"largest disagreement, {name}: {value if isinstance(value, bool) else f'{value:.2e} m'}")
     speed = simulation_speed()
     if speed is not None:
-        print(f"skillbank simulate: {speed['duration']:.1f} s of trajectory, real-time factor "
+        print(f"skillbank sim run: {speed['duration']:.1f} s of trajectory, real-time factor "
               f"{speed['real_time_factor']:.0f}x, command wall time {speed['wall']:.2f} s")
     if args.json:
         args.json.write_text(json.dumps({"samples": args.samples, "pairs": n_pairs, "simulation": speed,
@@ -229,7 +229,7 @@ def simulation_speed():
         write_npz(demo, traj)
         path.write_text(json.dumps(scene))
         t0 = time.perf_counter()
-        out = subprocess.run([sys.executable, "-m", "skillbank.cli", "simulate", str(traj), "--scene",
+        out = subprocess.run([sys.executable, "-m", "skillbank.cli", "sim", "run", str(traj), "--scene",
                               str(path), "--json"], capture_output=True, text=True, check=False)
         wall = time.perf_counter() - t0
     if out.returncode not in (0, 1):

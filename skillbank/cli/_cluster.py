@@ -9,7 +9,25 @@ import numpy as np
 
 from ._options import add_repair_option
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "CLUSTER_FEATURES", "LIBRARY_FEATURES", "library_features", "FEATURE_KIND"]
+
+#: ``cluster --features``: the featurisers of a folder of trajectories (``clustering.trajectory_features``).
+CLUSTER_FEATURES = ("default", "heading", "angular", "dtw", "none")
+#: ``library cluster --features``: the two the library stores (``clustering.primitive_features``), by the
+#: names ``cluster`` gives them; FEATURE_KIND maps them to the library's own kinds.
+LIBRARY_FEATURES = ("heading", "position")
+FEATURE_KIND = {"heading": "default", "position": "position"}
+
+
+def library_features(text: str) -> str:
+    """``library cluster --features``: its old name ``default`` is read as ``heading``.
+
+    Examples
+    --------
+    >>> library_features("default"), library_features("position")
+    ('heading', 'position')
+    """
+    return "heading" if text == "default" else text
 
 
 
@@ -32,7 +50,7 @@ def add_parser(sub):
                    help="how the number of clusters is chosen: hierarchy (the most detailed cut of a Ward "
                         "tree whose clusters are all well separated; default), auto (split one cluster at a "
                         "time while the split is well separated), paper (the authors' energy)")
-    p.add_argument("--features", default="default",
+    p.add_argument("--features", default="default", choices=CLUSTER_FEATURES,
                    help="featuriser for a folder of trajectories: default (shape and direction: unit step "
                         "directions over time and along the path), heading (direction over time in each "
                         "trajectory's heading frame), angular (similarity to --representatives), dtw, "
@@ -40,7 +58,9 @@ def add_parser(sub):
     p.add_argument("--representatives", default=None,
                    help="comma-separated file indices (sorted order) of the representatives for "
                         "--features angular")
-    p.add_argument("--seed", type=int, default=None, help="random seed")
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed (first elastic node, PCA; default 0, as 'library cluster' and "
+                        "'experiment rail')")
     add_repair_option(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", type=Path, default=None,

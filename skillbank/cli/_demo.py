@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from ._options import show_progress
+from ._output import add_force_option
 
 __all__ = ["add_parser", "run"]
 
@@ -13,7 +14,9 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub):
     """Register ``demo`` on argparse subparsers ``sub``."""
     p = sub.add_parser("demo", help="run the main job on embedded data (LASA) and write figures")
-    p.add_argument("--out", type=Path, default=Path("demo_output"), help="folder for figures and summary")
+    p.add_argument("--out", type=Path, default=Path("demo_output"), metavar="DIR",
+                   help="folder for figures and summary (default demo_output; new or empty, else --force)")
+    add_force_option(p, folder=True)
     p.add_argument("--data", type=Path, default=None,
                    help="shared data folder: use RAIL and the three-button demo instead of LASA")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")

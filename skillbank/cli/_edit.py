@@ -16,6 +16,7 @@ from ._options import (
     execution_params,
     export_params,
 )
+from ._output import add_force_option
 from ._world import (
     clearance_margin,
     load_world,
@@ -46,7 +47,9 @@ def add_parser(sub):
                         "file's orientation, gripper and other streams come along")
     p.add_argument("--method", default="lte",
                    help="a representation of skillbank.representations.REPRESENTATIONS: lte (Laplacian "
-                        "trajectory editing, default), ja (jerk-accuracy), promp, elmap (elastic map), dmp")
+                        "trajectory editing, default, as 'sim evaluate', 'plan' and 'experiment', which "
+                        "adapt one demonstration each), ja (jerk-accuracy), promp, elmap (elastic map), "
+                        "dmp; 'library reuse' defaults to promp, which learns from its several candidates")
     add_constraint_options(p)
     p.add_argument("--metrics", action="store_true",
                    help="also compare the result with the demonstration (Fréchet, DTW, swept area, ...); "
@@ -55,6 +58,7 @@ def add_parser(sub):
     add_pose_of_option(p)
     p.add_argument("--out", type=Path, default=None,
                    help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
+    add_force_option(p)
     add_repair_option(p)
     p.add_argument("--json", action="store_true",
                    help="print the result as JSON: t, streams, joint_names, trajectory (the position path), "

@@ -1,13 +1,26 @@
 """``skillbank experiment``: ``rail``, the paper's RAIL clustering experiment (Fig. 4); ``unload`` and
-``stack3``, its future work in physics (a task composed from single demonstrations, planned and executed
-in robosuite). ``unload`` and ``stack3`` exit 0 when they ran, whatever the success rate."""
+``stack3``, beyond the paper: a task composed from single demonstrations, planned and executed in robosuite
+(what the paper leaves to future work). ``unload`` and ``stack3`` exit 0 when they ran, whatever the success
+rate; with ``--out DIR`` they keep what they recorded and built there."""
 
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import sys
+import tempfile
 from pathlib import Path
 
-from ._options import add_episode_options, parallel_params, show_progress
+from ._options import (
+    EPISODES_DEFAULT,
+    add_episode_options,
+    check_folder,
+    parallel_params,
+    show_progress,
+    verbose_logging,
+)
+from ._output import add_force_option
 
 __all__ = ["add_parser", "run"]
 
@@ -22,10 +35,13 @@ def add_parser(sub):
     >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
     ArgumentParser(...)
     """
-    p = sub.add_parser("experiment", help="run a reproducible experiment from the paper")
+    p = sub.add_parser("experiment", help="run a reproducible experiment: rail, the paper's clustering "
+                                          "experiment; unload and stack3, tasks composed in physics (beyond "
+                                          "the paper)")
     experiments = p.add_subparsers(dest="experiment", required=True)
     rail = experiments.add_parser(
-        "rail", help="cluster RAIL demonstrations with elastic and agglomerative clustering (Fig. 4)")
+        "rail", help="the paper's experiment: cluster RAIL demonstrations with elastic and agglomerative "
+                     "clustering (Fig. 4)")
     rail.add_argument("--data", type=Path, required=True,
                       help="the RAIL folder (REACHING/, PUSHING/, ...) or a folder holding rail/")
     rail.add_argument("--mode", choices=["default", "paper"], default="default",
@@ -42,8 +58,10 @@ def add_parser(sub):
                                   "place, and plan and execute unloading all four objects"),
                        ("stack3", "record robosuite's Stack (one cube on another), learn pick and place, and "
                                   "plan and execute stacking three cubes in an order drawn per episode")):
-        c = experiments.add_parser(name, help=text + " (needs skillbank[sim])")
-        c.add_argument("--episodes", type=int, default=20, help="scenes (default 20)")
+        c = experiments.add_parser(name, help=text + " (not in the paper, which leaves it to future work; "
+                                                    "needs skillbank[sim])")
+        c.add_argument("--episodes", type=int, default=EPISODES_DEFAULT,
+                       help=f"scenes (default {EPISODES_DEFAULT}, as 'sim evaluate')")
         c.add_argument("--seed", type=int, default=0,
                        help="seeds the recordings (SEED, SEED + 1, ...) and the scenes (episode k from "
                             "SEED + 1000 + k); default 0")
@@ -59,8 +77,15 @@ def add_parser(sub):
                             "evaluate --robot'")
         c.add_argument("--record-robot", default="UR5e", metavar="ARM",
                        help="robosuite's arm the demonstrations are recorded on, as 'sim record --robot' "
-                            "(default UR5e); another than --robot runs the skills on an arm that did not "
-                            "show them, through the grip site's pose (a note says so)")
+                            "(default UR5e, any case); another than --robot runs the skills on an arm that "
+                            "did not show them, through the grip site's pose (a note says so)")
+        c.add_argument("--out", type=Path, default=None, metavar="DIR",
+                       help=f"keep what the experiment recorded and built in DIR (new or empty, else "
+                            f"--force): the demonstrations (TASK.hdf5, for 'library add'), the labelled "
+                            f"and described library ({name}.db, for 'plan', 'sim evaluate', 'library "
+                            f"view'), the first episode's figure ({name}.png) and the report ({name}.json); "
+                            f"default: nothing kept")
+        add_force_option(c, folder=True)
         c.add_argument("--json", action="store_true",
                        help="print robot, recorded_on, notes, episodes, successes, success_rate, interval, "
                             "failures, per_episode as JSON")
@@ -122,22 +147,38 @@ def _composition(args) -> int:
                   method=args.method, replan=args.replan, robot=args.robot, record_robot=args.record_robot,
                   **parallel)
 
-    progress = None
+    check_folder(args.out, "out")
+    if args.out is not None and os.path.lexists(args.out) and not Path(args.out).is_dir():
+        raise ValueError(f"out: expected a folder to keep the experiment in, got {str(args.out)!r}, which is "
+                         "a file")
+    verbose_logging(args)
+    bars, progress = {}, None
     if show_progress(args):
         from tqdm import tqdm  # a bar on a terminal only
 
-        bars = {}
-
-        def progress(stage, done, total):
+        def progress(stage, done, total, successes):
             if stage not in bars:
-                bars[stage] = tqdm(total=total, desc=stage, unit="task" if stage == "record" else "episode")
+                for bar in bars.values():
+                    bar.close()
+                bars[stage] = tqdm(total=total, desc="recording" if stage == "record" else "episodes",
+                                   unit="demonstration" if stage == "record" else "episode", file=sys.stderr)
             bars[stage].update(done - bars[stage].n)
-    report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
-                                    method=args.method, replan=args.replan, progress=progress,
-                                    robot=args.robot, record_robot=args.record_robot,
-                                    verbose=args.verbose, **parallel)
+            if successes is not None:
+                bars[stage].set_postfix(successes=successes)
+    try:
+        with _kept(args.out) as folder:
+            report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed,
+                                            demos=args.demos, method=args.method, replan=args.replan,
+                                            progress=progress, robot=args.robot,
+                                            record_robot=args.record_robot, verbose=args.verbose,
+                                            folder=folder, paths=folder is not None, **parallel)
+            written = [] if folder is None else _write_results(args, report, folder)
+    finally:
+        for bar in bars.values():
+            bar.close()
     if args.json:
-        print(json.dumps(report, allow_nan=False))
+        print(json.dumps({**report, **({"written": [str(p) for p in written]} if written else {})},
+                         allow_nan=False))
         return 0
     lo, hi = report["interval"]
     lib = report["library"]
@@ -147,7 +188,9 @@ def _composition(args) -> int:
     for row in report["per_episode"]:
         verdict = "success" if row["success"] else f"failure at step {row['failure']['step']}: " \
             f"{row['failure']['reason']}"
-        print(f"  seed {row['seed']}: {' '.join(row['plan'])}: {verdict}")
+        # the order carried out (the moves the goal leaves free are taken tallest first), not the planner's
+        done = [f"({' '.join([s['action'], *s['args']])})" for s in row.get("steps", ()) if s["ok"]]
+        print(f"  seed {row['seed']}: carried out {' '.join(done) or '(no steps)'}: {verdict}")
     print(f"{report['scene']} ({report['method']}, on {report['robot']}): {report['successes']}/"
           f"{report['episodes']} = "
           f"{100 * report['success_rate']:.0f} % [{100 * lo:.1f}, {100 * hi:.1f}] (Wilson 95 %)")
@@ -155,5 +198,51 @@ def _composition(args) -> int:
         print(f"  note: {note}")
     if report["failures"]:
         print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(report["failures"].items())))
+    for path in written:
+        print(f"  wrote {path}")
     return 0
+
+
+class _kept:
+    """The folder a composition experiment writes to: None without ``--out``; else a new folder beside DIR,
+    whose files are moved into DIR when the run is whole (a run that fails leaves DIR as it was)."""
+
+    def __init__(self, out):
+        self.out = None if out is None else Path(out)
+        self.work = None
+
+    def __enter__(self):
+        if self.out is None:
+            return None
+        self.work = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", dir=self.out.parent))
+        return self.work
+
+    def __exit__(self, kind, error, trace):
+        if self.work is None:
+            return False
+        try:
+            if kind is None:
+                self.out.mkdir(exist_ok=True)
+                for path in sorted(self.work.iterdir()):
+                    os.replace(path, self.out / path.name)
+        finally:
+            shutil.rmtree(self.work, ignore_errors=True)
+        return False
+
+
+def _write_results(args, report, folder: Path) -> list:
+    """The first episode's figure and the report (as ``--json`` prints it) beside the recordings and the
+    library; the files ``--out`` keeps, by their names in DIR."""
+    from ..plotting import plot_composed  # matplotlib, when the results are kept
+
+    name = args.experiment
+    rows = report["per_episode"]
+    figure = plot_composed(rows[0], folder / f"{name}.png",
+                           title=f"{report['scene']}, seed {rows[0]['seed']}, {report['method']}")
+    for row in rows:
+        row.pop("path", None)
+        row.pop("step_starts", None)
+    (folder / f"{name}.json").write_text(json.dumps(report, allow_nan=False, indent=1) + "\n")
+    del figure  # written in folder, moved with the rest
+    return [Path(args.out) / p.name for p in sorted(folder.iterdir())]
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core._text import printable
 from ..core._validation import summarise
+from ._cluster import FEATURE_KIND, LIBRARY_FEATURES, library_features
 from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
 from ._library_transfer import _copy, _export, _import
 from ._library_view import add_view_parser, check_view, write_library_view
@@ -28,6 +29,7 @@ from ._options import (
     segmentation_params,
     show_progress,
 )
+from ._output import add_force_option
 from ._world import (
     clearance_margin,
     load_world,
@@ -85,9 +87,13 @@ def add_parser(sub):
     c = cmds.add_parser("cluster", help="(re)cluster every primitive; records a new version")
     c.add_argument("db", type=_location, help=_DB)
     c.add_argument("--stretch", type=float, default=None, help="stretching constant (default 1.2)")
-    c.add_argument("--features", choices=["default", "position"], default="default",
-                   help="direction over time in the heading frame (default) or resampled positions")
-    c.add_argument("--seed", type=int, default=0, help="random seed")
+    c.add_argument("--features", type=library_features, choices=LIBRARY_FEATURES, default="heading",
+                   help="heading (default): direction over time in each primitive's heading frame, as "
+                        "'cluster --features heading'; position: the positions resampled. Two of 'cluster''s "
+                        "featurisers only, and its default is heading, not 'cluster''s default: the library "
+                        "stores its featuriser with the clustering and applies it to the primitives added "
+                        "later, which these two allow ('default' is still read as heading)")
+    c.add_argument("--seed", type=int, default=0, help="random seed (first elastic node, PCA; default 0)")
     c.add_argument("--plot", type=Path, default=None,
                    help="write a figure of the clusters (features and each cluster's primitives) to this "
                         "file (.png, .pdf, .svg; no extension: .png)")
@@ -127,17 +133,22 @@ def add_parser(sub):
     c.add_argument("--skill", required=True, help="a label, or a cluster id")
     add_constraint_options(c)
     c.add_argument("--method", default="promp",
-                   help="a representation of skillbank.representations.REPRESENTATIONS (default promp)")
+                   help="a representation of skillbank.representations.REPRESENTATIONS: promp (default), "
+                        "lte, ja, elmap, dmp. Its default is not 'edit''s and 'sim evaluate''s lte, which "
+                        "adapt one demonstration: reuse hands the method the best --k candidates of the "
+                        "skill, and promp learns from all of them")
     c.add_argument("--k", type=int, default=None, help="candidates passed to the representation")
     c.add_argument("--rank", default="shortlist",
                    help="candidate ranking (default shortlist: the least deformed candidates, "
                         "shortest curve first; length: the paper's curve length over all)")
     c.add_argument("--shortlist", type=int, default=argparse.SUPPRESS,
                    help="shortlist size for --rank shortlist (default: skillbank.selection.SHORTLIST)")
-    c.add_argument("--seed", type=int, default=None, help="random seed")
+    c.add_argument("--seed", type=int, default=None,
+                   help="random seed for methods that sample (default: none, a fresh draw each run)")
     add_execution_options(c)
     c.add_argument("--out", type=Path, default=None,
                    help="write the result with every stream (.csv, .npz, .script, .bag; see --format)")
+    add_force_option(c)
     c.add_argument("--plot", type=Path, default=None, help="write a figure of the reproduction")
     c.add_argument("--view", type=Path, default=None, metavar="DIR",
                    help="write the library's web view to DIR with the result's page (reuse.html: the "
@@ -257,7 +268,8 @@ def _cluster(args) -> int:
 
         figure_path(args.plot, name="plot")  # a bad name fails before the work, not after
     with _open(args) as lib:
-        version = lib.cluster(stretch=args.stretch, features=args.features, random_state=args.seed,
+        version = lib.cluster(stretch=args.stretch, features=FEATURE_KIND[args.features],
+                              random_state=args.seed,
                               progress=show_progress(args))
         skills = lib.summary()["skills"]
         if args.plot is not None:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ._library_location import _DB_READ, _location, _open, _target
+from ._output import add_force_option
 
 __all__ = ["add_view_parser", "check_view", "write_library_view"]
 
@@ -18,11 +19,12 @@ def add_view_parser(cmds) -> None:
     c.add_argument("db", type=_location, help=_DB_READ)
     where = c.add_mutually_exclusive_group(required=True)
     where.add_argument("--out", type=Path, default=None, metavar="DIR",
-                       help="write the site to this folder (new, empty, or a view written before, which is "
-                            "replaced); open DIR/index.html, no network needed")
+                       help="write the site to this folder (new or empty; a view written before is replaced "
+                            "with --force); open DIR/index.html, no network needed")
     where.add_argument("--serve", default=None, metavar="[HOST:]PORT",
                        help="serve the pages from the live library, read-only, on HOST (default 127.0.0.1) "
                             "and PORT (0: any free port); Ctrl-C stops")
+    add_force_option(c, folder=True)
     c.add_argument("--page-size", type=int, default=None, metavar="N",
                    help="members per page of a skill (default 100)")
     c.add_argument("--json", action="store_true",

@@ -11,7 +11,7 @@ from ..io import check_output_path
 from . import _cluster, _demo, _edit, _experiment, _library, _plan, _segment, _sim, _simulate
 from ._library_location import check_libraries
 from ._options import join_negative_values
-from ._output import error_line, escaped_stdout
+from ._output import check_overwrite, error_line, escaped_stdout
 
 __all__ = ["main", "build_parser", "leaf_parsers"]
 
@@ -118,6 +118,7 @@ def main(argv=None) -> int:
             raise
         try:
             _check_outputs(args)
+            check_overwrite(args)
             check_libraries(args)
             with escaped_stdout():  # user-given text (labels, file names) without raw terminal escapes
                 status = int(args.func(args) or 0)

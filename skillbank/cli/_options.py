@@ -29,7 +29,8 @@ __all__ = [
     "size", "margin", "ratio_or_none", "add_segmentation_options", "segmentation_params",
     "add_constraint_options", "constraints_from_args", "join_negative_values", "CONSTRAINT_OPTIONS",
     "add_repair_option", "add_reader_options", "reader_options",
-    "add_pose_of_option", "show_progress", "check_folder",
+    "add_pose_of_option", "show_progress", "check_folder", "EPISODES_DEFAULT", "add_verbose_option",
+    "verbose_logging",
     "add_execution_options",
     "execution_params", "add_parallel_options", "add_episode_options", "parallel_params",
     "SCHEDULER_VARIABLE", "add_robot_options",
@@ -38,6 +39,9 @@ __all__ = [
 
 #: The environment variable naming a Dask scheduler for `library add` when no option says otherwise.
 SCHEDULER_VARIABLE = "SKILLBANK_SCHEDULER"
+
+#: ``--episodes`` of every command that runs robosuite episodes (``plan`` says why its default is 1).
+EPISODES_DEFAULT = 10
 
 #: Options whose values are coordinates and may start with a minus sign ("-25,3").
 CONSTRAINT_OPTIONS = ("--start", "--goal", "--via", "--obstacle", "--start-velocity", "--end-velocity",
@@ -161,9 +165,24 @@ def add_episode_options(p) -> None:
                              here="each in its own environment from its seed; the report is the one this "
                                   "process gives, in seed order",
                              there="whose workers have skillbank[sim] installed", doc="docs/simulation.md")
-    g.add_argument("-v", "--verbose", action="store_true",
-                   help="let robosuite's, MuJoCo's and Dask's log lines through (off by default, in the "
-                        "workers too)")
+    add_verbose_option(g)
+
+
+def add_verbose_option(p) -> None:
+    """``-v``: the log lines of robosuite, MuJoCo and Dask on stderr (:func:`verbose_logging`)."""
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="let robosuite's, MuJoCo's and Dask's log lines through, on stderr (off by default, "
+                        "in Dask's workers too)")
+
+
+def verbose_logging(args) -> None:
+    """With ``-v``, the root logger at INFO: robosuite's own logger then stays on when it is imported
+    (``io.import_robosuite`` turns it off otherwise), and its console handler writes to stderr."""
+    if getattr(args, "verbose", False):
+        import logging  # the standard library, only when asked
+
+        root = logging.getLogger()
+        root.setLevel(min(root.level or logging.INFO, logging.INFO))
 
 
 def parallel_params(args, environ=None) -> dict:

@@ -7,7 +7,7 @@ import sys
 
 from ..core._text import printable
 
-__all__ = ["escaped_stdout", "error_line"]
+__all__ = ["escaped_stdout", "error_line", "add_force_option", "check_overwrite", "FORCE_HELP"]
 
 
 class _Escaping:
@@ -57,3 +57,55 @@ def error_line(exc, args=None) -> str:
             message = scrub(message, url)
         message = mask_text(message)
     return printable(message)
+
+
+#: ``--force``'s help: the one text for every command with ``--out``.
+FORCE_HELP = ("overwrite what --out names when it is there already (default: refuse with one line on stderr "
+              "and exit status 2, before any work, nothing written)")
+
+
+def add_force_option(p, *, folder: bool = False, existing=None) -> None:
+    """``--force``: the one rule of ``--out`` for every command that has it.
+
+    Without ``--force`` an output that is there already is refused before any work (:func:`check_overwrite`):
+    a file that exists; with ``folder=True`` a folder that holds anything (an empty one is new); with
+    ``existing``, a function of the parsed arguments, the files it returns (``segment``: an earlier run's
+    segments of the same input).
+    """
+    p.add_argument("--force", action="store_true", help=FORCE_HELP)
+    p.set_defaults(out_is_folder=folder, out_existing=existing)
+
+
+def _already_there(args) -> list:
+    import os
+    from pathlib import Path
+
+    out = getattr(args, "out", None)
+    if out is None:
+        return []
+    out = Path(out)
+    existing = getattr(args, "out_existing", None)
+    if existing is not None:
+        return list(existing(args))
+    if getattr(args, "out_is_folder", False) and out.is_dir() and not out.is_symlink():
+        return [out] if any(out.iterdir()) else []
+    return [out] if os.path.lexists(out) else []
+
+
+def check_overwrite(args) -> None:
+    """Refuse an ``--out`` that is there already, unless ``--force``: one ValueError naming it and the way on.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> check_overwrite(argparse.Namespace(out=__file__, force=False))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: out: ... exists; give --force to overwrite it
+    """
+    if not hasattr(args, "force") or args.force:
+        return
+    there = _already_there(args)
+    if there:
+        more = f" (and {len(there) - 1} more)" if len(there) > 1 else ""
+        raise ValueError(f"out: {str(there[0])!r}{more} exists; give --force to overwrite it")

@@ -22,6 +22,7 @@ from ._options import (
     robot_params,
     show_progress,
 )
+from ._output import add_force_option
 from ._world import CLEARANCE_HELP, check_simulation, clearance_margin, print_simulation, run_simulation
 
 __all__ = ["add_parser"]
@@ -40,11 +41,13 @@ def add_parser(sub):
     p = sub.add_parser("plan", help="plan a task over labelled skills (PDDL) and reproduce it as one "
                                     "trajectory (--search optimal needs skillbank[plan])")
     p.add_argument("db", type=_location, help=_DB_READ)
-    p.add_argument("--scene", required=True,
+    p.add_argument("--scene", default=None, metavar="FILE",
                    help="scene file (JSON): objects with type/position/orientation, obstacles, init, goal, "
-                        "start (see docs/planning.md); or robosuite:PickPlace / robosuite:Stack3, a "
-                        "robosuite "
-                        "scene the plan is carried out in (with --simulate; see docs/simulation.md)")
+                        "start (see docs/planning.md); give it or --env")
+    p.add_argument("--env", default=None, metavar="robosuite:TASK",
+                   help="a robosuite task the plan is carried out in instead of a scene FILE, "
+                        "robosuite:PickPlace or robosuite:Stack3 (with --simulate; see docs/simulation.md), "
+                        "as 'sim evaluate --env'; '--scene robosuite:TASK' is the same")
     p.add_argument("--domain", type=Path, default=None,
                    help="a PDDL domain to use as it is (default: built from the skills' descriptions, see "
                         "'library describe')")
@@ -68,6 +71,7 @@ def add_parser(sub):
                         "LM-cut (jupyddl), the fewest steps, for small tasks")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
+    add_force_option(p)
     p.add_argument("--format", choices=["csv", "npz", "urscript", "rosbag"], default=None,
                    help="format of --out (default from its suffix)")
     add_export_options(p)
@@ -85,9 +89,11 @@ def add_parser(sub):
                    help="replay the plan's joints in a MuJoCo simulation of the scene (needs --robot and "
                         "skillbank[sim]) and report the planned and the achieved goal facts side by side; "
                         "exit 1 when they disagree or the robot touches what no step targets")
-    g = p.add_argument_group("robosuite scenes (--scene robosuite:TASK --simulate)")
-    g.add_argument("--episodes", type=int, default=1, help="scenes to plan and run; episode k is placed from "
-                                                           "seed --seed + k (default 1, seed 0)")
+    g = p.add_argument_group("robosuite scenes (--env robosuite:TASK --simulate)")
+    g.add_argument("--episodes", type=int, default=1,
+                   help="scenes to plan and run; episode k is placed from seed --seed + k (default 1, seed "
+                        "0: one plan carried out, as with a scene FILE; 'sim evaluate' and 'experiment', "
+                        "which measure a success rate, run 10)")
     g.add_argument("--goal", default=None, metavar="FACTS",
                    help="the goal's facts, e.g. '(on cubeC cubeA) (on cubeA cubeB)' (default: the task's)")
     g.add_argument("--method", default="lte",
@@ -106,6 +112,7 @@ def add_parser(sub):
 
 
 def _plan(args) -> int:
+    args.scene = _scene(args)
     if args.scene.startswith("robosuite:"):
         return _plan_physics(args)
     args.scene = Path(args.scene)
@@ -198,6 +205,18 @@ def _plan(args) -> int:
     if sim is not None:
         print_simulation(sim, planned=True)
     return status
+
+
+def _scene(args) -> str:
+    """``--scene FILE`` or ``--env robosuite:TASK`` (``--scene robosuite:TASK`` as before): exactly one."""
+    if args.env is not None and args.scene is not None:
+        raise ValueError(f"env: give --env {args.env} or --scene {args.scene}, not both")
+    if args.env is None and args.scene is None:
+        raise ValueError("scene: expected --scene FILE (a scene file) or --env robosuite:TASK")
+    if args.env is not None and not args.env.startswith("robosuite:"):
+        raise ValueError(f"env: expected robosuite:TASK (robosuite:PickPlace, robosuite:Stack3), got "
+                         f"{args.env!r}; a scene file is --scene FILE")
+    return args.env if args.env is not None else args.scene
 
 
 def _plan_view(args, result, scene, sim) -> dict:
@@ -357,6 +376,9 @@ def _plan_physics(args) -> int:
             if "replanned" in st:
                 print(f"     replanned: {' '.join(st['replanned']) or '(no steps)'}")
         verdict = "success" if row["success"] else f"failure ({row['failure']['reason']})"
+        # the order carried out: the moves the goal leaves free are taken tallest first, not as planned
+        done = " ".join(f"({' '.join([s['action'], *s['args']])})" for s in row["steps"] if s["ok"])
+        print(f"  carried out: {done or '(no steps)'}")
         print(f"  {verdict} by the environment's check, {row['control_steps']} control steps")
     lo, hi = report["interval"]
     print(f"{args.scene}: {report['successes']}/{report['episodes']} = {100 * report['success_rate']:.0f} % "

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..core._text import printable
 from ._options import add_reader_options, add_segmentation_options, reader_options, segmentation_params
+from ._output import add_force_option
 
 __all__ = ["add_parser", "run", "segment_file_names", "set_aside_note"]
 
@@ -25,7 +26,8 @@ def add_parser(sub):
     p.add_argument("--out", type=Path, default=None,
                    help="write the segments to this folder: <input>_segmentNN.npz with every stream, or "
                         "with --format csv one <input>_segmentNN_<stream>.csv per stream; files of that "
-                        "format left there by an earlier run on the same input are removed")
+                        "format left there by an earlier run on the same input are replaced, with --force")
+    add_force_option(p, existing=_earlier_outputs)
     p.add_argument("--format", choices=["npz", "csv"], default="npz", help="segment file format for --out")
     p.set_defaults(func=run)
     return p
@@ -55,6 +57,12 @@ def _earlier_files(folder: Path, stem: str, fmt: str) -> list[Path]:
     stream = r"_(?!segment\d)\w+" if fmt == "csv" else ""
     pattern = re.compile(rf"{re.escape(stem)}_segment\d+{stream}\.{fmt}")
     return sorted(p for p in folder.iterdir() if p.is_file() and pattern.fullmatch(p.name))
+
+
+def _earlier_outputs(args) -> list[Path]:
+    """What ``--out`` would replace: the segments an earlier run on the same input left there."""
+    folder = Path(args.out)
+    return _earlier_files(folder, Path(args.input).stem, args.format) if folder.is_dir() else []
 
 
 def _write_segments(io, result, folder: Path, stem: str, fmt: str) -> tuple[list[str], list[str]]:

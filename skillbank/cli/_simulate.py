@@ -1,4 +1,6 @@
-"""``skillbank simulate``: replay a joint trajectory in a MuJoCo world of a scene and report what happened.
+"""``skillbank sim run``: replay a joint trajectory in a MuJoCo world of a scene and report what happened.
+
+``skillbank simulate`` is its old name, kept as an alias that says so on stderr.
 
 Exit status: 0 when every goal fact the simulation can judge holds and no unintended contact happened,
 1 otherwise, 2 on bad input (docs/simulation.md).
@@ -7,6 +9,7 @@ Exit status: 0 when every goal fact the simulation can judge holds and no uninte
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from ._execution_options import ROBOT_HELP, add_tool_frame_option
@@ -14,11 +17,17 @@ from ._library import check_robot
 from ._options import check_folder
 from ._world import run_simulation
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "add_run_parser", "DEPRECATED"]
+
+#: What ``skillbank simulate`` says on stderr before it runs as ``sim run``.
+DEPRECATED = "skillbank simulate: deprecated, use 'skillbank sim run' (the same options)"
+
+_RUN_HELP = ("replay a joint trajectory (a reuse's or plan's output) in a MuJoCo simulation of a scene FILE "
+             "(needs skillbank[sim]); exit 1 when a goal fact fails or the robot touches what it should not")
 
 
 def add_parser(sub):
-    """Register ``skillbank simulate``.
+    """Register ``skillbank simulate``, the old name of ``skillbank sim run`` (:func:`add_run_parser`).
 
     Examples
     --------
@@ -27,9 +36,26 @@ def add_parser(sub):
     >>> add_parser(parser.add_subparsers(dest="command"))  # doctest: +ELLIPSIS
     ArgumentParser(...)
     """
-    p = sub.add_parser("simulate", help="replay a joint trajectory in a physics simulation of the scene "
-                                        "(MuJoCo, needs skillbank[sim]); exit 1 when a goal fact fails or "
-                                        "the robot touches what it should not")
+    p = sub.add_parser("simulate", help="deprecated: the old name of 'sim run', which it runs")
+    _add_arguments(p)
+    p.set_defaults(func=_deprecated)
+    return p
+
+
+def add_run_parser(sub):
+    """Register ``run`` on the sub-commands ``sub`` of ``skillbank sim``."""
+    p = sub.add_parser("run", help=_RUN_HELP)
+    _add_arguments(p)
+    p.set_defaults(func=_simulate)
+    return p
+
+
+def _deprecated(args) -> int:
+    print(DEPRECATED, file=sys.stderr)
+    return _simulate(args)
+
+
+def _add_arguments(p) -> None:
     p.add_argument("trajectory", type=Path,
                    help="a file with a 'joints' stream: a reuse's or plan's CSV or NPZ, or a recording "
                         "such as the three-button HDF5")
@@ -47,8 +73,6 @@ def add_parser(sub):
                         "over time")
     p.add_argument("--video", type=Path, default=None,
                    help="write an animated GIF rendered off-screen (EGL or OSMesa)")
-    p.set_defaults(func=_simulate)
-    return p
 
 
 def _simulate(args) -> int:

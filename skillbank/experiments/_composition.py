@@ -119,7 +119,7 @@ def _tower_goal(seed) -> list:
     return _goal(np.random.default_rng(seed))
 
 
-def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demos: int = 10,
+def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demos: int = 10,
                            method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
                            progress=None, robot: str = DRIVEN_ROBOT, record_robot: str = DRIVEN_ROBOT,
                            workers=None, scheduler=None, verbose: bool = False) -> dict:
@@ -129,7 +129,7 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     ----------
     name : {"unload", "stack3"}
         The experiment (:data:`COMPOSITIONS`).
-    episodes : int, default=20
+    episodes : int, default=10
         Scenes; episode ``k`` is placed from seed ``seed + 1000 + k`` (the demonstrations from ``seed``).
     demos : int, default=10
         Demonstrations recorded per demonstrated task.
@@ -139,11 +139,14 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     replan : bool, default=False
         Plan again from the observed facts when a step's effect did not happen.
     folder : path-like, optional
-        Where the recordings and the library are written (default: a temporary folder, removed).
+        Where the recordings (``TASK.hdf5``) and the library (``NAME.db``) are written and kept (default: a
+        temporary folder, removed); it must not hold them already.
     paths : bool, default=False
         Keep each episode's tool path (for :func:`skillbank.plotting.plot_composed`).
     progress : callable, optional
-        ``progress(stage, done, total)``.
+        ``progress(stage, done, total, successes)``: stage ``"record"`` as it starts and after each
+        demonstration kept (``successes`` None), ``"episodes"`` as they start and after each episode
+        (``successes`` so far).
     robot : str, default="UR5e"
         robosuite's arm that carries the plans out (any of its single arms, any case: ``panda``), as
         :func:`~skillbank.simulation.execute_plan`'s.
@@ -185,12 +188,15 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp if folder is None else folder)
         files = []
+        if progress is not None:  # each stage announced as it starts: a bar that times it from there
+            progress("record", 0, demos * len(tasks), None)
         for i, task in enumerate(tasks):
             out = where / f"{task}.hdf5"
-            record(f"robosuite:{task}", episodes=demos, out=out, seed=int(seed) + i, robot=record_robot)
+            tick = None if progress is None else (lambda kept, _, before=i * demos:
+                                                  progress("record", before + kept, demos * len(tasks), None))
+            record(f"robosuite:{task}", episodes=demos, out=out, seed=int(seed) + i, robot=record_robot,
+                   progress=tick)
             files.append(out)
-            if progress is not None:
-                progress("record", i + 1, len(tasks))
         db = where / f"{name}.db"
         with Library(db) as lib:
             lib.add_files(files, assign="recluster")
@@ -199,12 +205,14 @@ def composition_experiment(name: str, *, episodes: int = 20, seed: int = 0, demo
         library = {"demonstrations": summary["n_demonstrations"], "primitives": len(summary["primitives"]),
                    "skills": len(summary["skills"])}
         first = int(seed) + EPISODE_SEEDS
+        if progress is not None:
+            progress("episodes", 0, episodes, 0)
         # stack3: the tower's order is drawn per episode from its seed, a goal no demonstration showed
         report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
                               goal=_tower_goal if name == "stack3" else None, paths=paths, robot=robot,
                               workers=checked["workers"], scheduler=scheduler, verbose=verbose,
                               progress=None if progress is None else
-                              (lambda done, _: progress("episodes", done, episodes)))
+                              (lambda done, successes: progress("episodes", done, episodes, successes)))
         rows = report["per_episode"]
     successes, failures = tally(rows)
     # every episode's report says the same of the arms (one library, one arm): the last one's is kept

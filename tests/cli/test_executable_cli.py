@@ -168,7 +168,9 @@ OUT = ["--out", "{tmp}/out.csv"]
     (["--format", "csv", "--json"], r"format: --format csv needs --out FILE"),
     (["--duration", "-1", *OUT], r"duration: expected a number > 0"),
     (["--out", "{tmp}/r.xlsx"], r"out: expected a file name ending in \.csv"),
-    (["--out", "{tmp}/bag", "--format", "rosbag"], r"out: '.*bag' already exists; a ROS 2 bag is written"),
+    (["--out", "{tmp}/bag", "--format", "rosbag"], r"out: '.*bag' exists; give --force to overwrite it"),
+    (["--out", "{tmp}/bag", "--format", "rosbag", "--force"],
+     r"out: '.*bag' already exists; a ROS 2 bag is written"),
 ])
 def test_reuse_errors_exit_2_with_one_line(cli, tmp_path, argv, match):
     import re

@@ -14,9 +14,9 @@ def _listing(folder):
 
 
 @pytest.mark.parametrize("argv, option, other", [
-    (["simulate", "t.npz", "--scene", "s.json", "--plot", "same.gif", "--video", "same.gif"],
+    (["sim", "run", "t.npz", "--scene", "s.json", "--plot", "same.gif", "--video", "same.gif"],
      "video", "plot"),
-    (["simulate", "t.npz", "--scene", "s.json", "--plot", "sub/../same.png", "--video", "./same.png"],
+    (["sim", "run", "t.npz", "--scene", "s.json", "--plot", "sub/../same.png", "--video", "./same.png"],
      "video", "plot"),
     (["edit", "d.csv", "--goal", "0,0", "--out", "x.csv", "--plot", "x.csv"], "plot", "out"),
     (["segment", "d.csv", "--plot", "fig", "--out", "fig.png"], "plot", "out"),  # --plot fig writes fig.png
@@ -41,7 +41,8 @@ def test_one_path_for_two_outputs_is_one_line_and_nothing_written(argv, option, 
 
 def test_different_paths_pass_the_check(cli, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, _, err = cli("simulate", "missing.npz", "--scene", "s.json", "--plot", "a.png", "--video", "a.gif")
+    code, _, err = cli("sim", "run", "missing.npz", "--scene", "s.json", "--plot", "a.png", "--video",
+                       "a.gif")
     assert code == 2 and "is the path" not in err and "missing.npz" in err
 
 
@@ -89,6 +90,11 @@ def test_out_and_plot_replace_a_link_on_the_command_line(option, name, outside, 
     argv = ["edit", demo, "--goal", "0.1,0.1,0.1", option, link]
     if option == "--plot":
         argv += ["--out", work / "edited.csv"]
+    else:  # a link there is an output there: replaced with --force only
+        code, out, err = cli(*argv)
+        assert code == 2 and err.startswith("skillbank edit: error: out: ") and "--force" in err, err
+        assert link.is_symlink() and secret.read_bytes() == before
+        argv.append("--force")
     code, out, err = cli(*argv)
     assert code == 0, err
     assert not link.is_symlink() and link.stat().st_size > 0

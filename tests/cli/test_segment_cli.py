@@ -156,7 +156,14 @@ def test_csv_out_writes_every_stream_and_replaces_an_earlier_run(capsys, tmp_pat
               "pick_segmentation.csv", "pick_segment01_notes.txt"]
     for name in stale + others:
         (out_dir / name).write_text("old\n")
+    # an earlier run's segments are replaced with --force only: before any work, one line, nothing touched
     code, out, err = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv", "--json")
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert err.startswith(f"skillbank segment: error: out: {str(out_dir / stale[0])!r} (and 2 more) exists; "
+                          "give --force"), err
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(stale + others)
+    code, out, err = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv", "--json",
+                          "--force")
     assert code == 0, err
     doc = json.loads(out)
     expected = [f"pick_segment{i:02d}_{s}.csv" for i in range(3) for s in ("position", "gripper", "force")]
@@ -171,7 +178,7 @@ def test_csv_out_writes_every_stream_and_replaces_an_earlier_run(capsys, tmp_pat
         assert parts[0].metadata["columns"][0] == f"{name}_0"
     # text output lists what it wrote and what it removed
     (out_dir / "pick_segment05_force.csv").write_text("old\n")
-    code, out, _ = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv")
+    code, out, _ = _run(capsys, "segment", str(path), "--out", str(out_dir), "--format", "csv", "--force")
     assert code == 0
     wrote = [line.split("wrote ", 1)[1] for line in out.splitlines() if line.startswith("  wrote ")]
     assert [Path(w).name for w in wrote] == expected

@@ -1,4 +1,4 @@
-"""``skillbank simulate``: exit status 0 / 1 / 2, the report, --json, --plot, --video."""
+"""``skillbank sim run`` (old name ``simulate``): exit status 0 / 1 / 2, the report, --json, --plot."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def files(tmp_path):
 
 def test_a_clean_replay_exits_0(cli, files):
     traj, _, empty = files
-    code, out, err = cli("simulate", str(traj), "--scene", str(empty))
+    code, out, err = cli("sim", "run", str(traj), "--scene", str(empty))
     assert code == 0, err
     assert "ok" in out.splitlines()[0] and "contacts: none unintended" in out
     assert "fact (pressed b1): cannot judge" in out
@@ -63,7 +63,7 @@ def test_a_button_the_replay_never_presses_exits_1(cli, files, tmp_path):
     scene = tmp_path / "button.json"
     scene.write_text(json.dumps({"objects": {"b1": {"type": "button", "position": [0.4, 0.0, 0.1]}},
                                  "goal": ["(pressed b1)"]}))
-    code, out, err = cli("simulate", str(traj), "--scene", str(scene), "--json")
+    code, out, err = cli("sim", "run", str(traj), "--scene", str(scene), "--json")
     assert code == 1, err
     doc = json.loads(out)
     assert doc["facts"] == {"(pressed b1)": False} and doc["buttons"]["b1"]["pressed"] is False
@@ -71,7 +71,7 @@ def test_a_button_the_replay_never_presses_exits_1(cli, files, tmp_path):
 
 def test_a_contact_exits_1_and_names_the_forearm_and_the_wall(cli, files):
     traj, wall, _ = files
-    code, out, err = cli("simulate", str(traj), "--scene", str(wall))
+    code, out, err = cli("sim", "run", str(traj), "--scene", str(wall))
     assert code == 1, err
     assert "forearm touched wall" in out and "NOT ok" in out
 
@@ -79,7 +79,7 @@ def test_a_contact_exits_1_and_names_the_forearm_and_the_wall(cli, files):
 def test_json_and_plot(cli, files, tmp_path):
     traj, wall, _ = files
     plot = tmp_path / "sim.png"
-    code, out, err = cli("simulate", str(traj), "--scene", str(wall), "--json", "--plot", str(plot))
+    code, out, err = cli("sim", "run", str(traj), "--scene", str(wall), "--json", "--plot", str(plot))
     assert code == 1, err
     doc = json.loads(out)
     assert doc["contacts"][0]["robot_body"] == "forearm" and doc["contacts"][0]["other"] == "wall"
@@ -89,19 +89,19 @@ def test_json_and_plot(cli, files, tmp_path):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["missing.npz", "--scene", "{empty}"], "simulate: error: .*missing.npz"),
-    (["{traj}", "--scene", "{empty}", "--robot", "nao"], "simulate: error: robot: expected one of"),
-    (["{traj}", "--scene", "{empty}", "--video", "out.mp4"], r"simulate: error: video: expected a .gif file"),
+    (["missing.npz", "--scene", "{empty}"], "sim run: error: .*missing.npz"),
+    (["{traj}", "--scene", "{empty}", "--robot", "nao"], "sim run: error: robot: expected one of"),
+    (["{traj}", "--scene", "{empty}", "--video", "out.mp4"], r"sim run: error: video: expected a .gif file"),
     (["{traj}", "--scene", "{empty}", "--plot", "nowhere/sim.png"],
-     "simulate: error: plot: expected a file in an existing folder"),
-    (["{nojoints}", "--scene", "{empty}"], r"simulate: error: trajectory: expected a 'joints' stream"),
+     "sim run: error: plot: expected a file in an existing folder"),
+    (["{nojoints}", "--scene", "{empty}"], r"sim run: error: trajectory: expected a 'joints' stream"),
 ])
 def test_bad_input_is_one_line_and_exit_2(cli, files, tmp_path, argv, match):
     traj, _, empty = files
     nojoints = tmp_path / "pos.npz"
     write_npz(Demonstration(np.linspace(0, 1, 5), {"position": np.zeros((5, 3))}), nojoints)
     argv = [a.format(traj=traj, empty=empty, nojoints=nojoints) for a in argv]
-    code, out, err = cli("simulate", *argv)
+    code, out, err = cli("sim", "run", *argv)
     assert code == 2 and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and __import__("re").search(match, lines[0]), err
@@ -114,7 +114,7 @@ def test_video_is_an_animated_gif_or_one_line_saying_what_to_install(files, tmp_
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
     env["PYTHONPATH"] = ROOT
     short = _sweep(tmp_path / "short.npz", angle=0.2, duration=0.5)
-    argv = ["simulate", str(short), "--scene", str(empty), "--video", str(gif)]
+    argv = ["sim", "run", str(short), "--scene", str(empty), "--video", str(gif)]
     done = subprocess.run([sys.executable, "-m", "skillbank.cli", *argv], capture_output=True, text=True,
                           env=env, timeout=120)
     if done.returncode == 2:

@@ -38,11 +38,11 @@ def test_a_million_seconds_is_one_line_and_exit_2_within_a_small_memory(long_fil
     path, scene = long_file
     assert path.stat().st_size < 4096
     before = sorted(p.name for p in tmp_path.iterdir())
-    code, out, err = limited("simulate", path, "--scene", scene, "--plot", tmp_path / "p.png",
+    code, out, err = limited("sim", "run", path, "--scene", scene, "--plot", tmp_path / "p.png",
                              "--video", tmp_path / "v.gif", memory=1 << 30, timeout=120)
     assert code == 2 and out == "", err
     assert err.count("\n") == 1
-    assert "simulate: error: trajectory: the simulation would take 5e+08 physics steps (1e+06 s at 2 ms a " \
+    assert "sim run: error: trajectory: the simulation would take 5e+08 physics steps (1e+06 s at 2 ms a " \
            "step), more than the bound of 2097152 (set SKILLBANK_MAX_SIMULATION_STEPS" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
 

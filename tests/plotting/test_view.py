@@ -304,15 +304,19 @@ def test_the_command_writes_the_site_and_says_where(cli, view_library, tmp_path)
     code, out, err = cli("library", "view", view_library["path"], "--out", tmp_path / "site")
     assert (code, err) == (0, "")
     assert out.splitlines()[-1] == f"  open {tmp_path / 'site' / 'index.html'}"
+    code, out, err = cli("library", "view", view_library["path"], "--out", tmp_path / "site")
+    assert code == 2 and "out: " in err and "give --force to overwrite it" in err  # a view is there
     code, out, _ = cli("library", "view", view_library["path"], "--out", tmp_path / "site", "--json",
-                       "--page-size", "2")
+                       "--page-size", "2", "--force")
     doc = json.loads(out)
     assert code == 0 and doc["index"] == str(tmp_path / "site" / "index.html")
     assert (tmp_path / "site" / f"skill-{view_library['straight']}-3.html").is_file()
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--out", "{tmp}/full"], "out: folder '{tmp}/full' is not empty and holds no skillbank view"),
+    (["--out", "{tmp}/full"], "out: '{tmp}/full' exists; give --force to overwrite it"),
+    # --force replaces a view, never a folder of something else
+    (["--out", "{tmp}/full", "--force"], "out: folder '{tmp}/full' is not empty and holds no skillbank view"),
     (["--out", "{tmp}/site", "--page-size", "0"], "page-size: expected a positive integer, got 0"),
     (["--serve", "localhost:port"], "serve: expected [HOST:]PORT with PORT an integer in 0..65535"),
 ])

@@ -144,6 +144,13 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
                  "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["episodes"] == 1 and doc["env"] == "robosuite:Lift" and out.exists()
+    assert doc["out"] == str(out)
+    # --force: recorded beside it and put in its place when whole (--env names the task as elsewhere)
+    out.write_bytes(b"old")
+    assert main(["sim", "record", "--env", "robosuite:Lift", "--episodes", "1", "--seed", "5", "--out",
+                 str(out), "--force"]) == 0
+    assert out.read_bytes()[:8] == b"\x89HDF\r\n\x1a\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["lift.hdf5"]
 
 
 @pytest.mark.parametrize("argv, match", [
@@ -170,4 +177,4 @@ def test_an_existing_file_is_not_overwritten(tmp_path, capsys):
     out = tmp_path / "x.hdf5"
     out.write_bytes(b"keep")
     assert main(["sim", "record", "robosuite:Lift", "--out", str(out)]) == 2
-    assert "exists; give a new file" in capsys.readouterr().err and out.read_bytes() == b"keep"
+    assert "exists; give --force to overwrite it" in capsys.readouterr().err and out.read_bytes() == b"keep"
