@@ -814,7 +814,8 @@ def _carried_path(seg, obs, demo, goal_q):
 
 def _in_scene(seg, env):
     """``seg`` with the turns about the vertical of its goal that the scene says change nothing, where
-    its own data (one demonstration) teach none.
+    its data teach none (one demonstration, or members that agree at whole turns: a cube is still taken
+    the same way at a quarter turn, whatever its demonstrations happened to show).
 
     A place on what the scene holds fixed may take any turn the fixture there accepts
     (:func:`support`: a square peg, a quarter turn). A grasp kept on the object may take the object's
