@@ -1,0 +1,343 @@
+"""Free-space motion planning in joint space: OMPL's planners checked by the whole robot's clearance.
+
+:func:`plan_motion` finds a joint path from one configuration to another
+that keeps every body of the robot (its links' capsules, the mounted
+gripper's and an object held in it) ``margin`` metres from the obstacles,
+the table, the workspace bounds and itself. The search is OMPL's (the Open
+Motion Planning Library, BSD-3-Clause, the planners MoveIt uses; extra
+``plan``): RRTConnect by default, in the arm's joint space within its joint
+limits, and the path is then shortened by OMPL's simplifier.
+
+Every check is :func:`skillbank.robots.clearance`, the one collision test of
+the robot: a state is valid when its smallest signed distance is at least
+``margin + max_move / 2``, and a motion between two states is checked whole
+in one vectorised call, densified so that no body point moves more than
+``max_move`` between checked configurations. The clearance bound (its module
+docstring) then says every configuration of the straight joint-space segment
+keeps ``margin``. The returned path is measured again, densified at the
+finer default resolution, and refused if it does not keep the margin.
+
+A held object is a :class:`~skillbank.core.Sphere` or :class:`~skillbank.core.Box` in the tool
+frame: it becomes a capsule on the flange (a sphere exactly, a box the capsule that contains its
+corners, :func:`enclosing_capsule`), checked against the world and the arm like the gripper's bodies.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core._obstacles import Box, Sphere
+from ..core._validation import check_positive
+from ._clearance import clearance
+
+__all__ = ["MotionPlan", "MotionPlanningError", "plan_motion", "PLANNERS", "MOTION_TIME_LIMIT",
+           "PLANNER_MAX_MOVE", "INSTALL_OMPL", "SIMPLIFY_TIME"]
+
+#: OMPL planners :func:`plan_motion` can run, by name (OMPL's ``geometric`` class names).
+PLANNERS = ("rrtconnect", "rrt", "bitrrt", "kpiece", "prm")
+_OMPL_NAMES = {"rrtconnect": "RRTConnect", "rrt": "RRT", "bitrrt": "BiTRRT", "kpiece": "KPIECE1",
+               "prm": "PRM"}
+#: Seconds a search may take by default before it gives up.
+MOTION_TIME_LIMIT = 5.0
+#: Densification bound (m) of the motions the planner checks: a point of a body moves at most this much
+#: between checked configurations, and states keep half of it more than the margin (module docstring).
+PLANNER_MAX_MOVE = 0.02
+#: A motion is checked first with this many times ``max_move``: clear by the coarse bound, it is valid; a
+#: sample too near, it is not; else it is checked again at ``max_move``.
+_COARSE = 4
+#: The longest motion (rad, joint space) a search tree grows by (OMPL's range).
+STEP = 1.0
+#: Seconds the simplifier may take by default (it makes at least one pass).
+SIMPLIFY_TIME = 1.0
+#: Half-width (rad) of the box around the start and goal that the search samples in, within the limits:
+#: no joint turns more than half a turn beyond the span of the two.
+SPAN = np.pi
+#: The one line that names what to install.
+INSTALL_OMPL = "pip install 'skillbank[plan]'"
+
+
+class MotionPlanningError(ValueError):
+    """No collision-free joint path was found (or the start or goal is not clear): one line saying why."""
+
+
+@dataclass
+class MotionPlan:
+    """A joint path found by :func:`plan_motion`.
+
+    Attributes
+    ----------
+    joints : ndarray of shape (n, n_joints)
+        The waypoints, from the start to the goal; consecutive ones are joined by straight joint-space
+        segments, each checked whole.
+    clearance : Clearance
+        The whole robot's clearance along the path, densified at the default (fine) resolution.
+    planner : str
+        The OMPL planner that found it.
+    planning_time, simplify_time : float
+        Seconds the search and the simplification took.
+    n_checked : int
+        Motions the planner checked.
+    notes : list of str
+    """
+
+    joints: np.ndarray
+    clearance: object
+    planner: str
+    planning_time: float
+    simplify_time: float
+    n_checked: int = 0
+    notes: list = field(default_factory=list)
+
+    @property
+    def length(self) -> float:
+        """The path's length in joint space (rad, Euclidean)."""
+        return float(np.linalg.norm(np.diff(self.joints, axis=0), axis=1).sum())
+
+
+class _Holding:
+    """A robot model with a held object's capsule added to its bodies (on the flange frame)."""
+
+    def __init__(self, model, capsule):
+        self._model, self._capsule = model, capsule
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+    @property
+    def bodies(self):
+        return tuple(self._model.bodies) + (self._capsule,)
+
+    def self_collision_pairs(self):
+        bodies = self.bodies
+        held = self._capsule
+        return tuple(self._model.self_collision_pairs()) + tuple(
+            (b.name, held.name) for b in bodies[:-1] if abs(b.frame - held.frame) > 1)
+
+
+def _held_capsule(model, held):
+    """The held object (in the tool frame) as a capsule on the flange frame."""
+    from ._bodies import Capsule
+    from ._description import enclosing_capsule
+
+    if not isinstance(held, (Sphere, Box)) or held.n_dims != 3:
+        raise ValueError(f"held: expected a 3-D skillbank.core Sphere or Box in the tool frame, got {held!r}")
+    tool = np.asarray(model.tool, dtype=float)
+    if isinstance(held, Sphere):
+        c = tool[:3, :3] @ held.center + tool[:3, 3]
+        return Capsule("held", model.n_joints, tuple(c), tuple(c), float(held.radius))
+    corners = np.array([[x, y, z] for x in (held.lower[0], held.upper[0]) for y in (held.lower[1],
+                        held.upper[1]) for z in (held.lower[2], held.upper[2])])
+    a, b, r = enclosing_capsule(corners @ tool[:3, :3].T + tool[:3, 3])
+    return Capsule("held", model.n_joints, tuple(np.asarray(a, float)), tuple(np.asarray(b, float)), float(r))
+
+
+def _ompl():
+    try:
+        from ompl import base, geometric, util  # optional extra 'plan': imported when a motion is planned
+    except ImportError:
+        raise ImportError(f"motion planning needs OMPL: {INSTALL_OMPL}") from None
+    return base, geometric, util
+
+
+def _seed(random_state) -> int:
+    """OMPL's seed (it ignores 0) from ``random_state`` (None: a fresh one)."""
+    if random_state is None:
+        return int(np.random.default_rng().integers(1, 2 ** 31 - 1))
+    if isinstance(random_state, (bool, np.bool_)) or not isinstance(random_state, (int, np.integer)):
+        raise ValueError(f"random_state: expected an integer seed or None, got {random_state!r}")
+    return int(np.random.default_rng(int(random_state)).integers(1, 2 ** 31 - 1))
+
+
+def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace=None, held=None,
+                margin=0.005, ignore=(), self_collision=True, planner="rrtconnect",
+                time_limit=MOTION_TIME_LIMIT, max_move=PLANNER_MAX_MOVE, span=SPAN,
+                simplify_time=SIMPLIFY_TIME, step=STEP, random_state=None, label=None) -> MotionPlan:
+    """A joint path from ``q_start`` to ``q_goal`` that keeps every body of the robot clear.
+
+    Parameters
+    ----------
+    model : RobotModel
+        With bodies (:attr:`RobotModel.bodies`).
+    q_start, q_goal : array-like of shape (n_joints,)
+        Within the joint limits.
+    obstacles : mapping of str to Obstacle, or sequence of Obstacle, optional
+        3-D spheres and boxes in the world frame (:func:`clearance`'s).
+    table : Box, optional
+    workspace : (lower, upper) or Box, optional
+    held : Sphere or Box, optional
+        An object held by the tool, in the tool frame (module docstring); checked like a body.
+    margin : float, default=0.005
+        Metres every body keeps from everything it is checked against.
+    ignore : iterable
+        :func:`clearance`'s ``ignore``.
+    self_collision : bool, default=True
+    planner : {"rrtconnect", "rrt", "bitrrt", "kpiece", "prm"}
+        OMPL's planner.
+    time_limit : float, default=MOTION_TIME_LIMIT
+        Seconds the search may take.
+    max_move : float, default=PLANNER_MAX_MOVE
+        Densification bound (m) of the planner's checks (module docstring).
+    span : float, default=SPAN
+        Radians beyond the start's and goal's range that a joint may take in the search.
+    simplify_time : float, default=SIMPLIFY_TIME
+        Seconds OMPL's simplifier may shorten the path (shortcuts, vertex reduction, at least one
+        pass); 0: the path as the search found it.
+    step : float, default=STEP
+        The longest motion (rad, in joint space) the search grows its trees by (OMPL's range).
+    random_state : int, optional
+        Seeds OMPL's random numbers: the same seed, the same path.
+    label : callable, optional
+        ``label(other)``: how an error names what a body came near (default its name).
+
+    Returns
+    -------
+    MotionPlan
+
+    Raises
+    ------
+    MotionPlanningError
+        One line: the start or the goal not clear (the body and what it comes near), or no path found
+        within the time limit (the start, the goal and the obstacle nearest the configurations the
+        search reached).
+    ImportError
+        OMPL is not installed (one line naming the extra).
+
+    Examples
+    --------
+    >>> from skillbank.core import Box
+    >>> from skillbank.robots import robot_model
+    >>> robot = robot_model("ur5e")
+    >>> a, b = [0.5, -1.4, 1.6, -1.8, -1.57, 0.0], [2.6, -1.4, 1.6, -1.8, -1.57, 0.0]
+    >>> wall = Box([-0.2, 0.1, 0.0], [0.2, 0.14, 0.6])  # in the way of the shoulder's turn
+    >>> path = plan_motion(robot, a, b, obstacles={"wall": wall}, random_state=0)  # doctest: +SKIP
+    >>> path.clearance.min_distance >= 0.005  # doctest: +SKIP
+    True
+    """
+    label = label or (lambda other: other)
+    margin = check_positive(margin, name="margin", allow_zero=True)
+    max_move = check_positive(max_move, name="max_move")
+    time_limit = check_positive(time_limit, name="time_limit")
+    span = check_positive(span, name="span", allow_zero=True)
+    step = check_positive(step, name="step")
+    simplify_time = check_positive(simplify_time, name="simplify_time", allow_zero=True)
+    if planner not in PLANNERS:
+        raise ValueError(f"planner: expected one of {list(PLANNERS)}, got {planner!r}")
+    q0 = model.check_joints(q_start, name="q_start")
+    q1 = model.check_joints(q_goal, name="q_goal")
+    if q0.shape[0] != 1 or q1.shape[0] != 1:
+        raise ValueError(f"q_start, q_goal: expected one configuration each, got {q0.shape[0]} and "
+                         f"{q1.shape[0]}")
+    q0, q1 = q0[0], q1[0]
+    lo, hi = model.limits.T
+    for name, q in (("q_start", q0), ("q_goal", q1)):
+        bad = np.flatnonzero((q < lo) | (q > hi))
+        if bad.size:
+            j = int(bad[0])
+            raise ValueError(f"{name}: expected joints within the limits of robot {model.name}, got "
+                             f"{model.joint_names[j]} = {q[j]:.6g} rad outside [{lo[j]:.6g}, {hi[j]:.6g}]")
+    robot = model if held is None else _Holding(model, _held_capsule(model, held))
+    world = dict(obstacles=obstacles, table=table, workspace=workspace, ignore=ignore,
+                 self_collision=self_collision)
+    need = margin + max_move / 2  # a checked sample this clear keeps the margin all along (module docs)
+
+    def where(q):
+        return "[" + ", ".join(f"{v:.4g}" for v in q) + "]"
+
+    for name, q in (("start", q0), ("goal", q1)):
+        res = clearance(robot, q[None], **world)
+        if res.min_distance < margin:
+            d = res.min_distance
+            depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+            raise MotionPlanningError(
+                f"motion planning: the {name} {where(q)} is not clear: the robot's {res.body} comes {depth} "
+                f"{label(res.other)} (clearance margin {margin * 1000:g} mm)")
+    ob, og, ou = _ompl()
+    ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
+    ou.RNG.setSeed(_seed(random_state))  # before the planner's samplers exist: they draw their seeds from it
+
+    n = model.n_joints
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    low = np.maximum(lo, np.minimum(q0, q1) - span)
+    high = np.minimum(hi, np.maximum(q0, q1) + span)
+    for j in range(n):
+        bounds.setLow(j, float(low[j]))
+        bounds.setHigh(j, float(high[j] if high[j] > low[j] else low[j] + 1e-9))
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    blocked = {}  # what the failed checks ran into: other -> [count, distance, body, q]
+    checked = [0]
+
+    def array(state):
+        return np.fromiter((state[j] for j in range(n)), dtype=float, count=n)
+
+    def measure(Q):
+        checked[0] += 1
+        if Q.shape[0] > 1:  # coarse first: most motions are clearly free or clearly blocked
+            res = clearance(robot, Q, max_move=_COARSE * max_move, **world)
+            if res.min_distance >= margin + _COARSE * max_move / 2:
+                return True
+        if Q.shape[0] == 1 or res.min_distance >= need:
+            res = clearance(robot, Q, max_move=max_move, **world)
+        if res.min_distance >= need:
+            return True
+        # the obstacle the search keeps running into is what blocks it: named in the failure
+        seen = blocked.setdefault(res.other, [0, np.inf, None, None])
+        seen[0] += 1
+        if res.min_distance < seen[1]:
+            seen[1:] = [res.min_distance, res.body, Q[res.index]]
+        return False
+
+    def valid(state):
+        return measure(array(state)[None])
+
+    class _Motion(ob.MotionValidator):  # one vectorised, densified clearance call per motion
+        def checkMotion(self, s1, s2, *last):
+            return measure(np.stack([array(s1), array(s2)]))
+
+    si.setStateValidityChecker(valid)
+    validator = _Motion(si)
+    si.setMotionValidator(validator)
+    si.setup()
+    start, goal = si.allocState(), si.allocState()
+    for j in range(n):
+        start[j], goal[j] = float(q0[j]), float(q1[j])
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(start, goal)
+    search = getattr(og, _OMPL_NAMES[planner])(si)
+    if hasattr(search, "setRange"):  # the longest motion a tree grows by: short ones are cheap to check
+        search.setRange(float(step))
+    search.setProblemDefinition(pdef)
+    search.setup()
+    t0 = _time.perf_counter()
+    search.solve(float(time_limit))
+    planning_time = _time.perf_counter() - t0
+    if not pdef.hasExactSolution():
+        if not blocked:
+            why = "no configuration it reached came near anything: the search ran out of time"
+        else:
+            other, (count, d, body, q) = max(blocked.items(), key=lambda item: item[1][0])
+            depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+            why = (f"blocked by {label(other)} ({count} of the {checked[0]} motions checked ran into it; "
+                   f"the robot's {body} came {depth} it at {where(q)})")
+        raise MotionPlanningError(
+            f"motion planning: no collision-free path from {where(q0)} to {where(q1)} found by OMPL "
+            f"{_OMPL_NAMES[planner]} in {time_limit:g} s: {why} (clearance margin {margin * 1000:g} mm)")
+    path = pdef.getSolutionPath()
+    t1 = _time.perf_counter()
+    if simplify_time > 0:
+        og.PathSimplifier(si).simplify(path, float(simplify_time))
+    spent = _time.perf_counter() - t1
+    Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
+    Q[0], Q[-1] = q0, q1  # exactly, not to round-off
+    final = clearance(robot, Q, **world)
+    if final.min_distance < margin:  # never a silent success: the bound says this cannot happen
+        raise MotionPlanningError(
+            f"motion planning: the path OMPL {_OMPL_NAMES[planner]} found from {where(q0)} to {where(q1)} "
+            f"comes within {final.min_distance * 1000:.3g} mm of {label(final.other)} (the robot's "
+            f"{final.body}; clearance margin {margin * 1000:g} mm)")
+    return MotionPlan(joints=Q, clearance=final, planner=_OMPL_NAMES[planner], planning_time=planning_time,
+                      simplify_time=spent, n_checked=checked[0])
