@@ -9,13 +9,19 @@ Motion Planning Library, BSD-3-Clause, the planners MoveIt uses; extra
 limits, and the path is then shortened by OMPL's simplifier.
 
 Every check is :func:`skillbank.robots.clearance`, the one collision test of
-the robot: a state is valid when its smallest signed distance is at least
-``margin + max_move / 2``, and a motion between two states is checked whole
-in one vectorised call, densified so that no body point moves more than
-``max_move`` between checked configurations. The clearance bound (its module
-docstring) then says every configuration of the straight joint-space segment
-keeps ``margin``. The returned path is measured again, densified at the
-finer default resolution, and refused if it does not keep the margin.
+the robot. A state is valid when its smallest signed distance is at least
+``margin``. A motion between two states (a straight segment in joint space)
+is checked whole in one vectorised call, densified so that no body point
+moves more than ``m`` between checked configurations; by the clearance bound
+(its module docstring) every configuration of the segment is then at least
+the smallest sampled distance minus ``m / 2`` clear. So a motion is valid
+when its samples keep ``margin + m / 2``, invalid when one is nearer than
+``margin``, and checked again with ``m`` four times smaller in between: ``m``
+is ``4 max_move`` first (most motions are clearly free or clearly blocked),
+then ``max_move``, then ``max_move / 4`` (a motion that leaves a state close
+to an obstacle, as a press's start is to its button's table). The returned
+path is measured again, densified at the default resolution, and refused if
+it does not keep the margin (which the bound says cannot happen).
 
 A held object is a :class:`~skillbank.core.Sphere` or :class:`~skillbank.core.Box` in the tool
 frame: it becomes a capsule on the flange (a sphere exactly, a box the capsule that contains its
@@ -37,16 +43,17 @@ __all__ = ["MotionPlan", "MotionPlanningError", "plan_motion", "PLANNERS", "MOTI
            "PLANNER_MAX_MOVE", "INSTALL_OMPL", "SIMPLIFY_TIME"]
 
 #: OMPL planners :func:`plan_motion` can run, by name (OMPL's ``geometric`` class names).
-PLANNERS = ("rrtconnect", "rrt", "bitrrt", "kpiece", "prm")
-_OMPL_NAMES = {"rrtconnect": "RRTConnect", "rrt": "RRT", "bitrrt": "BiTRRT", "kpiece": "KPIECE1",
-               "prm": "PRM"}
+PLANNERS = ("rrtconnect", "rrt", "kpiece", "bkpiece", "lbkpiece", "prm")
+_OMPL_NAMES = {"rrtconnect": "RRTConnect", "rrt": "RRT", "kpiece": "KPIECE1", "bkpiece": "BKPIECE1",
+               "lbkpiece": "LBKPIECE1", "prm": "PRM"}
 #: Seconds a search may take by default before it gives up.
 MOTION_TIME_LIMIT = 5.0
 #: Densification bound (m) of the motions the planner checks: a point of a body moves at most this much
 #: between checked configurations, and states keep half of it more than the margin (module docstring).
 PLANNER_MAX_MOVE = 0.02
-#: A motion is checked first with this many times ``max_move``: clear by the coarse bound, it is valid; a
-#: sample too near, it is not; else it is checked again at ``max_move``.
+#: A motion is checked first at this many times ``max_move``: clear by that bound, it is valid; a sample
+#: nearer than the margin, it is not; else it is checked again this many times finer, down to
+#: ``max_move / _COARSE`` (module docstring).
 _COARSE = 4
 #: The longest motion (rad, joint space) a search tree grows by (OMPL's range).
 STEP = 1.0
@@ -174,8 +181,8 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     ignore : iterable
         :func:`clearance`'s ``ignore``.
     self_collision : bool, default=True
-    planner : {"rrtconnect", "rrt", "bitrrt", "kpiece", "prm"}
-        OMPL's planner.
+    planner : {"rrtconnect", "rrt", "kpiece", "bkpiece", "lbkpiece", "prm"}
+        OMPL's planner (RRTConnect, RRT, KPIECE1, BKPIECE1, LBKPIECE1 (lazy), PRM).
     time_limit : float, default=MOTION_TIME_LIMIT
         Seconds the search may take.
     max_move : float, default=PLANNER_MAX_MOVE
@@ -241,7 +248,6 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     robot = model if held is None else _Holding(model, _held_capsule(model, held))
     world = dict(obstacles=obstacles, table=table, workspace=workspace, ignore=ignore,
                  self_collision=self_collision)
-    need = margin + max_move / 2  # a checked sample this clear keeps the margin all along (module docs)
 
     def where(q):
         return "[" + ", ".join(f"{v:.4g}" for v in q) + "]"
@@ -276,14 +282,19 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
 
     def measure(Q):
         checked[0] += 1
-        if Q.shape[0] > 1:  # coarse first: most motions are clearly free or clearly blocked
-            res = clearance(robot, Q, max_move=_COARSE * max_move, **world)
-            if res.min_distance >= margin + _COARSE * max_move / 2:
+        if Q.shape[0] == 1:  # a state: its distance is exact
+            res = clearance(robot, Q, **world)
+            if res.min_distance >= margin:
                 return True
-        if Q.shape[0] == 1 or res.min_distance >= need:
-            res = clearance(robot, Q, max_move=max_move, **world)
-        if res.min_distance >= need:
-            return True
+        else:  # a motion: coarse first, finer only where a sample is too near to tell (module docstring)
+            move = _COARSE * max_move
+            while True:
+                res = clearance(robot, Q, max_move=move, **world)
+                if res.min_distance >= margin + move / 2:
+                    return True
+                if res.min_distance < margin or move <= max_move / _COARSE:
+                    break
+                move /= _COARSE
         # the obstacle the search keeps running into is what blocks it: named in the failure
         seen = blocked.setdefault(res.other, [0, np.inf, None, None])
         seen[0] += 1
