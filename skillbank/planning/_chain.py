@@ -527,8 +527,8 @@ def _plannable(exc, planner, model, position, where) -> bool:
     if planner != "ompl" or model is None or position is None:
         return False
     message = str(exc)
-    if "starts inside" in message or (message.startswith(f"{where}: cannot avoid")
-                                      and message.endswith("is inside it")):
+    if message.startswith("start:") or "starts inside" in message or (
+            message.startswith(f"{where}: cannot avoid") and message.endswith("is inside it")):
         return False
     return isinstance(exc, _ArmContact) or any(k in message for k in (
         "cannot avoid", "cannot keep the robot clear", "passes through", "comes within", "mm into",
