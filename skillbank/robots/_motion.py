@@ -37,7 +37,9 @@ import numpy as np
 
 from ..core._obstacles import Box, Sphere
 from ..core._validation import check_positive
+from ._bodies import Capsule
 from ._clearance import clearance
+from ._description import enclosing_capsule
 
 __all__ = ["MotionPlan", "MotionPlanningError", "plan_motion", "PLANNERS", "MOTION_TIME_LIMIT",
            "PLANNER_MAX_MOVE", "INSTALL_OMPL", "SIMPLIFY_TIME"]
@@ -126,9 +128,6 @@ class _Holding:
 
 def _held_capsule(model, held):
     """The held object (in the tool frame) as a capsule on the flange frame."""
-    from ._bodies import Capsule
-    from ._description import enclosing_capsule
-
     if not isinstance(held, (Sphere, Box)) or held.n_dims != 3:
         raise ValueError(f"held: expected a 3-D skillbank.core Sphere or Box in the tool frame, got {held!r}")
     tool = np.asarray(model.tool, dtype=float)
