@@ -582,7 +582,8 @@ def _planned_step(failure, *, model, scene, skill, where, position, orientation,
         piece, motion = planned_transit(
             model, scene, where=where, starts=starts, end=end, end_q=q_b, names=names, objects=others,
             margin=margin, duration=lambda length: _duration(length, TRANSIT_SPEED, task_limits),
-            limits=limits, random_state=random_state, time_limit=time_limit, label=label)
+            limits=limits, random_state=random_state, time_limit=time_limit, label=label,
+            first=joints is None)
         J = piece.pop("joints")
         pieces = [("transit", piece)]
         if np.linalg.norm(end - goal) > 0.0:  # the binding's approach, or the planned one

@@ -21,10 +21,9 @@ import numpy as np
 
 from ..core import quaternion_to_matrix
 from ..robots import MotionPlanningError, plan_motion
-from ..robots._base import wrap_angle
 from ._start import clear_starts
 
-__all__ = ["PLANNERS", "PLANNED_APPROACH", "planned_end", "planned_transit", "MAX_GOAL_CONFIGURATIONS",
+__all__ = ["PLANNERS", "PLANNED_APPROACH", "planned_end", "planned_transit",
            "TRANSIT_JOINT_SPEED"]
 
 #: ``planner`` values of :func:`~skillbank.planning.plan_task` (``plan --planner``): ``"ompl"`` plans a
@@ -34,8 +33,6 @@ PLANNERS = ("ompl", "none")
 #: Metres above the goal (along the tool's axis) where a planned transit ends when the binding gives no
 #: approach: the last of the move is a straight line onto the goal, as a press needs.
 PLANNED_APPROACH = 0.05
-#: Pairs of start and end configurations tried in turn (the same branch first) before giving up.
-MAX_GOAL_CONFIGURATIONS = 3
 #: Peak joint speed (rad/s) of a planned transit's segments, unless the robot's limits are lower.
 TRANSIT_JOINT_SPEED = 1.0
 #: Sample spacing (s) of a planned transit.
@@ -50,16 +47,6 @@ def planned_end(goal, goal_q, near):
     axis = np.array([0.0, 0.0, -1.0]) if goal_q is None else quaternion_to_matrix(
         np.asarray(goal_q, dtype=float)[None])[0][:, 2]
     return np.asarray(goal, dtype=float) - PLANNED_APPROACH * axis
-
-
-def _nearest_turn(model, q, reference) -> np.ndarray:
-    """``q`` with each joint turned by whole turns to be nearest ``reference``, within the joint limits:
-    the same pose, and no turn of a wrist the planner would have to undo."""
-    lo, hi = model.limits.T
-    out = reference + wrap_angle(q - reference)
-    for shift in (2 * np.pi, -2 * np.pi):
-        out = np.where(out < lo, out + shift, out) if shift > 0 else np.where(out > hi, out + shift, out)
-    return np.where((out < lo) | (out > hi), q, out)
 
 
 def _timed(model, Q, duration, joint_speed):
@@ -85,23 +72,36 @@ def _timed(model, Q, duration, joint_speed):
     return np.concatenate(ts), np.concatenate(qs)
 
 
-def _pairs(model, starts, ends):
-    """(start, end) configurations to plan between, in order: the same inverse-kinematics branch first
-    (a change of branch turns the shoulder, elbow or wrist over, the hardest move for a planner), then by
-    distance in joint space; each end turned to be nearest its start."""
-    pairs = []
-    for i, q0 in enumerate(starts):
-        b0 = int(model.branch_of(q0)[0])
-        for j, q1 in enumerate(ends):
-            q1 = _nearest_turn(model, q1, q0)
-            same = int(model.branch_of(q1)[0]) == b0
-            pairs.append(((not same, float(np.linalg.norm(q1 - q0)), i, j), q0, q1))
-    pairs.sort(key=lambda item: item[0])
-    return [(q0, q1) for _, q0, q1 in pairs]
+def _turns(model, q) -> np.ndarray:
+    """Every configuration of the same pose as ``q`` by whole turns of its joints, within the joint limits
+    (up to ``2^k`` for ``k`` joints with a range over a turn): which way a wrist is turned decides whether
+    it must fold the gripper back onto the forearm on the way."""
+    lo, hi = model.limits.T
+    options = [[v for v in q[j] + 2 * np.pi * np.arange(-2, 3) if lo[j] <= v <= hi[j]] or [q[j]]
+               for j in range(model.n_joints)]
+    grids = np.meshgrid(*options, indexing="ij")
+    return np.stack([g.ravel() for g in grids], axis=1)
+
+
+def _rounds(model, starts, ends, turn_starts):
+    """``[(starts, ends)]`` to plan between, in order: the branch of the preferred start (the first)
+    first (a change of branch turns the shoulder, elbow or wrist over, the hardest move for a planner),
+    then every branch. Ends (and, for a first step, starts) are taken at every whole turn."""
+    def spread(configs, turn):
+        return np.concatenate([_turns(model, q) if turn else np.asarray(q, float)[None] for q in configs])
+
+    S, E = spread(starts, turn_starts), spread(ends, True)
+    branch = int(model.branch_of(starts[0])[0])
+    same_s = S[model.branch_of(S) == branch]
+    same_e = E[model.branch_of(E) == branch]
+    rounds = [(same_s, same_e)] if len(same_e) else []
+    if len(same_e) < len(E) or len(same_s) < len(S):
+        rounds.append((S, E))
+    return rounds
 
 
 def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, margin, duration, limits,
-                    random_state=None, time_limit=None, label):
+                    random_state=None, time_limit=None, label, first=False):
     """A planned transit from one of ``starts`` to a clear configuration at the pose (``end``, ``end_q``).
 
     Parameters
@@ -114,7 +114,7 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
         The step, for messages.
     starts : sequence of ndarray of shape (n_joints,)
         Where the transit may start: the previous step's last joints, or the clear configurations at a
-        first step's start pose.
+        first step's start pose (``first``: then at every whole turn too).
     end, end_q : ndarray
         The transit's last tool pose.
     names, objects : sequence of str
@@ -138,8 +138,8 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
     Raises
     ------
     MotionPlanningError
-        No clear configuration at the end pose, or no path between the first
-        :data:`MAX_GOAL_CONFIGURATIONS` pairs tried (each one's reason).
+        No clear configuration at the end pose, or no path found (on the start's branch, then on any:
+        each search's reason).
     """
     obstacles = {n: scene.obstacles[n] for n in names}
     for n in objects:
@@ -155,11 +155,10 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
                                   f"{why.split('; move the start')[0]}") from None
     kwargs = {} if time_limit is None else {"time_limit": time_limit}
     failures = []
-    for q0, q_end in _pairs(model, starts, ends)[:MAX_GOAL_CONFIGURATIONS]:
+    for S, E in _rounds(model, starts, ends, turn_starts=len(starts) > 1 or first):
         try:
-            plan = plan_motion(model, q0, q_end, obstacles=obstacles, table=scene.table,
-                               workspace=scene.workspace, margin=margin, random_state=random_state,
-                               label=label, **kwargs)
+            plan = plan_motion(model, S, E, obstacles=obstacles, table=scene.table, workspace=scene.workspace,
+                               margin=margin, random_state=random_state, label=label, **kwargs)
             break
         except MotionPlanningError as exc:
             failures.append(str(exc).removeprefix("motion planning: "))

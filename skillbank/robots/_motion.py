@@ -167,8 +167,10 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     ----------
     model : RobotModel
         With bodies (:attr:`RobotModel.bodies`).
-    q_start, q_goal : array-like of shape (n_joints,)
-        Within the joint limits.
+    q_start, q_goal : array-like of shape (n_joints,) or (k, n_joints)
+        Within the joint limits: one configuration, or several of which any one will do (the
+        branches and whole turns of one pose); those not clear are left out, and the path starts and
+        ends on ones given.
     obstacles : mapping of str to Obstacle, or sequence of Obstacle, optional
         3-D spheres and boxes in the world frame (:func:`clearance`'s).
     table : Box, optional
@@ -231,19 +233,15 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     simplify_time = check_positive(simplify_time, name="simplify_time", allow_zero=True)
     if planner not in PLANNERS:
         raise ValueError(f"planner: expected one of {list(PLANNERS)}, got {planner!r}")
-    q0 = model.check_joints(q_start, name="q_start")
-    q1 = model.check_joints(q_goal, name="q_goal")
-    if q0.shape[0] != 1 or q1.shape[0] != 1:
-        raise ValueError(f"q_start, q_goal: expected one configuration each, got {q0.shape[0]} and "
-                         f"{q1.shape[0]}")
-    q0, q1 = q0[0], q1[0]
+    Q0 = model.check_joints(q_start, name="q_start")
+    Q1 = model.check_joints(q_goal, name="q_goal")
     lo, hi = model.limits.T
-    for name, q in (("q_start", q0), ("q_goal", q1)):
-        bad = np.flatnonzero((q < lo) | (q > hi))
+    for name, Q in (("q_start", Q0), ("q_goal", Q1)):
+        bad = np.argwhere((Q < lo) | (Q > hi))
         if bad.size:
-            j = int(bad[0])
+            k, j = (int(x) for x in bad[0])
             raise ValueError(f"{name}: expected joints within the limits of robot {model.name}, got "
-                             f"{model.joint_names[j]} = {q[j]:.6g} rad outside [{lo[j]:.6g}, {hi[j]:.6g}]")
+                             f"{model.joint_names[j]} = {Q[k, j]:.6g} rad outside [{lo[j]:.6g}, {hi[j]:.6g}]")
     robot = model if held is None else _Holding(model, _held_capsule(model, held))
     world = dict(obstacles=obstacles, table=table, workspace=workspace, ignore=ignore,
                  self_collision=self_collision)
@@ -251,14 +249,22 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     def where(q):
         return "[" + ", ".join(f"{v:.4g}" for v in q) + "]"
 
-    for name, q in (("start", q0), ("goal", q1)):
-        res = clearance(robot, q[None], **world)
-        if res.min_distance < margin:
-            d = res.min_distance
-            depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
-            raise MotionPlanningError(
-                f"motion planning: the {name} {where(q)} is not clear: the robot's {res.body} comes {depth} "
-                f"{label(res.other)} (clearance margin {margin * 1000:g} mm)")
+    def clear(name, Q):
+        """The configurations that keep the margin; none: the first one's reason, in one line."""
+        D = np.array([clearance(robot, q[None], **world) for q in Q], dtype=object)
+        keep = np.array([res.min_distance >= margin for res in D])
+        if keep.any():
+            return Q[keep]
+        res, q = D[0], Q[0]
+        d = res.min_distance
+        depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+        more = "" if len(Q) == 1 else f" (and the {len(Q) - 1} other {name} configuration(s) given)"
+        raise MotionPlanningError(
+            f"motion planning: the {name} {where(q)} is not clear{more}: the robot's {res.body} comes "
+            f"{depth} {label(res.other)} (clearance margin {margin * 1000:g} mm)")
+
+    Q0, Q1 = clear("start", Q0), clear("goal", Q1)
+    q0, q1 = Q0[0], Q1[0]
     ob, og, ou = _ompl()
     ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
     ou.RNG.setSeed(_seed(random_state))  # before the planner's samplers exist: they draw their seeds from it
@@ -266,8 +272,9 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     n = model.n_joints
     space = ob.RealVectorStateSpace(n)
     bounds = ob.RealVectorBounds(n)
-    low = np.maximum(lo, np.minimum(q0, q1) - span)
-    high = np.minimum(hi, np.maximum(q0, q1) + span)
+    both = np.concatenate([Q0, Q1])
+    low = np.maximum(lo, both.min(axis=0) - span)
+    high = np.minimum(hi, both.max(axis=0) + span)
     for j in range(n):
         bounds.setLow(j, float(low[j]))
         bounds.setHigh(j, float(high[j] if high[j] > low[j] else low[j] + 1e-9))
@@ -312,11 +319,20 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     validator = _Motion(si)
     si.setMotionValidator(validator)
     si.setup()
-    start, goal = si.allocState(), si.allocState()
-    for j in range(n):
-        start[j], goal[j] = float(q0[j]), float(q1[j])
     pdef = ob.ProblemDefinition(si)
-    pdef.setStartAndGoalStates(start, goal)
+
+    def state(q):
+        out = si.allocState()
+        for j in range(n):
+            out[j] = float(q[j])
+        return out
+
+    for q in Q0:  # any start will do (a first step's pose), and any goal (every branch and turn of a pose)
+        pdef.addStartState(state(q))
+    goals = ob.GoalStates(si)
+    for q in Q1:
+        goals.addState(state(q))
+    pdef.setGoal(goals)
     search = getattr(og, _OMPL_NAMES[planner])(si)
     if hasattr(search, "setRange"):  # the longest motion a tree grows by: short ones are cheap to check
         search.setRange(float(step))
@@ -333,8 +349,10 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
             depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
             why = (f"blocked by {label(other)} ({count} of the {checked[0]} motions checked ran into it; "
                    f"the robot's {body} came {depth} it at {where(q)})")
+        others = [f" (or {len(Q) - 1} other configuration(s))" if len(Q) > 1 else "" for Q in (Q0, Q1)]
         raise MotionPlanningError(
-            f"motion planning: no collision-free path from {where(q0)} to {where(q1)} found by OMPL "
+            f"motion planning: no collision-free path from {where(q0)}{others[0]} to {where(q1)}{others[1]} "
+            f"found by OMPL "
             f"{_OMPL_NAMES[planner]} in {time_limit:g} s: {why} (clearance margin {margin * 1000:g} mm)")
     path = pdef.getSolutionPath()
     t1 = _time.perf_counter()
@@ -342,7 +360,10 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
         og.PathSimplifier(si).simplify(path, float(simplify_time))
     spent = _time.perf_counter() - t1
     Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
-    Q[0], Q[-1] = q0, q1  # exactly, not to round-off
+    # the start and the goal reached, exactly (not to round-off)
+    Q[0] = Q0[np.argmin(np.abs(Q0 - Q[0]).max(axis=1))]
+    Q[-1] = Q1[np.argmin(np.abs(Q1 - Q[-1]).max(axis=1))]
+    q0, q1 = Q[0], Q[-1]
     final = clearance(robot, Q, **world)
     if final.min_distance < margin:  # never a silent success: the bound says this cannot happen
         raise MotionPlanningError(

@@ -11,7 +11,6 @@ import pytest
 pytest.importorskip("ompl")  # the extra skillbank[plan]
 
 from skillbank.core import Box, Sphere  # noqa: E402
-from skillbank.planning._transit import _nearest_turn  # noqa: E402
 from skillbank.robots import MotionPlanningError, clearance, plan_motion, robot_model  # noqa: E402
 from skillbank.robots._motion import _held_capsule  # noqa: E402
 
@@ -50,7 +49,10 @@ def ends(robot, world=WALL, z=0.08):
 
     pairs = [((ba == bb, min(da, db)), a, b) for ba, da, a in clear(-0.3) for bb, db, b in clear(0.3)]
     _, a, b = max(pairs, key=lambda item: item[0])  # the same branch, else the clearest
-    return a, _nearest_turn(robot, b, a)  # the same pose, each joint the nearest turn within the limits
+    # the same pose, each joint turned to be nearest a's within the limits
+    lo, hi = robot.limits.T
+    near = a + (b - a + np.pi) % (2 * np.pi) - np.pi
+    return a, np.where((near < lo) | (near > hi), b, near)
 
 
 @pytest.mark.parametrize("world", [WALL, SHELF], ids=["wall", "shelf"])
