@@ -88,6 +88,27 @@ def test_the_shelf_is_planned_past(button_library):
     assert res.steps[0].segments[0]["kind"] == "transit"
 
 
+@pytest.mark.parametrize("obstacles, y", [
+    ({"wall": "box:-0.6,-0.02,0.0,-0.3,0.02,0.32", "post": "sphere:-0.2,0.0,0.45,0.04"}, 0.3),
+    ({"wall": WALL}, 0.25)], ids=["wall and post", "buttons 50 cm apart"])
+def test_a_transit_that_turns_the_wrist_the_other_way_round(button_library, obstacles, y):
+    """No clear configuration over b2 is on the start's branch: the transit changes branch, with the wrist
+    turned the way that does not fold the gripper onto the forearm (a whole turn from the recorded one)."""
+    doc = scene_doc(obstacles)
+    for k, obj in (("b1", -y), ("b2", y)):
+        doc["objects"][k]["position"][1] = obj
+    doc["start"]["position"][1] = -y
+    scene = scene_from_dict(doc)
+    with pytest.raises(ValueError, match=r"^step 1 \(press b2\): cannot keep the robot clear of "):
+        plan_task(button_library.store, scene, robot="ur5e", planner="none")
+    res = plan_task(button_library.store, scene, robot="ur5e", random_state=0)
+    model = robot_model("ur5e")
+    check = arm_clearance(model, scene, list(scene.obstacles), res.trajectory["joints"], objects=["b1"])
+    assert check.min_distance >= _chain.CLEARANCE - 1e-9 and not res.collision
+    J = res.trajectory["joints"]
+    assert model.branch_of(J[0])[0] != model.branch_of(J[-1])[0]
+
+
 def test_the_same_seed_gives_the_same_plan(button_library, over_the_wall):
     scene, res = over_the_wall
     again = plan_task(button_library.store, scene, robot="ur5e", random_state=0)

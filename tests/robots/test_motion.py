@@ -144,3 +144,19 @@ def test_other_ompl_planners_find_the_way_over_the_wall(robot, planner):
     a, b = ends(robot)
     path = plan_motion(robot, a, b, obstacles=WALL, table=TABLE, planner=planner, random_state=0)
     assert path.clearance.min_distance >= 0.005
+
+
+def test_any_of_several_starts_and_goals_will_do(robot):
+    """The wrist turned the long way round must fold the gripper onto the forearm to reach the goal; the
+    same pose a whole turn away need not (a wall with a post, the start over b1 as the chain found it)."""
+    post = {"wall": Box([-0.6, -0.02, 0.0], [-0.3, 0.02, 0.32]), "post": Sphere([-0.2, 0.0, 0.45], 0.04)}
+    a = np.array([0.339, -0.9035, 1.306, -5.115, -4.712, 1.91])
+    b = np.array([2.803, -2.242, -1.311, -4.301, -1.571, 1.232])
+    turned = a + [0.0, 0.0, 0.0, 0.0, 2 * np.pi, 0.0]  # the same pose
+    np.testing.assert_allclose(robot.fk(turned)[0], robot.fk(a)[0], atol=1e-12)
+    with pytest.raises(MotionPlanningError, match=r"no collision-free path from \[0.339, .*\] to \[2.803, "):
+        plan_motion(robot, a, b, obstacles=post, table=TABLE, time_limit=1.0, random_state=0)
+    path = plan_motion(robot, [a, turned], b, obstacles=post, table=TABLE, random_state=0)
+    np.testing.assert_array_equal(path.joints[0], turned)  # it starts on one given, exactly
+    np.testing.assert_array_equal(path.joints[-1], b)
+    assert path.clearance.min_distance >= 0.005
