@@ -83,21 +83,38 @@ def _turns(model, q) -> np.ndarray:
     return np.stack([g.ravel() for g in grids], axis=1)
 
 
+def _nearest_turn(model, q, reference) -> np.ndarray:
+    """``q`` with each joint turned by whole turns to be nearest ``reference``, within the joint limits."""
+    T = _turns(model, q)
+    return T[np.argmin(np.abs(T - reference).sum(axis=1))]
+
+
 def _rounds(model, starts, ends, turn_starts):
-    """``[(starts, ends)]`` to plan between, in order: the branch of the preferred start (the first)
-    first (a change of branch turns the shoulder, elbow or wrist over, the hardest move for a planner),
-    then every branch. Ends (and, for a first step, starts) are taken at every whole turn."""
+    """``[(starts, ends)]`` to plan between, in order, each a search of its own:
+
+    1. the preferred start's branch (the first start's), each end turned to be nearest it: the shortest
+       moves, found first when there is one;
+    2. the same branch at every whole turn of the joints (a first step's starts too): which way a wrist
+       is turned decides whether it must fold the gripper onto the forearm on the way;
+    3. every branch, every turn (a change of branch turns the shoulder or the wrist over).
+
+    A round that adds nothing to the one before is left out.
+    """
     def spread(configs, turn):
         return np.concatenate([_turns(model, q) if turn else np.asarray(q, float)[None] for q in configs])
 
-    S, E = spread(starts, turn_starts), spread(ends, True)
+    starts = [np.asarray(q, float) for q in starts]
     branch = int(model.branch_of(starts[0])[0])
+    S, E = spread(starts, turn_starts), spread(ends, True)
     same_s = S[model.branch_of(S) == branch]
     same_e = E[model.branch_of(E) == branch]
-    rounds = [(same_s, same_e)] if len(same_e) else []
-    if len(same_e) < len(E) or len(same_s) < len(S):
-        rounds.append((S, E))
-    return rounds
+    near = np.array([_nearest_turn(model, q, starts[0]) for q in ends])
+    near = near[model.branch_of(near) == branch]
+    out = []
+    for S_, E_ in ((np.array(starts[:1]), near), (same_s, same_e), (S, E)):
+        if len(E_) and not any(len(S_) == len(a) and len(E_) == len(b) for a, b in out):
+            out.append((S_, E_))
+    return out
 
 
 def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, margin, duration, limits,

@@ -57,6 +57,8 @@ PLANNER_MAX_MOVE = 0.02
 #: nearer than the margin, it is not; else it is checked again this many times finer, down to
 #: ``max_move / _COARSE`` (module docstring).
 _COARSE = 4
+#: Nearest other starts and goals tried in place of the path's ends (:func:`_nearer_ends`).
+_END_TRIES = 8
 #: The longest motion (rad, joint space) a search tree grows by (OMPL's range).
 STEP = 1.0
 #: Seconds the simplifier may take by default (it makes at least one pass).
@@ -146,6 +148,24 @@ def _ompl():
     except ImportError:
         raise ImportError(f"motion planning needs OMPL: {INSTALL_OMPL}") from None
     return base, geometric, util
+
+
+def _nearer_ends(Q, starts, goals, valid, tries=_END_TRIES):
+    """The path ``Q`` with its first and last waypoints replaced by the given start and goal nearest their
+    neighbours (of those ``tries`` nearest) that the motion from the neighbour allows: the search takes
+    whichever goal it meets first, which may be the same pose with a joint a whole turn further."""
+    Q = Q.copy()
+    for end, near, options in ((-1, -2, goals), (0, 1, starts)):
+        if len(options) < 2 or len(Q) < 2:
+            continue
+        gap = np.linalg.norm(options - Q[near], axis=1)
+        for k in np.argsort(gap, kind="stable")[:tries]:
+            if gap[k] >= np.linalg.norm(Q[end] - Q[near]) - 1e-12:
+                break
+            if valid(np.stack([Q[near], options[k]])):
+                Q[end] = options[k]
+                break
+    return Q
 
 
 def _seed(random_state) -> int:
@@ -355,14 +375,22 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
             f"found by OMPL "
             f"{_OMPL_NAMES[planner]} in {time_limit:g} s: {why} (clearance margin {margin * 1000:g} mm)")
     path = pdef.getSolutionPath()
-    t1 = _time.perf_counter()
-    if simplify_time > 0:
-        og.PathSimplifier(si).simplify(path, float(simplify_time))
-    spent = _time.perf_counter() - t1
     Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
     # the start and the goal reached, exactly (not to round-off)
     Q[0] = Q0[np.argmin(np.abs(Q0 - Q[0]).max(axis=1))]
     Q[-1] = Q1[np.argmin(np.abs(Q1 - Q[-1]).max(axis=1))]
+    t1 = _time.perf_counter()
+    Q = _nearer_ends(Q, Q0, Q1, measure)
+    if simplify_time > 0:
+        path = og.PathGeometric(si)
+        for q in Q:
+            path.append(state(q))
+        og.PathSimplifier(si).simplify(path, float(simplify_time))
+        ends = Q[[0, -1]]
+        Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
+        Q[0], Q[-1] = ends  # the simplifier keeps the ends: exactly, not to round-off
+        Q = _nearer_ends(Q, Q0, Q1, measure)
+    spent = _time.perf_counter() - t1
     q0, q1 = Q[0], Q[-1]
     final = clearance(robot, Q, **world)
     if final.min_distance < margin:  # never a silent success: the bound says this cannot happen
