@@ -96,7 +96,8 @@ def _rounds(model, starts, ends, turn_starts):
        moves, found first when there is one;
     2. the same branch at every whole turn of the joints (a first step's starts too): which way a wrist
        is turned decides whether it must fold the gripper onto the forearm on the way;
-    3. every branch, every turn (a change of branch turns the shoulder or the wrist over).
+    3. every branch at the nearest turns (a change of branch turns the shoulder or the wrist over);
+    4. every branch, every turn.
 
     A round that adds nothing to the one before is left out.
     """
@@ -109,9 +110,9 @@ def _rounds(model, starts, ends, turn_starts):
     same_s = S[model.branch_of(S) == branch]
     same_e = E[model.branch_of(E) == branch]
     near = np.array([_nearest_turn(model, q, starts[0]) for q in ends])
-    near = near[model.branch_of(near) == branch]
+    first = np.array(starts[:1])
     out = []
-    for S_, E_ in ((np.array(starts[:1]), near), (same_s, same_e), (S, E)):
+    for S_, E_ in ((first, near[model.branch_of(near) == branch]), (same_s, same_e), (first, near), (S, E)):
         if len(E_) and not any(len(S_) == len(a) and len(E_) == len(b) for a, b in out):
             out.append((S_, E_))
     return out
