@@ -35,6 +35,8 @@ PLANNERS = ("ompl", "none")
 PLANNED_APPROACH = 0.05
 #: Peak joint speed (rad/s) of a planned transit's segments, unless the robot's limits are lower.
 TRANSIT_JOINT_SPEED = 1.0
+#: Most configurations of one pose taken at whole turns of its joints (:func:`_turns`).
+MAX_TURNS = 64
 #: Sample spacing (s) of a planned transit.
 _DT = 0.01
 
@@ -77,10 +79,12 @@ def _turns(model, q) -> np.ndarray:
     (up to ``2^k`` for ``k`` joints with a range over a turn): which way a wrist is turned decides whether
     it must fold the gripper back onto the forearm on the way."""
     lo, hi = model.limits.T
-    options = [[v for v in q[j] + 2 * np.pi * np.arange(-2, 3) if lo[j] <= v <= hi[j]] or [q[j]]
+    options = [[v for v in q[j] + 2 * np.pi * np.arange(-1, 2) if lo[j] <= v <= hi[j]] or [q[j]]
                for j in range(model.n_joints)]
     grids = np.meshgrid(*options, indexing="ij")
-    return np.stack([g.ravel() for g in grids], axis=1)
+    out = np.stack([g.ravel() for g in grids], axis=1)
+    # joints without limits (or wider than two turns) would multiply them: the fewest turns first
+    return out[np.argsort(np.abs(out - q).sum(axis=1), kind="stable")[:MAX_TURNS]]
 
 
 def _nearest_turn(model, q, reference) -> np.ndarray:
