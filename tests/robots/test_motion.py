@@ -18,7 +18,7 @@ DOWN = [0.0, 1.0, 0.0, 0.0]
 TABLE = Box([-2.0, -2.0, -0.05], [2.0, 2.0, 0.0])
 #: A 40 cm wall between two points over a table in front of the UR5e.
 WALL = {"wall": Box([-0.6, -0.02, 0.0], [-0.3, 0.02, 0.40])}
-#: A 30 cm wall with a shelf over it: the way over the wall is under the shelf.
+#: A 30 cm wall with a shelf 8 cm over its top (no way straight over: the path changes branch).
 SHELF = {"wall": Box([-0.6, -0.02, 0.0], [-0.3, 0.02, 0.30]),
          "shelf": Box([-0.75, -0.12, 0.38], [-0.35, 0.12, 0.41])}
 GOAL_BLOCKED = (r"^motion planning: the goal \[[-\d., ]+\] is not clear: the robot's \w+ comes [\d.]+ mm "
