@@ -69,6 +69,12 @@ def add_parser(sub):
                    help="the planner's search: 'satisficing' (default), skillbank's greedy best-first search "
                         "with the FF heuristic, which scales to hundreds of objects; 'optimal', A* with "
                         "LM-cut (jupyddl), the fewest steps, for small tasks")
+    p.add_argument("--planner", choices=["ompl", "none"], default="ompl",
+                   help="with --robot: a step whose skill (and transit) cannot keep the robot clear has its "
+                        "move planned in joint space by OMPL's RRTConnect, every link, the gripper and the "
+                        "scene checked ('ompl', default; skillbank[plan]); 'none' refuses such a step")
+    p.add_argument("--motion-time-limit", type=float, default=None, metavar="SECONDS",
+                   help="seconds the motion planner may search per transit (default 5)")
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory with every stream (.csv, .npz, .script, .bag; see --format)")
     add_force_option(p)
@@ -158,7 +164,8 @@ def _plan(args) -> int:
         if args.clearance is not None:
             bound["clearance"] = clearance_margin(args)
         result = plan_task(store, scene, domain=args.domain, robot=cli_robot(args), limits=limits,
-                           random_state=args.seed, progress=tick, search=args.search, **bound)
+                           random_state=args.seed, progress=tick, search=args.search, planner=args.planner,
+                           motion_time_limit=args.motion_time_limit, **bound)
         prims = {p.id: p.demo for s in result.steps for p in store.primitives(label=s.skill)} \
             if args.plot is not None else {}
     if not result.plan:  # the goal already holds: a plan of no steps, and no trajectory to write
@@ -317,8 +324,8 @@ def _plan_physics(args) -> int:
     from ..simulation import execute_plan  # robosuite and the planner, when a plan runs
 
     # what a kinematic model or a written trajectory needs: robosuite's controller drives its own arm
-    kinematic = ("out", "format", "domain", "clearance", "view", "tool_frame", "tool", "robot_base", "branch",
-                 "max_joint_velocity", "max_joint_acceleration")
+    kinematic = ("out", "format", "domain", "clearance", "motion_time_limit", "view", "tool_frame", "tool",
+                 "robot_base", "branch", "max_joint_velocity", "max_joint_acceleration")
     given = [f"--{n.replace('_', '-')}" for n in kinematic if getattr(args, n, None) is not None]
     if given:
         raise ValueError(f"{given[0]}: a robosuite scene runs robosuite's arm (--robot) in its own world, "

@@ -453,14 +453,15 @@ class Library(Adding):
 
     def plan(self, scene, *, domain=None, robot=None, limits=None, random_state=None, progress: bool = False,
              max_groundings: int | None = None, time_limit: float = TIME_LIMIT,
-             search: str = "satisficing"):
+             search: str = "satisficing", planner: str = "ompl"):
         """Plan a task over the labelled skills in ``scene`` and reproduce it as one trajectory.
 
         See :func:`skillbank.planning.plan_task`: ``scene`` is a scene file, a dict of the same content
         or a :class:`~skillbank.planning.Scene`; ``progress`` shows a tqdm bar over the steps;
         ``max_groundings`` bounds the ground actions the planner may build, ``time_limit`` its search;
         ``search`` is ``"satisficing"`` (skillbank's greedy best-first search) or ``"optimal"``
-        (A* with LM-cut, the fewest steps).
+        (A* with LM-cut, the fewest steps); ``planner`` (``"ompl"``, default, or ``"none"``) whether a
+        step the skill cannot keep clear has its move planned in joint space (docs/planning.md).
 
         Returns
         -------
@@ -475,7 +476,8 @@ class Library(Adding):
         with tqdm(desc="plan steps", unit="step", disable=not progress) as bar:
             return plan_task(self.store, scene, domain=domain, robot=robot, limits=limits,
                              random_state=random_state, progress=_ticker(bar) if progress else None,
-                             max_groundings=max_groundings, time_limit=time_limit, search=search)
+                             max_groundings=max_groundings, time_limit=time_limit, search=search,
+                             planner=planner)
 
     def export(self, folder, *, progress: bool = False):
         """Write everything to ``folder``: NPZ files plus ``manifest.json``; returns the manifest path.

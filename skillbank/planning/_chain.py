@@ -30,6 +30,7 @@ from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_mode
 from ..selection import reuse, shift_near
 from ..selection._execution import check_limits, peak_rates, robot_limits
 from ._start import clear_starts
+from ._transit import PLANNERS, planned_end, planned_transit
 
 __all__ = ["PlanStep", "PlanResult", "reproduce_plan", "EMPTY_PLAN", "CLEARANCE", "arm_clearance"]
 
@@ -520,6 +521,105 @@ class _ArmContact(ValueError):
         return None
 
 
+def _plannable(exc, planner, model, position, where) -> bool:
+    """Whether a step's failure is one the motion planner may solve: the robot or its tool path not
+    clear of the world, with a robot and a known start (not a start or a goal inside an obstacle)."""
+    if planner != "ompl" or model is None or position is None:
+        return False
+    message = str(exc)
+    if message.startswith("start:") or "starts inside" in message or (
+            message.startswith(f"{where}: cannot avoid") and message.endswith("is inside it")):
+        return False
+    return isinstance(exc, _ArmContact) or any(k in message for k in (
+        "cannot avoid", "cannot keep the robot clear", "passes through", "comes within", "mm into",
+        "did not clear"))
+
+
+def _planned_step(failure, *, model, scene, skill, where, position, orientation, joints, goal, goal_q,
+                  gripper, steps, args, margin, task_limits, limits, random_state, time_limit):
+    """The step with its move planned by the motion planner (:mod:`._transit`), checked as every step is.
+
+    Returns ``(res, streams, segments, G, arm, resting, notes)`` as the step's own reproduction gives them;
+    raises ``failure`` with the planner's reason appended when the planner finds no clear move either.
+    """
+    b = skill.binding
+    names = _obstacles(scene, b, where)
+    with_q = all("orientation" in p.demo.streams for p in skill.primitives)
+    step_q = goal_q if with_q else None
+    near = _offset_point(goal, step_q, b.approach, "approach", where)
+    away = _offset_point(goal, step_q, b.retreat, "retreat", where)
+    zero = np.zeros(3)
+    free = Constraints(start=position, goal=goal if near is None else near, start_velocity=zero,
+                       end_velocity=zero, start_orientation=orientation if with_q else None,
+                       goal_orientation=step_q)
+    try:
+        # the primitive without the obstacles: the step's orientation at its ends, gripper and other streams
+        res = _reuse(skill, free, [], where, task_limits, random_state)
+    except ValueError:
+        raise failure from None
+    traj = res.trajectory
+    if "orientation" not in traj.streams:
+        raise failure
+    q_a = orientation if orientation is not None else traj["orientation"][0]
+    q_b = traj["orientation"][-1]
+
+    def label(other):
+        return _other_label(scene, other)
+
+    try:
+        starts = [joints]
+        if joints is None:  # the first step from a pose: the clear starts, nearest the recorded joints first
+            best = next(p for p in skill.primitives if p.id == res.used[0]).demo
+            seed = best["joints"][0] if "joints" in best.streams and \
+                best["joints"].shape[1] == model.n_joints else None
+            starts = clear_starts(model, scene, position, q_a, reference=seed, names=names, margin=margin,
+                                  label=label)
+        # the objects the robot rests on at its start may be left (as in the step's own reproduction)
+        resting = set(steps[-1].args) if steps else set().union(
+            *(_resting(model, scene, q[None], margin) for q in starts))
+        others = [n for n in scene.objects if n not in set(args) | resting]
+        end = planned_end(goal, q_b, near)
+        piece, motion = planned_transit(
+            model, scene, where=where, starts=starts, end=end, end_q=q_b, names=names, objects=others,
+            margin=margin, duration=lambda length: _duration(length, TRANSIT_SPEED, task_limits),
+            limits=limits, random_state=random_state, time_limit=time_limit, label=label,
+            first=joints is None)
+        J = piece.pop("joints")
+        pieces = [("transit", piece)]
+        if np.linalg.norm(end - goal) > 0.0:  # the binding's approach, or the planned one
+            pieces.append(("approach", _line(end, goal, q_b, q_b, APPROACH_SPEED, task_limits)))
+        if away is not None:
+            pieces.append(("retreat", _line(goal, away, q_b, q_b, APPROACH_SPEED, task_limits)))
+        streams, segments = _assemble(pieces, traj)
+        t = streams.pop("t")
+        k = len(J)
+        rest = {"position": streams["position"][k - 1:], "orientation": streams["orientation"][k - 1:]}
+        if len(rest["position"]) > 1:  # the straight lines by inverse kinematics from the planned end
+            J = np.concatenate([J, _joints(model, rest, J[-1], where)[1:]])
+        streams["joints"] = J
+        notes = [f"{where}: the motion planner (OMPL {motion.planner}) carried the move in "
+                 f"{motion.planning_time:.3g} s ({len(motion.joints)} waypoints, the whole robot "
+                 f"{motion.clearance.min_distance * 1000:.3g} mm clear): the skill's own move was refused "
+                 f"({' '.join(str(failure).split())})"]
+        scale = _joint_scale(J, t, limits)
+        if scale > 1.0:
+            t = t * scale
+            notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
+                         f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
+        G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, len(t))
+        if G is not None:
+            streams["gripper"] = G[:, None]
+        if note:
+            notes.append(f"{where}: {note}")
+        streams["t"] = t
+        arm = check_step(_world(scene, names), streams, segments, where, model, scene=scene, names=names,
+                         margin=margin, first=not steps, objects=others)
+    except ValueError as exc:
+        why = " ".join(str(exc).split()).removeprefix(f"{where}: ")
+        raise ValueError(f"{failure}; the motion planner found no clear move either ({why})") from None
+    return res, streams, segments, G, arm, resting, notes
+
+
 def _shape(scene, other):
     """The solid shape of ``other`` (an obstacle, the table or an object of the scene), or None (itself)."""
     if other == "table":
@@ -640,7 +740,7 @@ def _joint_scale(J, t, limits) -> float:
 
 
 def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state=None, progress=None,
-                   clearance_margin=None):
+                   clearance_margin=None, planner="ompl", motion_time_limit=None):
     """Reproduce every step of ``plan`` in ``scene`` and join them (see the module docstring).
 
     Parameters
@@ -659,6 +759,12 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     clearance_margin : float, optional
         With a robot: metres every body keeps from the obstacles, the table, the workspace bounds and
         itself (default :data:`CLEARANCE`); a step that comes closer is refused.
+    planner : {"ompl", "none"}, default="ompl"
+        With a robot: a step whose skill (and hand-written transit) cannot keep the robot clear has its
+        move planned in joint space by OMPL (:mod:`skillbank.planning._transit`); ``"none"`` refuses it.
+    motion_time_limit : float, optional
+        Seconds the motion planner may search per transit (default
+        :data:`skillbank.robots.MOTION_TIME_LIMIT`).
 
     Returns
     -------
@@ -667,6 +773,8 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     clearance_margin = CLEARANCE if clearance_margin is None else check_positive(
         clearance_margin, name="clearance", allow_zero=True)
     limits = check_limits(limits)
+    if planner not in PLANNERS:
+        raise ValueError(f"planner: expected one of {list(PLANNERS)}, got {planner!r}")
     task_limits = {k: v for k, v in limits.items() if k in _TASK_LIMITS}
     model = None if robot is None else robot if isinstance(robot, RobotModel) else robot_model(robot)
     if model is None and any(k.startswith("joint_") for k in limits):
@@ -713,158 +821,174 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         strategies = ("grow", "via") if model is not None else ("grow",)
         grow, repaired, via, failed, failing = {}, [], [], None, None
         tries = {"grow": MAX_REPAIRS, "via": MAX_VIA_POINTS}
-        for strategy, attempt in [(s, k) for s in strategies for k in range(tries[s] + 1)]:
-            if failed is not None and strategy == "grow":
-                continue  # the growth failed: on to the via points
-            if failed is not None and attempt == 0:
-                # the growths that worked stay; what growing could not clear gets via points instead
-                grow = {n: g for n, g in grow.items() if n != failing}
-                repaired, via = list(grow), []
-            try:
-                world = _grown(_world(scene, _obstacles(scene, b, where)), scene, grow)
-                with_q = all("orientation" in p.demo.streams for p in skill.primitives)
-                step_q = goal_q if with_q else None
-                near = _offset_point(goal, step_q, b.approach, "approach", where)
-                away = _offset_point(goal, step_q, b.retreat, "retreat", where)
-                _inside(world, goal, f"goal (the pose of {target})", where)
-                for point, what in ((near, "approach point"), (away, "retreat point"), (position, "start")):
-                    if point is not None:
-                        _inside(world, point, what, where)
-                height = _transit_height(scene, b)
-                extra = near is not None or away is not None or height is not None
-                zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
-                constraints = Constraints(start=position, goal=goal if near is None else near,
-                                          via=[v for v, _ in via], start_velocity=zero, end_velocity=zero,
-                                          obstacles=[ob for _, ob in world],
-                                          start_orientation=orientation if with_q else None,
-                                          goal_orientation=step_q)
-                step_notes = []
+        try:
+            for strategy, attempt in [(s, k) for s in strategies for k in range(tries[s] + 1)]:
+                if failed is not None and strategy == "grow":
+                    continue  # the growth failed: on to the via points
+                if failed is not None and attempt == 0:
+                    # the growths that worked stay; what growing could not clear gets via points instead
+                    grow = {n: g for n, g in grow.items() if n != failing}
+                    repaired, via = list(grow), []
                 try:
-                    res = _reuse(skill, constraints, world, where, task_limits, random_state)
-                    failure = None
-                except ValueError as exc:
-                    if height is None or position is None:
-                        raise
-                    res, failure = None, exc
-                traj = None if res is None else res.trajectory
-                end = constraints.goal
-                if height is not None and position is not None and (
-                        traj is None or float(traj["position"][:, 2].max()) < height):
-                    if traj is None:  # the primitive cannot make the move: a transit may
-                        try:
-                            res = _reuse(skill, constraints.replace(obstacles=()), [], where, task_limits,
-                                         random_state)
-                        except ValueError:
-                            raise failure from None
-                        traj = res.trajectory
-                    rotated = "orientation" in traj.streams
-                    q_a = (orientation if orientation is not None else traj["orientation"][0]) \
-                        if rotated else None
-                    q_b = traj["orientation"][-1] if rotated else None
-                    pieces = _transit(position, end, q_a, q_b, height, task_limits)
-                    reached = "cannot avoid the obstacles on its own" if failure is not None else \
-                        f"reaches z = {float(traj['position'][:, 2].max()):.6g} m"
-                    step_notes.append(f"{where}: a transit at z = {height:.6g} m carries the move (the "
-                                      f"primitive {reached})")
-                else:
-                    pieces = [("primitive", None)]
-                q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
-                for kind, a_, b_ in (("approach", near, goal), ("retreat", goal, away)):
-                    if (near, away)[kind == "retreat"] is not None:
-                        pieces.append((kind, _line(a_, b_, q_goal, q_goal, APPROACH_SPEED, task_limits)))
-                streams, segments = _assemble(pieces, traj)
-                n = len(streams["t"])
-                t = streams.pop("t")
-                if goal_q is not None and not with_q:
-                    step_notes.append(f"{where}: the goal orientation was left free: skill {skill.label!r} "
-                                      "has none")
-                if model is not None:
-                    seed = joints
-                    if seed is None:
-                        best = next(p for p in skill.primitives if p.id == res.used[0]).demo
-                        if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
-                            seed = best["joints"][0]
-                    if joints is None and branch is None:  # the start is a pose: a configuration clear of all
-                        streams["joints"] = _first_joints(model, scene, streams, seed, where,
-                                                          _obstacles(scene, b, where), clearance_margin, args)
+                    world = _grown(_world(scene, _obstacles(scene, b, where)), scene, grow)
+                    with_q = all("orientation" in p.demo.streams for p in skill.primitives)
+                    step_q = goal_q if with_q else None
+                    near = _offset_point(goal, step_q, b.approach, "approach", where)
+                    away = _offset_point(goal, step_q, b.retreat, "retreat", where)
+                    _inside(world, goal, f"goal (the pose of {target})", where)
+                    for point, what in ((near, "approach point"), (away, "retreat point"),
+                                        (position, "start")):
+                        if point is not None:
+                            _inside(world, point, what, where)
+                    height = _transit_height(scene, b)
+                    extra = near is not None or away is not None or height is not None
+                    zero = np.zeros(3) if b.velocity == "zero" or extra else None  # pieces join at rest
+                    constraints = Constraints(start=position, goal=goal if near is None else near,
+                                              via=[v for v, _ in via], start_velocity=zero, end_velocity=zero,
+                                              obstacles=[ob for _, ob in world],
+                                              start_orientation=orientation if with_q else None,
+                                              goal_orientation=step_q)
+                    step_notes = []
+                    try:
+                        res = _reuse(skill, constraints, world, where, task_limits, random_state)
+                        failure = None
+                    except ValueError as exc:
+                        if height is None or position is None:
+                            raise
+                        res, failure = None, exc
+                    traj = None if res is None else res.trajectory
+                    end = constraints.goal
+                    if height is not None and position is not None and (
+                            traj is None or float(traj["position"][:, 2].max()) < height):
+                        if traj is None:  # the primitive cannot make the move: a transit may
+                            try:
+                                res = _reuse(skill, constraints.replace(obstacles=()), [], where, task_limits,
+                                             random_state)
+                            except ValueError:
+                                raise failure from None
+                            traj = res.trajectory
+                        rotated = "orientation" in traj.streams
+                        q_a = (orientation if orientation is not None else traj["orientation"][0]) \
+                            if rotated else None
+                        q_b = traj["orientation"][-1] if rotated else None
+                        pieces = _transit(position, end, q_a, q_b, height, task_limits)
+                        reached = "cannot avoid the obstacles on its own" if failure is not None else \
+                            f"reaches z = {float(traj['position'][:, 2].max()):.6g} m"
+                        step_notes.append(f"{where}: a transit at z = {height:.6g} m carries the move (the "
+                                          f"primitive {reached})")
                     else:
-                        streams["joints"] = _joints(model, streams, seed, where, branch)
-                    scale = _joint_scale(streams["joints"], t, limits)
-                    if scale > 1.0:
-                        t = t * scale
-                        step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
-                                          f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
-                G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
-                if G is not None:
-                    streams["gripper"] = G[:, None]
-                if note:
-                    step_notes.append(f"{where}: {note}")
-                streams["t"] = t
-                # objects the step and the one before act on may be touched (pressed, left); others not
-                if steps:
-                    resting = set(steps[-1].args)
-                elif model is not None:  # where the robot starts: objects it rests on it may leave
-                    resting = _resting(model, scene, streams["joints"][:1], clearance_margin)
-                else:
-                    resting = set()
-                acted = set(args) | resting
-                others = [n for n in scene.objects if n not in acted]
-                arm = check_step(world, streams, segments, where, model, scene=scene,
-                                 names=_obstacles(scene, b, where), margin=clearance_margin, first=not steps,
-                                 objects=others)
-                break
-            except _ArmContact as contact:
-                if strategy == "via" and contact.other not in grow:
-                    # a via point in the primitive that moves the body away (skillbank.robots.clearing_move,
-                    # through the robot's kinematics, so links far from the tool are repaired too)
-                    if not via and attempt == MAX_VIA_POINTS:
-                        raise failed from None  # no via point could be tried: the growth's reason
-                    shape, phase, move = _shape(scene, contact.other), contact.primitive_phase(), None
-                    if phase is None:
-                        why = "it is not in the primitive"
-                    elif shape is None:
-                        why = "its body is itself"
-                    elif attempt == MAX_VIA_POINTS:
-                        why = f"after {len(via)} via point(s)"
+                        pieces = [("primitive", None)]
+                    q_goal = traj["orientation"][-1] if "orientation" in traj.streams else None
+                    for kind, a_, b_ in (("approach", near, goal), ("retreat", goal, away)):
+                        if (near, away)[kind == "retreat"] is not None:
+                            pieces.append((kind, _line(a_, b_, q_goal, q_goal, APPROACH_SPEED, task_limits)))
+                    streams, segments = _assemble(pieces, traj)
+                    n = len(streams["t"])
+                    t = streams.pop("t")
+                    if goal_q is not None and not with_q:
+                        step_notes.append(f"{where}: the goal orientation was left free: skill "
+                                          f"{skill.label!r} has none")
+                    if model is not None:
+                        seed = joints
+                        if seed is None:
+                            best = next(p for p in skill.primitives if p.id == res.used[0]).demo
+                            if "joints" in best.streams and best["joints"].shape[1] == model.n_joints:
+                                seed = best["joints"][0]
+                        # the start is a pose: a configuration clear of all
+                        if joints is None and branch is None:
+                            streams["joints"] = _first_joints(model, scene, streams, seed, where,
+                                                              _obstacles(scene, b, where), clearance_margin,
+                                                              args)
+                        else:
+                            streams["joints"] = _joints(model, streams, seed, where, branch)
+                        scale = _joint_scale(streams["joints"], t, limits)
+                        if scale > 1.0:
+                            t = t * scale
+                            step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint "
+                                              f"limits: {t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
+                    G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
+                    if G is not None:
+                        streams["gripper"] = G[:, None]
+                    if note:
+                        step_notes.append(f"{where}: {note}")
+                    streams["t"] = t
+                    # objects the step and the one before act on may be touched (pressed, left); others not
+                    if steps:
+                        resting = set(steps[-1].args)
+                    elif model is not None:  # where the robot starts: objects it rests on it may leave
+                        resting = _resting(model, scene, streams["joints"][:1], clearance_margin)
                     else:
-                        why = "moving the tool cannot clear it"
-                        move = clearing_move(model, contact.q, contact.body, shape, contact.body_lack)
-                    if move is None:
-                        what = str(contact).split(": ", 1)[-1].split(" (clearance margin")[0]
-                        raise ValueError(f"{failed}; via points in the primitive did not clear it either: "
-                                         f"{what} ({why})") from None
-                    mm = np.linalg.norm(move) * 1000
-                    via = shift_near(via, phase, move, _SAME_PLACE) + [
-                        (ViaPoint(contact.point + move, phase=phase),
-                         f"{contact.body} off {contact.other} (tool moved {mm:.3g} mm)")]
+                        resting = set()
+                    acted = set(args) | resting
+                    others = [n for n in scene.objects if n not in acted]
+                    arm = check_step(world, streams, segments, where, model, scene=scene,
+                                     names=_obstacles(scene, b, where), margin=clearance_margin,
+                                     first=not steps, objects=others)
+                    break
+                except _ArmContact as contact:
+                    if strategy == "via" and contact.other not in grow:
+                        # a via point in the primitive that moves the body away
+                        # (skillbank.robots.clearing_move, through the robot's kinematics, so links far from
+                        # the tool are repaired too)
+                        if not via and attempt == MAX_VIA_POINTS:
+                            raise failed from None  # no via point could be tried: the growth's reason
+                        shape, phase, move = _shape(scene, contact.other), contact.primitive_phase(), None
+                        if phase is None:
+                            why = "it is not in the primitive"
+                        elif shape is None:
+                            why = "its body is itself"
+                        elif attempt == MAX_VIA_POINTS:
+                            why = f"after {len(via)} via point(s)"
+                        else:
+                            why = "moving the tool cannot clear it"
+                            move = clearing_move(model, contact.q, contact.body, shape, contact.body_lack)
+                        if move is None:
+                            what = str(contact).split(": ", 1)[-1].split(" (clearance margin")[0]
+                            raise ValueError(f"{failed}; via points in the primitive did not clear it "
+                                             f"either: {what} ({why})") from None
+                        mm = np.linalg.norm(move) * 1000
+                        via = shift_near(via, phase, move, _SAME_PLACE) + [
+                            (ViaPoint(contact.point + move, phase=phase),
+                             f"{contact.body} off {contact.other} (tool moved {mm:.3g} mm)")]
+                        repaired.append(contact.other)
+                        continue
+                    # the tool path keeps further from what the body came near, by what it lacked
+                    growable = contact.other in scene.obstacles or contact.other == "table"
+                    if not growable or attempt == MAX_REPAIRS:
+                        grown = ", ".join(f"{n} by {g * 1000:.3g} mm" for n, g in grow.items())
+                        failed = ValueError(f"{contact} (after {len(repaired)} repair(s) growing {grown} "
+                                            "for the tool path)" if repaired else str(contact))
+                        # what growing failed on: this obstacle, or (a body or an object, never grown) the
+                        # last one grown, whose growth brought the arm here
+                        failing = contact.other if growable else (repaired[-1] if repaired else None)
+                        if strategy == strategies[-1]:
+                            raise failed from None
+                        continue
+                    grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
                     repaired.append(contact.other)
-                    continue
-                # the tool path keeps further from what the body came near, by what it lacked
-                growable = contact.other in scene.obstacles or contact.other == "table"
-                if not growable or attempt == MAX_REPAIRS:
-                    grown = ", ".join(f"{n} by {g * 1000:.3g} mm" for n, g in grow.items())
-                    failed = ValueError(f"{contact} (after {len(repaired)} repair(s) growing {grown} for the "
-                                        "tool path)" if repaired else str(contact))
-                    # what growing failed on: this obstacle, or (a body or an object, never grown) the last
-                    # one grown, whose growth brought the arm here
-                    failing = contact.other if growable else (repaired[-1] if repaired else None)
+                except ValueError as exc:
+                    if not repaired:
+                        raise
+                    if failed is not None:  # the via points left no path: the growth's reason, and why
+                        raise ValueError(f"{failed}; via points in the primitive left no path either "
+                                         f"({' '.join(str(exc).split())})") from None
+                    failing = repaired[-1]
+                    failed = ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it "
+                                        f"for the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no "
+                                        f"path ({' '.join(str(exc).split())})")
                     if strategy == strategies[-1]:
                         raise failed from None
-                    continue
-                grow[contact.other] = grow.get(contact.other, 0.0) + contact.lack
-                repaired.append(contact.other)
-            except ValueError as exc:
-                if not repaired:
-                    raise
-                if failed is not None:  # the via points left no path: the growth's reason, and why
-                    raise ValueError(f"{failed}; via points in the primitive left no path either "
-                                     f"({' '.join(str(exc).split())})") from None
-                failing = repaired[-1]
-                failed = ValueError(f"{where}: cannot keep the robot clear of {repaired[-1]}: growing it for "
-                                    f"the tool path by {grow[repaired[-1]] * 1000:.3g} mm leaves no path "
-                                    f"({' '.join(str(exc).split())})")
-                if strategy == strategies[-1]:
-                    raise failed from None
+        except ValueError as exc:
+            if not _plannable(exc, planner, model, position, where):
+                raise
+            # the skill (and the hand-written transit) cannot keep the robot clear: the motion planner
+            # finds the move in joint space (OMPL), and a straight approach brings the tool onto the goal
+            res, streams, segments, G, arm, resting, step_notes = _planned_step(
+                exc, model=model, scene=scene, skill=skill, where=where, position=position,
+                orientation=orientation, joints=joints, goal=goal, goal_q=goal_q, gripper=gripper,
+                steps=steps, args=args, margin=clearance_margin, task_limits=task_limits, limits=limits,
+                random_state=random_state, time_limit=motion_time_limit)
+            grow, via, n = {}, [], len(streams["t"])
         if grow:
             step_notes.append(f"{where}: kept the whole robot clear by keeping the tool further from "
                               + ", ".join(f"{n} (by {g * 1000:.3g} mm)" for n, g in grow.items()))

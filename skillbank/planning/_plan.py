@@ -139,7 +139,7 @@ def _scene(scene) -> Scene:
 def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, random_state=None,
               max_expansions: int = MAX_EXPANSIONS, max_groundings: int | None = None,
               time_limit: float = TIME_LIMIT, progress=None, clearance=None,
-              search: str = "satisficing") -> PlanResult:
+              search: str = "satisficing", planner: str = "ompl", motion_time_limit=None) -> PlanResult:
     """Plan a task over the library's labelled skills in a scene, and reproduce the plan as one trajectory.
 
     1. The domain: ``domain`` (a :class:`Domain`, PDDL text or a file; used as
@@ -180,6 +180,13 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
     search : {"satisficing", "optimal"}
         The planner's search (see :data:`~skillbank.planning.SEARCHES`): greedy best-first with h_ff,
         which scales to hundreds of objects, or A* with LM-cut (jupyddl), the fewest steps.
+    planner : {"ompl", "none"}, default="ompl"
+        With a robot: a step whose skill (and hand-written transit) cannot keep the robot clear has its
+        move planned in joint space by OMPL (the ``plan`` extra; docs/planning.md, "Planned transits");
+        ``"none"`` refuses such a step.
+    motion_time_limit : float, optional
+        Seconds the motion planner may search per transit (default
+        :data:`skillbank.robots.MOTION_TIME_LIMIT`).
 
     Returns
     -------
@@ -214,7 +221,7 @@ def plan_task(store: Store, scene, *, domain=None, robot=None, limits=None, rand
             raise
         raise ValueError(f"{exc}{unused}") from None
     result = reproduce_plan(scene, steps, _skills(store, dom), robot=robot, limits=limits,
-                            clearance_margin=clearance,
+                            clearance_margin=clearance, planner=planner, motion_time_limit=motion_time_limit,
                             random_state=random_state, progress=progress)
     result.domain, result.problem = dom.text, problem
     return result

@@ -26,6 +26,7 @@ from ._chain import ChainModel, KinematicChain
 from ._clearance import Clearance, clearance
 from ._clearing import CLEARANCE, clearing_move
 from ._description import check_description_files, enclosing_capsule, load_description
+from ._motion import MOTION_TIME_LIMIT, MotionPlan, MotionPlanningError, plan_motion
 from ._points import PosePoint, pose_point, to_tool, tool_point
 from ._registry import DESCRIPTIONS, ROBOTS, registered_name, robot_model
 from ._time_law import STILL, TIME_LAWS, rate_ratio, time_law
@@ -36,5 +37,6 @@ __all__ = ["RobotModel", "KinematicsError", "Singularity", "UR5e", "UR5E_DH", "R
            "check_description_files",
            "enclosing_capsule",
            "Capsule", "Gripper", "GRIPPERS", "ROBOTIQ_2F85", "PANDA_HAND", "Clearance", "clearance",
-           "CLEARANCE", "clearing_move", "PosePoint", "pose_point", "to_tool", "tool_point", "time_law",
-           "rate_ratio", "TIME_LAWS", "STILL"]
+           "CLEARANCE", "clearing_move",
+           "plan_motion", "MotionPlan", "MotionPlanningError", "MOTION_TIME_LIMIT",
+           "PosePoint", "pose_point", "to_tool", "tool_point", "time_law", "rate_ratio", "TIME_LAWS", "STILL"]

@@ -68,7 +68,8 @@ def test_the_fingers_would_touch_the_wall_without_the_repair(button_library, mon
                                          r"within [\d.]+ mm of obstacle wall \(box:-0.6,-0.02,0.0,-0.3,0.02,"
                                          r"0.25\) at t = [\d.]+ s \(clearance margin 5 mm; --clearance "
                                          r"sets it\)$"):
-        plan_task(button_library.store, scene_from_dict(wall_scene()), robot="ur5e")
+        # without the motion planner (issue 43), which would plan the move instead
+        plan_task(button_library.store, scene_from_dict(wall_scene()), robot="ur5e", planner="none")
 
 
 def test_the_repair_is_said(around_the_wall):
@@ -156,7 +157,7 @@ def test_a_link_that_growing_cannot_clear_is_repaired_with_via_points(button_lib
     with pytest.raises(ValueError, match=r"^step 1 \(press b2\): .*growing wall by [\d.]+ mm, post by "
                                          r"[\d.]+ mm for the tool path\); via points in the primitive did "
                                          r"not clear it either: .*\(moving the tool cannot clear it\)$"):
-        plan_task(button_library.store, scene, robot="ur5e")
+        plan_task(button_library.store, scene, robot="ur5e", planner="none")
 
 
 def test_plan_on_the_panda_keeps_its_links_clear_of_the_wall(cli, button_library, tmp_path):
