@@ -528,7 +528,8 @@ class _Episode:
         """Adapted segments also leave as their demonstrations did (:func:`_path_adapted`): a lift off
         the table stays a lift, clear of a cube beside the one picked up (a human Stack, tuning seeds:
         17/20 on the UR5e without, 19/20 with); ``reach``: a
-        :class:`~skillbank.simulation._reach.Reach` that keeps commanded paths within the arm's reach margin (a composed task, whose arm goes on from where each step leaves it)."""
+        :class:`~skillbank.simulation._reach.Reach` that keeps commanded paths within the arm's reach
+        margin (a composed task, whose arm goes on from where each step leaves it)."""
         self.env, self.horizon = env, horizon
         self.path = [] if trace else None
         self.driver = _Driver(env, obs, keep=False)
