@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -66,7 +67,7 @@ from ._robosuite import (
     recorded_robot,
     robosuite_robot,
 )
-from ._support import fixtures, object_symmetry, support
+from ._support import fixtures, object_extents, object_symmetry, pad_half_width, support
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
 
@@ -441,12 +442,53 @@ def running_arm(sources, robot: str = DRIVEN_ROBOT) -> dict:
     return {**arm, "notes": arm["notes"] + pose_points(sources, robot)}
 
 
+class _Fingers(NamedTuple):
+    """The executing gripper, and the scene's objects as its pads meet them."""
+
+    axis: np.ndarray  # the closing axis in the tool's frame
+    half: float  # half the opening, m
+    pad: float  # half a pad's width across the closing axis, m
+    extents: dict  # object -> its half sizes (m) in its own frame (:func:`object_extents`)
+
+
 def _fingers(env, obs):
-    """``(closing axis in the tool's frame, half the opening (m))`` of the gripper, from its finger pads."""
+    """The gripper's :class:`_Fingers`, from its finger pads' collision geoms, and the objects' extents."""
     across = _pads(env)
     width = float(np.linalg.norm(across))
-    axis = quaternion_to_matrix(np.asarray(obs["robot0_eef_quat"], float)).T @ (across / max(width, 1e-9))
-    return axis, width / 2
+    R = quaternion_to_matrix(np.asarray(obs["robot0_eef_quat"], float))
+    axis = R.T @ (across / max(width, 1e-9))
+    return _Fingers(axis, width / 2, pad_half_width(env, R @ axis),
+                    {o: object_extents(env, o) for o in _objects(obs)})
+
+
+def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
+    """The goal ``p`` of a reach that closes the gripper on its object, moved across the closing axis
+    just enough that the executing gripper's pads overlap the object's face by their width.
+
+    A person grasps off centre (2.75 cm across a 4 cm cube's face, the Panda's 1.6 cm pads still
+    closing on its edge); the grasp kept where it was on the object leaves another gripper's pads on
+    nothing but the corner, and the cube turns out of the fingers. Along the closing axis nothing
+    moves (closing centres the object between the fingers); across it the offset is kept as far as the
+    pads still cover the face (centred, if the face is narrower than a pad).
+    """
+    relation = seg.relation
+    if (fingers is None or relation is None or relation.moves_with
+            or seg.primitive.demo["actions"][-1, 6] <= 0):
+        return p
+    obj = seg.scene(relation.object)
+    half = fingers.extents.get(obj)
+    if half is None:
+        return p
+    R = quaternion_to_matrix(q)
+    up = R[:, 2]
+    across = np.cross(up, R @ fingers.axis)  # along a pad's width, in the world
+    across /= max(float(np.linalg.norm(across)), 1e-12)
+    centre = np.asarray(obs[f"{obj}_pos"], float)
+    # the object's half extent along that direction, from its own frame
+    reach = float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ across) @ half)
+    room = max(0.0, reach - fingers.pad)
+    off = float((centre - p) @ across)
+    return p + (off - np.clip(off, -room, room)) * across
 
 
 def _cost(segments, obs, fingers=None) -> float:
@@ -697,7 +739,8 @@ def _goal(seg, obs, fingers=None):
     tool's frame and half the opening, m) stay :data:`NEIGHBOUR` metres from every object the segment
     does not act on; else the one that keeps them farthest.
     """
-    options = [(q, _goal_position(seg, obs, q, angle)) for q, angle in _goal_orientations(seg, obs)]
+    options = [(q, _on_pads(seg, obs, _goal_position(seg, obs, q, angle), q, fingers))
+               for q, angle in _goal_orientations(seg, obs)]
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
     others = _others(seg, obs)
@@ -717,7 +760,7 @@ def _others(seg, obs) -> list:
 
 def _room(p, q, fingers, others) -> float:
     """How far (m) the fingertips of the tool at ``p``, ``q`` are from the nearest of ``others``."""
-    axis, half = fingers
+    axis, half = fingers.axis, fingers.half
     tips = p + np.outer([-half, half], quaternion_to_matrix(q) @ axis)
     return min((float(np.linalg.norm(tip - o)) for tip in tips for o in others), default=math.inf)
 

@@ -16,9 +16,9 @@ import math
 import numpy as np
 
 from ..robots._description import _geom_balls
-from ._robosuite import _box
+from ._robosuite import _box, _gripper
 
-__all__ = ["fixtures", "object_symmetry", "support", "vertical_symmetry"]
+__all__ = ["fixtures", "object_extents", "object_symmetry", "pad_half_width", "support", "vertical_symmetry"]
 
 #: Turns tried, most first: quarter, half (whole turns always hold).
 TURNS = (4, 2)
@@ -139,3 +139,39 @@ def object_symmetry(env, name) -> int:
     body = int(m.geom_bodyid[gs[0]])
     return vertical_symmetry(np.concatenate([c for c, _ in balls]), np.concatenate([r for _, r in balls]),
                              d.xpos[body])
+
+
+def object_extents(env, name):
+    """The half sizes (m) of the scene object ``name``'s collision geometry along its own axes, about its
+    centre; None for an object the scene does not model."""
+    sim = env.sim
+    m, d = sim.model._model, sim.data._data
+    model = next((o for o in env.model.mujoco_objects if o.name == name), None)
+    if model is None or not model.contact_geoms:
+        return None
+    gs = [sim.model.geom_name2id(g) for g in model.contact_geoms]
+    body = int(m.geom_bodyid[gs[0]])
+    balls = [_geom_balls(m, d, g) for g in gs]
+    points = np.concatenate([c for c, _ in balls])
+    radii = np.concatenate([r for _, r in balls])
+    local = (points - d.xpos[body]) @ np.asarray(d.xmat[body], float).reshape(3, 3)
+    return np.abs(local).max(axis=0) + radii.max(initial=0.0)
+
+
+def pad_half_width(env, closing) -> float:
+    """Half the width (m) of the gripper's finger pads across the horizontal closing direction
+    ``closing`` (world): how far a pad reaches sideways on the face it closes on."""
+    sim = env.sim
+    m, d = sim.model._model, sim.data._data
+    closing = np.asarray(closing, float)
+    up = np.array([0.0, 0.0, 1.0])
+    across = np.cross(up, closing)
+    across /= max(float(np.linalg.norm(across)), 1e-12)
+    widths = []
+    for side in ("left", "right"):
+        for name in _gripper(env).important_geoms[f"{side}_fingerpad"]:
+            g = sim.model.geom_name2id(name)
+            points, radii = _geom_balls(m, d, g)
+            along = (points - d.geom_xpos[g]) @ across
+            widths.append(float(np.abs(along).max() + radii.max(initial=0.0)))
+    return min(widths)

@@ -260,3 +260,27 @@ def test_a_carry_is_aimed_again_from_where_the_object_sits_in_the_hand_before_le
     np.testing.assert_allclose(_aimed(seg, obs, p), [-0.01, 0.0, 0.0], atol=1e-12)
     obs["cube_pos"] = tool + [0.0, 0.0, -0.01]  # where the plan had it: no shift
     np.testing.assert_allclose(_aimed(seg, obs, p), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("offset", "pad", "expected"), [(0.0275, 0.01, 0.01), (0.0275, 0.008, 0.012),
+                                                         (0.005, 0.01, 0.005), (-0.03, 0.01, -0.01),
+                                                         (0.02, 0.025, 0.0)])
+def test_a_grasp_across_the_closing_axis_keeps_the_executing_pads_on_the_face(offset, pad, expected):
+    """A cube of 2 cm half sides grasped ``offset`` off its centre across the closing axis (the tool's
+    x; the fingers close along y): the goal keeps the offset as far as pads of half width ``pad`` still
+    cover the face, centres a face narrower than a pad, and never moves along the closing axis."""
+    from skillbank.simulation._evaluate import _Fingers, _on_pads
+
+    box = np.array([0.1, -0.3, 0.82])
+    n = 10
+    tool = box + [offset, 0.004, 0.0] + np.linspace(0.1, 0.0, n)[:, None] * [0.0, 0.0, 1.0]
+    prim = _primitive(tool, np.tile(box, (n, 1)), 0.0, 0.0, 0)
+    prim.demo["actions"][-1, 6] = 1.0  # it closes on the cube at its end
+    seg = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 1)
+    obs = {"cube_pos": box, "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
+    fingers = _Fingers(np.array([0.0, 1.0, 0.0]), 0.04, pad, {"cube": np.full(3, 0.02)})
+    p = _on_pads(seg, obs, tool[-1], DOWN, fingers)
+    np.testing.assert_allclose(p - box, [expected, 0.004, 0.0], atol=1e-12)
+    carry = _Segment(prim, acted_on(prim.demo), ("cube", "end"), ("cube", "end"), 1)
+    carry.primitive.demo["actions"][-1, 6] = -1.0  # a reach that does not close: left as it is
+    np.testing.assert_allclose(_on_pads(carry, obs, tool[-1], DOWN, fingers), tool[-1])

@@ -103,3 +103,25 @@ def test_a_cube_has_quarter_turns_and_a_nut_with_its_handle_none(scenes):
         assert object_symmetry(stack, "cubeA") == 4
     finally:
         stack.close()
+
+
+def test_a_cubes_extents_and_the_grippers_pads(scenes):
+    from skillbank.simulation._evaluate import _make
+    from skillbank.simulation._robosuite import _pads, import_robosuite
+    from skillbank.simulation._support import object_extents, pad_half_width
+
+    env, _ = scenes["NutAssemblySquare"]
+    assert object_extents(env, "no such object") is None
+    nut = object_extents(env, "SquareNut")
+    assert nut[0] > 2 * nut[2]  # a flat nut, its handle along its x
+    for robot, pad in (("UR5e", 0.01), ("Panda", 0.008)):  # the 2F-85's pads 2 cm wide, the Panda's 1.6 cm
+        lift = _make(import_robosuite(), "Lift", 0, 1000, robot)
+        try:
+            lift.reset()
+            half = object_extents(lift, "cube")
+            np.testing.assert_allclose(half, half[0], rtol=0.2)  # a cube, about 2 cm each way
+            assert 0.015 < half[0] < 0.03
+            closing = _pads(lift) * [1, 1, 0]
+            assert abs(pad_half_width(lift, closing / np.linalg.norm(closing)) - pad) < 1.5e-3
+        finally:
+            lift.close()
