@@ -95,7 +95,7 @@ LEVER = 0.1  # m per radian: how far a turn of the wrist moves its fingertips (a
 #: Phases of a segment pinned to its source's path moved onto the goal: the second half closes in as the
 #: demonstration did (an approach from above stays one), the first is adapted from where the robot is.
 CLOSE_IN = (0.5, 0.625, 0.75, 0.875)
-LEAVE = (0.125, 0.25)  # and, where asked, the first quarter leaves as the demonstration did
+LEAVE = (0.125, 0.25)  # and the first quarter leaves as the demonstration did
 TURNS_WITH = 0.5  # a symmetric grasp's place stays when its ends agree twice as well as they are as turned
 SYMMETRIES = (1, 2, 4)  # whole, half and quarter turns about the vertical: a goal's heading may repeat
 NEIGHBOUR = 0.06  # m: a fingertip nearer another object's centre than this may touch it (a 4-10 cm object)
@@ -782,7 +782,7 @@ def _path_rigid(seg, obs):
             np.concatenate([np.full(RIGID_BLEND, grip[0]), grip]))
 
 
-def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
+def _path_adapted(seg, obs, method, random_state, fingers=None):
     """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate.
 
     A reach is adapted from its last try (:func:`_last_try`): a grasp the person closed on nothing and
@@ -802,13 +802,12 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, leave=False):
         goal_p + (P_src - P_src[-1]) @ turn.T
     via = [ViaPoint(np.array([np.interp(u, u_src, close[:, j]) for j in range(3)]), phase=u)
            for u in CLOSE_IN]
-    if leave:
-        # and the first part leaves as the source did, from where the robot is: a lift off the table
-        # stays a lift, clear of what stands beside what was picked up
-        here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
-        off = quaternion_to_matrix(quaternion_multiply(here_q, quaternion_conjugate(demo["orientation"][0])))
-        at = [np.array([np.interp(u, u_src, P_src[:, j]) for j in range(3)]) for u in LEAVE]
-        via = [ViaPoint(here_p + off @ (a - P_src[0]), phase=u) for a, u in zip(at, LEAVE, strict=True)] + via
+    # and the first part leaves as the source did, from where the robot is: a lift off the table stays a
+    # lift, clear of what stands beside what was picked up
+    here_p, here_q = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
+    off = quaternion_to_matrix(quaternion_multiply(here_q, quaternion_conjugate(demo["orientation"][0])))
+    at = [np.array([np.interp(u, u_src, P_src[:, j]) for j in range(3)]) for u in LEAVE]
+    via = [ViaPoint(here_p + off @ (a - P_src[0]), phase=u) for a, u in zip(at, LEAVE, strict=True)] + via
     # a primitive of a few samples puts two phases on one sample (or on its start or end): one pin each
     pins = {}
     for v in via:
@@ -1023,8 +1022,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     P, Q, G = _path_rigid(seg, episode.obs)
                 else:
                     seg = _in_scene(seg, episode.env)
-                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
-                                            leave=True)
+                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers)
                     carried = seg.scene(seg.relation.object) if _carries(seg.relation) else None
                     P = _over_tops(P, G, episode.env, episode.obs, carried)
             except ValueError as error:

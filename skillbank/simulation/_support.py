@@ -105,7 +105,6 @@ def support(env, point):
     smallest: a peg on the table, not the table.
     """
     sim = env.sim
-    m, d = sim.model._model, sim.data._data
     p = np.asarray(point, float)
     best = None
     for b, gs in fixtures(env).items():
@@ -118,42 +117,47 @@ def support(env, point):
     if best is None:
         return None
     _, b, gs, centre = best
-    balls = [_geom_balls(m, d, g) for g in gs]
-    points = np.concatenate([c for c, _ in balls])
-    radii = np.concatenate([r for _, r in balls])
-    return b, vertical_symmetry(points, radii, centre)
+    return b, vertical_symmetry(*_points(sim, gs), centre)
 
+
+def _points(sim, geoms) -> tuple:
+    """``(points (n, 3), radii (n,))``: the collision geoms ``geoms`` (ids) as they lie now, as balls
+    whose hull holds them (robots' one reading of a geom)."""
+    m, d = sim.model._model, sim.data._data
+    balls = [_geom_balls(m, d, g) for g in geoms]
+    return np.concatenate([c for c, _ in balls]), np.concatenate([r for _, r in balls])
+
+
+def _object(env, name):
+    """``(geom ids, body id)`` of the scene object ``name``'s collision geometry; None if not modelled."""
+    sim = env.sim
+    model = next((o for o in env.model.mujoco_objects if o.name == name), None)
+    if model is None or not model.contact_geoms:
+        return None
+    gs = [sim.model.geom_name2id(g) for g in model.contact_geoms]
+    return gs, int(sim.model._model.geom_bodyid[gs[0]])
 
 
 def object_symmetry(env, name) -> int:
     """The quarter (4) or half (2) turns about the vertical through the scene object ``name``'s centre that
     leave its collision geometry unchanged (a cube: 4; a nut with its handle: 1); 1 for an object the
     scene does not model."""
-    sim = env.sim
-    m, d = sim.model._model, sim.data._data
-    model = next((o for o in env.model.mujoco_objects if o.name == name), None)
-    if model is None or not model.contact_geoms:
+    found = _object(env, name)
+    if found is None:
         return 1
-    gs = [sim.model.geom_name2id(g) for g in model.contact_geoms]
-    balls = [_geom_balls(m, d, g) for g in gs]
-    body = int(m.geom_bodyid[gs[0]])
-    return vertical_symmetry(np.concatenate([c for c, _ in balls]), np.concatenate([r for _, r in balls]),
-                             d.xpos[body])
+    gs, body = found
+    return vertical_symmetry(*_points(env.sim, gs), env.sim.data._data.xpos[body])
 
 
 def object_extents(env, name):
     """The half sizes (m) of the scene object ``name``'s collision geometry along its own axes, about its
     centre; None for an object the scene does not model."""
-    sim = env.sim
-    m, d = sim.model._model, sim.data._data
-    model = next((o for o in env.model.mujoco_objects if o.name == name), None)
-    if model is None or not model.contact_geoms:
+    found = _object(env, name)
+    if found is None:
         return None
-    gs = [sim.model.geom_name2id(g) for g in model.contact_geoms]
-    body = int(m.geom_bodyid[gs[0]])
-    balls = [_geom_balls(m, d, g) for g in gs]
-    points = np.concatenate([c for c, _ in balls])
-    radii = np.concatenate([r for _, r in balls])
+    gs, body = found
+    d = env.sim.data._data
+    points, radii = _points(env.sim, gs)
     local = (points - d.xpos[body]) @ np.asarray(d.xmat[body], float).reshape(3, 3)
     return np.abs(local).max(axis=0) + radii.max(initial=0.0)
 
@@ -162,7 +166,6 @@ def pad_half_width(env, closing) -> float:
     """Half the width (m) of the gripper's finger pads across the horizontal closing direction
     ``closing`` (world): how far a pad reaches sideways on the face it closes on."""
     sim = env.sim
-    m, d = sim.model._model, sim.data._data
     closing = np.asarray(closing, float)
     up = np.array([0.0, 0.0, 1.0])
     across = np.cross(up, closing)
@@ -171,7 +174,7 @@ def pad_half_width(env, closing) -> float:
     for side in ("left", "right"):
         for name in _gripper(env).important_geoms[f"{side}_fingerpad"]:
             g = sim.model.geom_name2id(name)
-            points, radii = _geom_balls(m, d, g)
-            along = (points - d.geom_xpos[g]) @ across
+            points, radii = _points(sim, [g])
+            along = (points - sim.data.geom_xpos[g]) @ across
             widths.append(float(np.abs(along).max() + radii.max(initial=0.0)))
     return min(widths)

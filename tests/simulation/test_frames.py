@@ -124,7 +124,7 @@ def test_a_primitive_of_a_few_samples_is_adapted_with_one_pin_per_sample():
     here = box + [0.05, 0.0, 0.15]
     obs = {"robot0_eef_quat": DOWN, "robot0_eef_pos": here, "cube_pos": box + [0.02, 0.0, 0.0],
            "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
-    P, Q, G = _path_adapted(seg, obs, "lte", 0, leave=True)
+    P, Q, G = _path_adapted(seg, obs, "lte", 0)
     np.testing.assert_allclose(P[0], here, atol=1e-6)
     np.testing.assert_allclose(P[-1], box + [0.02, 0.0, 0.02], atol=1e-6)
 
