@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._options import show_progress
+from ._options import add_verbose_option, show_progress, verbose_logging
 from ._output import add_force_option
 
 __all__ = ["add_parser", "run"]
@@ -20,6 +20,7 @@ def add_parser(sub):
     p.add_argument("--data", type=Path, default=None,
                    help="shared data folder: use RAIL and the three-button demo instead of LASA")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (and no progress bar)")
+    add_verbose_option(p)
     p.set_defaults(func=run)
     return p
 
@@ -28,6 +29,7 @@ def run(args) -> int:
     """Run the main job; returns the exit status."""
     from ..experiments import run_library_demo  # the whole stack, imported when the job runs
 
+    verbose_logging(args)  # robosuite's set-up log only with -v
     summary = run_library_demo(args.out, data=args.data, progress=show_progress(args))
     if args.json:
         print(json.dumps(summary))

@@ -11,7 +11,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..core import Constraints, Demonstration, Sphere, exp_map
-from ..io import atomic_output, load, load_lasa, load_rail, write_json, write_trajectory
+from ..io import atomic_output, import_robosuite, load, load_lasa, load_rail, write_json, write_trajectory
 from ..pipeline import Library
 from ..plotting import plot_executable, plot_reuse, plot_skills
 from ..plotting._view import write_view
@@ -345,7 +345,7 @@ def _composed(out: Path, seed) -> dict:
     """A short run of ``experiment stack3`` and ``experiment unload``: three demonstrations per task, two
     and one scenes; each with the figure of its first episode. Empty without robosuite."""
     try:
-        import robosuite  # noqa: F401 - the sim extra, only to know whether it is there
+        import_robosuite()  # the sim extra, only to know whether it is there; its set-up log off (io's)
     except ImportError:
         return {"skipped": "robosuite is not installed (pip install 'skillbank[sim]')"}
     from ..plotting import plot_composed  # matplotlib, with the rest of the demo's figures

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import logging
 import re
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -102,14 +103,20 @@ def _environment(path, data) -> tuple[str, dict]:
 def import_robosuite(missing: str = MISSING_ROBOSUITE):
     """The ``robosuite`` module, quiet, or an ImportError of one line (``missing``) naming the extra.
 
-    robosuite logs its set-up (no private macro file, optional robots, controller files) through its
-    ``robosuite_logs`` logger at import and at every environment made; that is not skillbank's output, so
-    the logger is off unless the root logger asks for INFO or more (``logging.basicConfig(level=INFO)``).
+    robosuite logs its set-up through its ``robosuite_logs`` logger: at import (no private macro file,
+    optional robots, mink's IK, controller files) and at every environment made. That is not skillbank's
+    output, so unless the root logger asks for INFO or more (``logging.basicConfig(level=INFO)``, which the
+    commands' ``-v`` sets) the logger stays off, and the Python warnings its import raises are dropped too
+    (the warnings filters are restored after the import).
     """
-    if logging.getLogger().getEffectiveLevel() > logging.INFO:
+    quiet = logging.getLogger().getEffectiveLevel() > logging.INFO
+    if quiet:
         logging.getLogger("robosuite_logs").disabled = True
     try:
-        import robosuite  # the optional extra skillbank[sim]: only when an environment is made
+        with warnings.catch_warnings():
+            if quiet:
+                warnings.simplefilter("ignore")
+            import robosuite  # the optional extra skillbank[sim]: only when an environment is made
     except ImportError:
         raise ImportError(missing) from None
     return robosuite
