@@ -12,7 +12,7 @@ Every file here is made by this script, from numbers it computes (seeded) or fro
 - ``robomimic_demo.hdf5``: robomimic's low-dimensional layout, 4 episodes of a reach, grasp and
   lift (robot0_eef_pos in m, the gripper's finger positions), robosuite's Lift named in env_args.
 - ``my_recording/``: a ROS 2 bag (sqlite3) of a UR5e: /joint_states, /tool_pose, /ft_sensor,
-  /gripper, each on its own clock (100, 50, 250 and 20 Hz).
+  /gripper, each on its own clock (100, 50, 100 and 20 Hz).
 - ``run.bag`` (ROS 1) and ``run2.mcap`` (a plain MCAP file): joints and tool pose; ``run.bag`` has a
   1 s silence in the middle, so ``--split gaps`` reads two demonstrations from it.
 - ``lerobot_dataset/``: a LeRobot v2.1 dataset of 3 episodes at 30 Hz (observation.state, action).
@@ -74,7 +74,8 @@ def features(folder: Path) -> None:
     rng = np.random.default_rng(1)
     centres = np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
     X = np.concatenate([c + rng.normal(0.0, 0.4, (10, 2)) for c in centres])
-    np.savetxt(folder / "features.csv", np.round(X, 4), delimiter=",", header="f0,f1", comments="", fmt="%.4f")
+    np.savetxt(folder / "features.csv", np.round(X, 4), delimiter=",", header="f0,f1", comments="",
+               fmt="%.4f")
 
 
 def mixed(folder: Path) -> None:
@@ -105,7 +106,8 @@ def robomimic(folder: Path) -> None:
             group["obs/robot0_eef_pos"] = pos
             group["obs/robot0_eef_quat"] = quat
             group["obs/robot0_gripper_qpos"] = fingers
-            group["actions"] = np.column_stack([np.gradient(pos, axis=0), np.zeros((len(t), 3)), 2 * closed - 1])
+            group["actions"] = np.column_stack([np.gradient(pos, axis=0), np.zeros((len(t), 3)),
+                                                2 * closed - 1])
             group["rewards"] = (t >= 3.5).astype(float)
             group.attrs["num_samples"] = len(t)
             data.attrs["total"] += len(t)
@@ -159,8 +161,8 @@ def _recording(duration: float, rates: dict, gap=None) -> dict:
         s = _min_jerk(t / duration * 2) - _min_jerk(t / duration * 2 - 1)  # down, then back up
         if topic == "/joint_states":
             q = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0]) + np.outer(s, [0.2, 0.3, -0.4, 0.1, 0.0, 0.1])
-            items = [(names_q) for names_q in ((UR_JOINTS, row) for row in q)]
-            out[topic] = ("sensor_msgs/msg/JointState", list(zip(t, items, strict=True)))
+            out[topic] = ("sensor_msgs/msg/JointState",
+                          [(ti, (UR_JOINTS, row)) for ti, row in zip(t, q, strict=True)])
         elif topic == "/tool_pose":
             xyz = np.column_stack([0.4 + 0.1 * s, -0.1 + 0 * s, 0.3 - 0.2 * s])
             out[topic] = ("geometry_msgs/msg/PoseStamped",
@@ -200,8 +202,9 @@ def _write_bag(path: Path, storage: str, recording: dict) -> None:
 
 def ros(folder: Path) -> None:
     _write_bag(folder / "my_recording", "sqlite3",
-               _recording(3.0, {"/joint_states": 100, "/tool_pose": 50, "/ft_sensor": 250, "/gripper": 20}))
-    _write_bag(folder / "run.bag", "ros1", _recording(4.0, {"/joint_states": 50, "/tool_pose": 25}, gap=(1.8, 2.8)))
+               _recording(3.0, {"/joint_states": 100, "/tool_pose": 50, "/ft_sensor": 100, "/gripper": 20}))
+    _write_bag(folder / "run.bag", "ros1",
+               _recording(4.0, {"/joint_states": 50, "/tool_pose": 25}, gap=(1.8, 2.8)))
     _write_bag(folder / "run2", "mcap", _recording(2.0, {"/joint_states": 50, "/tool_pose": 25}))
     shutil.move(str(next((folder / "run2").glob("*.mcap"))), folder / "run2.mcap")
     shutil.rmtree(folder / "run2")
@@ -218,8 +221,9 @@ def lerobot(folder: Path) -> None:
     features.update({k: {"dtype": d, "shape": [1], "names": None} for k, d in (
         ("timestamp", "float32"), ("frame_index", "int64"), ("episode_index", "int64"), ("index", "int64"),
         ("task_index", "int64"))})
-    info = {"codebase_version": "v2.1", "robot_type": "ur5e", "fps": fps, "chunks_size": 1000, "total_episodes": 3,
-            "features": features, "data_path": "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"}
+    info = {"codebase_version": "v2.1", "robot_type": "ur5e", "fps": fps, "chunks_size": 1000,
+            "total_episodes": 3, "features": features,
+            "data_path": "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"}
     (root / "meta").mkdir(parents=True)
     (root / "meta" / "info.json").write_text(json.dumps(info, indent=1) + "\n")
     for episode in range(3):
