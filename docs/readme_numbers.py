@@ -6,7 +6,7 @@ its comment lines are compared with (``check``) or rewritten from
 (``rewrite``) what the commands printed and wrote:
 
 - ``#   -> <the line the reuse printed: N samples over T s from t = 0; streams ...>``
-- ``# URScript: N servoj steps`` (the ``servoj`` calls of the script written)
+- ``URScript: N servoj steps`` in a comment (the ``servoj`` calls of the script written)
 
 and the figures paragraph's cuts come from segmenting the seed data as
 ``docs/make_figures.py`` does (R demo 3 with the paper's parameters, the
@@ -28,7 +28,7 @@ from pathlib import Path
 README = Path(__file__).resolve().parents[1] / "README.md"
 DEMO = "three_button_pressing_demo.h5"
 SAMPLES = re.compile(r"(#\s+-> )(\d+ samples over [\d.]+ s from t = 0; streams [\w, ]+)")
-SERVOJ = re.compile(r"(# URScript: )(\d+)( servoj steps)")
+SERVOJ = re.compile(r"(URScript: )(\d+)( servoj steps)")
 R_CUTS = re.compile(r"(2 changepoints, at samples )(\d+) and (\d+)")
 BUTTON_CUTS = re.compile(r"(6 segments, cut at )([\d.]+) s and ([\d.]+) s"
                          r"( \(the gripper closing and opening\) and at )"
@@ -89,10 +89,16 @@ def run(data: Path, folder: Path) -> dict:
             if status != 0:
                 raise RuntimeError(f"skillbank {' '.join(args)} exited with {status}")
             printed.append(buffer.getvalue())
-        script = (folder / "press.script").read_text()
     finally:
         os.chdir(cwd)
-    line = next(m.group(1) for m in re.finditer(r"^\s+(\d+ samples over .*)$", "".join(printed), flags=re.M))
+    return from_run("".join(printed), folder)
+
+
+def from_run(printed: str, folder: Path) -> dict:
+    """The figures the UR5e example quotes, from what its commands ``printed`` and wrote in ``folder``
+    (also what ``tests/test_docs_run.py`` checks after running the README)."""
+    line = next(m.group(1) for m in re.finditer(r"^\s+(\d+ samples over .*)$", printed, flags=re.M))
+    script = (Path(folder) / "press.script").read_text()
     steps = sum(1 for s in script.splitlines() if s.strip().startswith("servoj("))
     return {"samples": line.strip(), "servoj": steps}
 
