@@ -8,7 +8,8 @@ Every file here is made by this script, from numbers it computes (seeded) or fro
 - ``letters/G_0.csv`` ... ``G_6.csv``: LASA's seven demonstrations of the letter G (mm, as LASA
   records them), every 4th sample: one skill's demonstrations, each a whole primitive.
 - ``features.csv``: a feature matrix, 30 rows in three groups of 10 (two features, unitless).
-- ``more/``: one good CSV and one that is not (its time runs backwards), for ``--keep-going``.
+- ``more/``: one good CSV (a 3-D press, m) and one that is not (its time runs backwards), for
+  ``--keep-going``.
 - ``robomimic_demo.hdf5``: robomimic's low-dimensional layout, 4 episodes of a reach, grasp and
   lift (robot0_eef_pos in m, the gripper's finger positions), robosuite's Lift named in env_args.
 - ``my_recording/``: a ROS 2 bag (sqlite3) of a UR5e: /joint_states, /tool_pose, /ft_sensor,
@@ -79,9 +80,15 @@ def features(folder: Path) -> None:
 
 
 def mixed(folder: Path) -> None:
+    from skillbank import Demonstration
+    from skillbank.io import write_csv
+
     out = folder / "more"
     out.mkdir()
-    shutil.copy(folder / "letters" / "G_0.csv", out / "good.csv")
+    t = np.round(np.arange(0.0, 2.0, 0.01), 10)  # a press: down onto a button at 6 cm and back up a little
+    Y = reach_and_pause(t, [[0.6, -0.3, 0.35], [0.68, -0.28, 0.06], [0.68, -0.28, 0.12]],
+                        [(0.0, 1.2), (1.4, 1.9)])
+    write_csv(Demonstration(t, {"position": np.round(Y, 6)}), out / "press.csv")
     (out / "backwards.csv").write_text("t,position_0,position_1\n0.2,1.0,2.0\n0.1,1.5,2.5\n0.0,2.0,3.0\n")
 
 
