@@ -8,7 +8,8 @@ language tag:
 - ``bash``: run by ``bash`` with ``set -eo pipefail``, as a user pastes it; it must exit with 0.
 - ``console``: its ``$ `` lines are run that way; the other lines are the output shown.
 - ``python``: executed in one namespace per file (later blocks see earlier blocks' names).
-- ``text``, ``json``, ``lisp``, ``toml``, ``csv``: shown, not run (output, file contents).
+- ``text``, ``json``, ``lisp``, ``toml``, ``csv``, ``yaml``, ``xml``: shown, not run (output, file
+  contents).
 
 An HTML comment on the line before a block changes that (a reason is required where one is asked):
 
@@ -45,7 +46,7 @@ EXEMPT = {"docs/benchmarks.md": "the benchmarks' own evaluations (hundreds of ro
                                 "hours each); every figure there names the command that measured it"}
 SHELL = ("bash", "console")
 PYTHON = ("python",)
-SHOWN = ("text", "json", "lisp", "toml", "csv", "yaml")
+SHOWN = ("text", "json", "lisp", "toml", "csv", "yaml", "xml")
 MARKER = re.compile(r"<!--\s*docs-run:\s*(?P<kind>[\w-]+)(?P<rest>.*?)-->", re.S)
 FENCE = re.compile(r"^```(?P<lang>[^\n`]*)\n(?P<code>.*?)^```[ \t]*$", re.S | re.M)
 MIN_REASON = 3  # words
