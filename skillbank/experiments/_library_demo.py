@@ -194,10 +194,13 @@ def _plot_reuse(lib, task, res, path) -> Path:
 
 
 def _markdown(result, rows, reuses, seg) -> str:
+    held = sum(r["count"] for r in rows)  # a primitive the clustering left out is in no skill
+    left = result["n_primitives"] - held
     lines = ["# skillbank demo: a motion-primitive library, end to end", "",
              f"Library `{Path(result['library']).name}` ({result['seconds']:.1f} s): {result['source']}.", "",
              f"{result['n_demonstrations']} demonstrations, {result['n_primitives']} primitives, clustered "
-             f"with elastic clustering on `{result['features']}` features into {len(rows)} skills.", "",
+             f"with elastic clustering on `{result['features']}` features into {len(rows)} skills"
+             + (f", which hold {held} of them ({left} in no skill)." if left else "."), "",
              "Each cluster is labelled with the **majority** ground-truth name of its members (the LASA "
              "shape or RAIL class of the demonstration; for segmented demonstrations, the move's place in "
              "its demonstration). A human labeller would give one label per cluster the same way.", "",
