@@ -32,7 +32,9 @@ class StreamSegmentation:
     strength : ndarray of float
         Prominence of each changepoint's jerk event.
     probability : ndarray of shape (n_steps,)
-        The stream's keypoint curve (Gaussians over a floor).
+        The stream's keypoint curve: a Gaussian per changepoint, of height its
+        confidence with ``combine="evidence"`` (the default), over the floor
+        with ``"product"``.
     jerk_step : int
         Stride, in samples, of the differences the jerk was taken over: 1,
         unless the values' round-off (few significant digits on a fine grid)
@@ -70,7 +72,9 @@ class SegmentationResult:
         The segmented input.
     streams : dict of str to StreamSegmentation
     probability : ndarray of shape (n_steps,)
-        The combined keypoint probability (product of the stream curves).
+        The combined keypoint probability: with ``combine="evidence"`` (the
+        default) the noisy-OR of the kinds' averaged confidences; with
+        ``"product"`` the product of the stream curves.
     support : ndarray of shape (n_steps,)
         How many streams agree at each sample.
     keypoints : ndarray of int

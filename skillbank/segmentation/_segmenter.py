@@ -34,9 +34,9 @@ _STREAM_KEYS = ("window", "min_size", "threshold", "grace", "scale", "normalize"
 _SECONDS = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*s\s*$")
 
 #: ``window="auto"`` is this fraction of the demonstration's length (at most the motion's
-#: time scale, :func:`_auto_window`). With
-#: ``min_size`` two windows, a demonstration then holds at most 12 segments,
-#: and each of a handful of primitives spans several windows.
+#: time scale, :func:`_auto_window`). With ``min_size`` one window (the default rule,
+#: ``combine="evidence"``) a demonstration then holds at most 25 segments, with two (the
+#: product rule's) at most 12, and each of a handful of primitives spans several windows.
 AUTO_WINDOW_FRACTION = 0.04
 
 #: ... and at least this many samples: wider than the jerk of a single kink
@@ -44,9 +44,10 @@ AUTO_WINDOW_FRACTION = 0.04
 #: short demonstration still averages the noise around an event, not only the event.
 MIN_AUTO_WINDOW = 8
 
-#: ``min_size="auto"`` is this many windows: the windowed mean smears each jerk
-#: event over one window, so two events less than two windows apart leave
-#: hardly a valley between them to tell them apart.
+#: ``min_size="auto"`` is this many windows under the product rule (``combine="product"``): the
+#: windowed mean smears each jerk event over one window, so two events less than two windows apart
+#: leave hardly a valley between them to tell them apart. The default rule (``"evidence"``) reads
+#: rests and switches, not jerk peaks, and uses one window.
 MIN_SIZE_WINDOWS = 2
 
 #: The third derivative needs at least four samples (:func:`jerk` refuses fewer).
@@ -57,7 +58,7 @@ MIN_SEGMENTS = 2
 
 #: The jerk's centre of mass is taken within ``window // REFINE_DIVISOR`` of a
 #: changepoint: wide enough to hold the event that the profile placed a sample
-#: or two off, and narrow next to the default ``min_size`` (two windows)
+#: or two off, and narrow next to a ``min_size`` of one or two windows
 #: between changepoints, so a neighbour's jerk stays out.
 REFINE_DIVISOR = 4
 
@@ -137,8 +138,13 @@ class MultimodalSegmenter(Params):
     at the onset of every jerk event whose prominence reaches ``threshold`` →
     the stop-or-turn gate, which keeps the events where the motion stops or
     turns (``stop_ratio``, ``min_turn``).
-    Each changepoint becomes a Gaussian with σ = window / 2; the per-stream
-    curves are multiplied; keypoints are taken from the product.
+    By default (``combine="evidence"``) each stream is then read by its kind
+    and is a witness of the boundaries it can see: its confidences, capped at
+    0.9, are averaged over the streams of one kind and the kinds combined by
+    noisy-OR; a keypoint is a mode of that probability above one half. The
+    paper's rule (``combine="product"``) makes each changepoint a Gaussian with
+    σ = window / 2 over a floor, multiplies the per-stream curves and takes the
+    keypoints from the product.
 
     It follows scikit-learn's estimator contract: the hyperparameters are
     stored unchanged and checked by :meth:`fit`, so that ``get_params``,
@@ -155,7 +161,8 @@ class MultimodalSegmenter(Params):
         few movements gets 4 %, a long recording a window set by its movements,
         so the cost per sample and the cuts per minute do not grow with it.
     min_size : int or str, default="auto"
-        Minimum segment length; ``"auto"`` uses 2 × window.
+        Minimum segment length; ``"auto"`` uses 1 × window with
+        ``combine="evidence"`` (the default) and 2 × window with ``"product"``.
     threshold : float, default=0.4
         Minimum prominence of a jerk event on the normalised profile, in (0, 1].
     grace : int or str, default="auto"
