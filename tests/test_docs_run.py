@@ -21,6 +21,10 @@ An HTML comment on the line before a block changes that (a reason is required wh
   stands for lines left out) is in what the block run before it printed, so figures quoted from a
   command are those of the run.
 
+A long file may be cut into parts that need nothing of each other, each run as its own test (so
+pytest-xdist spreads them): ``<!-- docs-run: part NAME -->`` on a line of its own starts (or resumes)
+part NAME; the blocks before the first part marker are a prelude that every part runs first.
+
 A block without a language tag is an error: each block says whether it is a command, code or output.
 """
 
@@ -48,6 +52,7 @@ SHELL = ("bash", "console")
 PYTHON = ("python",)
 SHOWN = ("text", "json", "lisp", "toml", "csv", "yaml", "xml")
 MARKER = re.compile(r"<!--\s*docs-run:\s*(?P<kind>[\w-]+)(?P<rest>.*?)-->", re.S)
+PART = re.compile(r"^<!--\s*docs-run:\s*part\s+(?P<name>[\w-]+)\s*-->[ \t]*$", re.M)
 FENCE = re.compile(r"^```(?P<lang>[^\n`]*)\n(?P<code>.*?)^```[ \t]*$", re.S | re.M)
 MIN_REASON = 3  # words
 
@@ -60,8 +65,9 @@ class Block:
     line: int
     lang: str
     code: str
-    kind: str = "run"  # run, skip, expect-fail, file
+    kind: str = "run"  # run, skip, expect-fail, file, output
     arg: str = ""  # the reason, or the file name
+    part: str = ""  # the part it belongs to ("": the prelude, or a file without parts)
 
     def where(self) -> str:
         return f"{self.path}:{self.line} ({self.lang or 'untagged'})"
@@ -71,11 +77,13 @@ def blocks(path: str, text: str | None = None) -> list[Block]:
     """The fenced blocks of ``path`` (its ``text`` if given), with their markers."""
     text = (ROOT / path).read_text() if text is None else text
     out = []
+    parts = [(m.start(), m.group("name")) for m in PART.finditer(text)]
     for m in FENCE.finditer(text):
         before = text[:m.start()].rstrip().rsplit("\n", 1)[-1]
-        block = Block(path, text.count("\n", 0, m.start()) + 1, m.group("lang").strip(), m.group("code"))
+        block = Block(path, text.count("\n", 0, m.start()) + 1, m.group("lang").strip(), m.group("code"),
+                      part=next((name for at, name in reversed(parts) if at < m.start()), ""))
         marker = MARKER.fullmatch(before.strip())
-        if marker:
+        if marker and marker.group("kind") != "part":
             block.kind = marker.group("kind")
             block.arg = marker.group("rest").strip().lstrip(":").strip()
         out.append(block)
@@ -104,7 +112,7 @@ def problems(bs: list[Block], text: str) -> list[str]:
             found.append(f"{b.where()}: 'expect-fail' on a block that is not run")
         elif b.kind in ("file", "output") and b.lang not in SHOWN:
             found.append(f"{b.where()}: '{b.kind}' on a block that is run (tag it text, json, ...)")
-    markers = len(MARKER.findall(text))
+    markers = len(MARKER.findall(text)) - len(PART.findall(text))
     marked = sum(b.kind != "run" for b in bs)
     if markers != marked:
         found.append(f"{bs[0].path if bs else '?'}: {markers} docs-run markers, {marked} of them right "
@@ -128,6 +136,17 @@ def test_the_convention_is_checked():
     assert "'file' needs a relative file name, got '../x'" in found[2]
     assert "unknown language 'cpp'" in found[3]
     assert "4 docs-run markers, 3 of them right before a block" in found[4]
+
+
+def test_parts_split_a_file_after_its_prelude():
+    text = ("```bash\nln -s a b\n```\n<!-- docs-run: part one -->\n## One\n```bash\necho 1\n```\n"
+            "<!-- docs-run: part two -->\n<!-- docs-run: skip: needs a server somewhere -->\n"
+            "```bash\nx\n```\n"
+            "<!-- docs-run: part one -->\n```python\nprint(1)\n```\n")
+    bs = blocks("a.md", text)
+    assert [(b.part, b.kind) for b in bs] == [("", "run"), ("one", "run"), ("two", "skip"), ("one", "run")]
+    assert parts("a.md", text) == ["one", "two"] and parts("a.md", "```bash\nls\n```\n") == [""]
+    assert problems(bs, text) == []
 
 
 def test_shown_output_is_checked_line_by_line():
@@ -204,9 +223,21 @@ def missing_lines(shown: str, printed: str) -> list[str]:
             and _squeezed(line) not in have]
 
 
-def run_file(path: str, folder: Path, data: Path, monkeypatch) -> list[tuple[Block, float, str]]:
-    """Run ``path``'s blocks in ``folder``; the blocks run, each with its time (s) and what it printed.
-    Fails at the first block that exits otherwise than its marker says."""
+def parts(path: str, text: str | None = None) -> list[str]:
+    """The parts of ``path`` (its ``text`` if given) in the order they first appear; ``[""]`` for a
+    file of one piece."""
+    text = (ROOT / path).read_text() if text is None else text
+    return list(dict.fromkeys(m.group("name") for m in PART.finditer(text))) or [""]
+
+
+CASES = [pytest.param(path, part, id=f"{path}:{part}" if part else path)
+         for path in FILES for part in parts(path)]
+
+
+def run_file(path: str, folder: Path, data: Path, monkeypatch,
+             part: str = "") -> list[tuple[Block, float, str]]:
+    """Run ``path``'s blocks (the prelude and ``part``'s) in ``folder``; the blocks run, each with its
+    time (s) and what it printed. Fails at the first block that exits otherwise than its marker says."""
     (folder / "examples").symlink_to(ROOT / "examples")
     env = _env(folder.parent / "bin", data)
     monkeypatch.chdir(folder)
@@ -215,7 +246,7 @@ def run_file(path: str, folder: Path, data: Path, monkeypatch) -> list[tuple[Blo
     namespace: dict = {"__name__": "__docs__"}
     ran, last = [], None
     for block in blocks(path):
-        if block.kind == "skip":
+        if block.part not in ("", part) or block.kind == "skip":
             continue
         if block.kind == "output":
             if last is None:
@@ -245,22 +276,23 @@ def run_file(path: str, folder: Path, data: Path, monkeypatch) -> list[tuple[Blo
     return ran
 
 
-@pytest.mark.parametrize("path", FILES)
-def test_docs_run(path, data_dir, tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize(("path", "part"), CASES)
+def test_docs_run(path, part, data_dir, tmp_path, monkeypatch, capsys):
     if path in EXEMPT:
         pytest.skip(f"{path}: {EXEMPT[path]}")
     folder = tmp_path / "work"
     folder.mkdir()
-    ran = run_file(path, folder, data_dir, monkeypatch)
+    ran = run_file(path, folder, data_dir, monkeypatch, part)
     if os.environ.get("SKILLBANK_DOCS_TIMES"):  # which blocks take the time
         with capsys.disabled():
             slowest = sorted(ran, key=lambda r: -r[1])[:4]
-            print(f"\n{path}: {len(ran)} blocks in {sum(r[1] for r in ran):.1f} s; slowest at lines "
+            print(f"\n{path}:{part}: {len(ran)} blocks in {sum(r[1] for r in ran):.1f} s; slowest at lines "
                   + ", ".join(f"{b.line} ({t:.1f} s)" for b, t, _ in slowest))
-    if path == "README.md":  # the figures its UR5e example quotes are those this run printed and wrote
-        numbers = _readme_numbers()
-        text = (ROOT / path).read_text()
-        printed = "".join(out for b, _, out in ran if b.code == numbers.example(text))
+    text = (ROOT / path).read_text()
+    numbers = _readme_numbers()
+    example = numbers.example(text) if path == "README.md" else None
+    printed = "".join(out for b, _, out in ran if b.code == example)
+    if printed:  # the figures the README's UR5e example quotes are those this run printed and wrote
         measured = numbers.from_run(printed, folder)
         assert {k: numbers.quoted(text)[k] for k in measured} == measured
 
