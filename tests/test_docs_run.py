@@ -52,6 +52,7 @@ SHELL = ("bash", "console")
 PYTHON = ("python",)
 SHOWN = ("text", "json", "lisp", "toml", "csv", "yaml", "xml")
 MARKER = re.compile(r"<!--\s*docs-run:\s*(?P<kind>[\w-]+)(?P<rest>.*?)-->", re.S)
+LINE_MARKER = re.compile(r"^[ \t]*<!--\s*docs-run:.*?-->[ \t]*$", re.M)
 PART = re.compile(r"^<!--\s*docs-run:\s*part\s+(?P<name>[\w-]+)\s*-->[ \t]*$", re.M)
 FENCE = re.compile(r"^```(?P<lang>[^\n`]*)\n(?P<code>.*?)^```[ \t]*$", re.S | re.M)
 MIN_REASON = 3  # words
@@ -112,7 +113,7 @@ def problems(bs: list[Block], text: str) -> list[str]:
             found.append(f"{b.where()}: 'expect-fail' on a block that is not run")
         elif b.kind in ("file", "output") and b.lang not in SHOWN:
             found.append(f"{b.where()}: '{b.kind}' on a block that is run (tag it text, json, ...)")
-    markers = len(MARKER.findall(text)) - len(PART.findall(text))
+    markers = len(LINE_MARKER.findall(text)) - len(PART.findall(text))  # markers on lines of their own
     marked = sum(b.kind != "run" for b in bs)
     if markers != marked:
         found.append(f"{bs[0].path if bs else '?'}: {markers} docs-run markers, {marked} of them right "
@@ -234,15 +235,20 @@ CASES = [pytest.param(path, part, id=f"{path}:{part}" if part else path)
          for path in FILES for part in parts(path)]
 
 
-def run_file(path: str, folder: Path, data: Path, monkeypatch,
+def run_file(path: str, folder: Path, data: Path | None, monkeypatch,
              part: str = "") -> list[tuple[Block, float, str]]:
     """Run ``path``'s blocks (the prelude and ``part``'s) in ``folder``; the blocks run, each with its
     time (s) and what it printed. Fails at the first block that exits otherwise than its marker says."""
     (folder / "examples").symlink_to(ROOT / "examples")
     env = _env(folder.parent / "bin", data)
     monkeypatch.chdir(folder)
-    for key in ("PATH", "SKILLBANK_DATA", "MPLBACKEND"):
+    for key in ("PATH", "MPLBACKEND"):
         monkeypatch.setenv(key, env[key])
+    if data is None:  # a file that does not read the data must not find it either
+        env.pop("SKILLBANK_DATA", None)
+        monkeypatch.delenv("SKILLBANK_DATA", raising=False)
+    else:
+        monkeypatch.setenv("SKILLBANK_DATA", env["SKILLBANK_DATA"])
     namespace: dict = {"__name__": "__docs__"}
     ran, last = [], None
     for block in blocks(path):
@@ -277,18 +283,20 @@ def run_file(path: str, folder: Path, data: Path, monkeypatch,
 
 
 @pytest.mark.parametrize(("path", "part"), CASES)
-def test_docs_run(path, part, data_dir, tmp_path, monkeypatch, capsys):
+def test_docs_run(path, part, request, tmp_path, monkeypatch, capsys):
     if path in EXEMPT:
         pytest.skip(f"{path}: {EXEMPT[path]}")
+    text = (ROOT / path).read_text()
+    # the shared data only where the file reads it (skipped without it, failed under CI: data_dir)
+    data = request.getfixturevalue("data_dir") if "SKILLBANK_DATA" in text else None
     folder = tmp_path / "work"
     folder.mkdir()
-    ran = run_file(path, folder, data_dir, monkeypatch, part)
+    ran = run_file(path, folder, data, monkeypatch, part)
     if os.environ.get("SKILLBANK_DOCS_TIMES"):  # which blocks take the time
         with capsys.disabled():
             slowest = sorted(ran, key=lambda r: -r[1])[:4]
             print(f"\n{path}:{part}: {len(ran)} blocks in {sum(r[1] for r in ran):.1f} s; slowest at lines "
                   + ", ".join(f"{b.line} ({t:.1f} s)" for b, t, _ in slowest))
-    text = (ROOT / path).read_text()
     numbers = _readme_numbers()
     example = numbers.example(text) if path == "README.md" else None
     printed = "".join(out for b, _, out in ran if b.code == example)
