@@ -57,7 +57,8 @@ def add_parser(sub):
 
     c = cmds.add_parser("init", help="create an empty library (a file, or tables in a PostgreSQL database)")
     c.add_argument("db", type=_location, help="the library file or postgresql:// URL (its database must "
-                                              "exist) to create; an existing library is left as it is")
+                                              "exist) to create; an existing library is checked and left "
+                                              "as it is, with status 0 (init may be run again)")
     c.add_argument("--json", action="store_true", help="print the library, whether it was created, and its "
                                                        "schema version as JSON")
     c.set_defaults(func=_init)

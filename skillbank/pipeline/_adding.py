@@ -34,6 +34,65 @@ ASSIGN = ("incremental", "none", "recluster")
 _RECLUSTER_KEEPS = ("stretch", "features", "n_points", "n_components", "random_state")
 
 
+def check_one_dimension(prims, items=()) -> None:
+    """One clustering needs one number of position dimensions: name the primitives that differ.
+
+    Parameters
+    ----------
+    prims : list of Primitive
+        Stored primitives (with their samples), named by id.
+    items : list of dict, optional
+        Store items about to be added (``{"demo", "bounds", ...}``), counted
+        as primitives "being added": an add that reclusters checks them before
+        it writes, so a refused add leaves the library as it was.
+
+    Raises
+    ------
+    ValueError
+        One line naming the most common dimension and the primitives of the others.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skillbank import Demonstration
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> item = {"demo": Demonstration.from_array(np.c_[t, t], t), "bounds": [(0, 5)]}
+    >>> check_one_dimension([], [item, item])
+    >>> item3 = {"demo": Demonstration.from_array(np.c_[t, t, t], t), "bounds": [(0, 2), (2, 5)]}
+    >>> check_one_dimension([], [item, item3])
+    Traceback (most recent call last):
+    ...
+    ValueError: library: cannot cluster positions of different dimensions together: 2 primitive(s) are 3-D \
+(being added), 1 are 2-D (1 being added); remove those demonstrations or keep them in another library
+    """
+    stored: dict = {}
+    new: dict = {}
+    for p in prims:
+        stored.setdefault(p.demo["position"].shape[1], []).append(p.id)
+    for item in items:
+        d = item["demo"]["position"].shape[1]
+        new[d] = new.get(d, 0) + len(item["bounds"])
+    dims = set(stored) | set(new)
+    if len(dims) <= 1:
+        return
+    count = {d: len(stored.get(d, [])) + new.get(d, 0) for d in dims}
+    order = sorted(dims, key=lambda d: -count[d])
+
+    def where(d):
+        ids = stored.get(d, [])
+        parts = [f"ids {', '.join(map(str, ids[:5]))}{', ...' if len(ids) > 5 else ''}"] if ids else []
+        parts += [f"{new[d]} being added"] if d in new else []
+        return "; ".join(parts)
+
+    first = order[0]
+    head = f"{count[first]} primitive(s) are {first}-D"
+    if first in new:  # the most common dimension is named by ids only when it includes what is added
+        head += " (being added)" if not stored.get(first) else f" ({new[first]} of them being added)"
+    rest = ", ".join(f"{count[d]} are {d}-D ({where(d)})" for d in order[1:])
+    raise ValueError(f"library: cannot cluster positions of different dimensions together: {head}, {rest}; "
+                     "remove those demonstrations or keep them in another library")
+
+
 def check_label(name, what="label"):
     """A stripped non-empty string, else ValueError naming ``what``."""
     if not isinstance(name, str) or not name.strip():
@@ -89,6 +148,10 @@ class Adding:
         snapshot = self._snapshot(cache) if assign == "incremental" else None
         return prepare(demo, segment=segment, segmentation=segmentation, label=label, source=source,
                        assign=assign, snapshot=snapshot)
+
+    def _check_recluster(self, items) -> None:
+        """An add that reclusters refuses, before it writes, what the clustering would refuse after."""
+        check_one_dimension(self.store.primitives(load=True), items)
 
     def _recluster(self, progress: bool = False) -> int:
         params = self.clustering_params() or {}
@@ -163,6 +226,11 @@ class Adding:
                 src = demo.metadata.get("source")
                 name = f"demos[{k}]" + ("" if src is None else f" (source {str(src)!r})")
                 raise ValueError(f"{name}: {exc}; nothing was added") from None
+        if assign == "recluster":
+            try:
+                self._check_recluster([item for item, _ in prepared])
+            except ValueError as exc:
+                raise ValueError(f"{exc}; nothing was added") from None
         written = self.store.add_demonstrations([item for item, _ in prepared])
         for (did, pids), (_, why) in zip(written, prepared, strict=True):
             if why is not None:
@@ -282,6 +350,11 @@ class Adding:
                 fail(path, "" if len(demos) == 1 else f"demonstration {len(items)}: ", exc)
                 continue
             prepared.extend(items)
+        if assign == "recluster" and prepared:
+            try:
+                self._check_recluster([item for item, _ in prepared])
+            except ValueError as exc:
+                raise ValueError(f"{exc}; nothing was added") from None
         written = self.store.add_demonstrations([item for item, _ in prepared]) if prepared else []
         order = {str(p): n for n, p in enumerate(paths)}
         report = {"demonstrations": [did for did, _ in written], "primitives": [pids for _, pids in written],

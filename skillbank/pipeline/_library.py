@@ -13,7 +13,7 @@ from ..planning import TIME_LIMIT, describe_skill, plan_task
 from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ..store._rows import MAX_N_POINTS
-from ._adding import Adding
+from ._adding import Adding, check_one_dimension
 from ._adding import check_label as _check_label
 
 __all__ = ["Library", "carry_labels"]
@@ -57,20 +57,6 @@ def carry_labels(old_members: dict, old_labels: dict, new_members: dict) -> dict
         if counts[best] * 2 > len(members):
             out[c] = str(values[best])
     return out
-
-
-def _check_one_dimension(prims) -> None:
-    """One clustering needs one number of position dimensions: name the primitives that differ."""
-    by_dims: dict = {}
-    for p in prims:
-        by_dims.setdefault(p.demo["position"].shape[1], []).append(p.id)
-    if len(by_dims) > 1:
-        groups = sorted(by_dims.items(), key=lambda kv: -len(kv[1]))
-        rest = "; ".join(f"{len(ids)} are {d}-D (ids {', '.join(map(str, ids[:5]))}"
-                         f"{', ...' if len(ids) > 5 else ''})" for d, ids in groups[1:])
-        raise ValueError(f"library: cannot cluster positions of different dimensions together: "
-                         f"{len(groups[0][1])} primitive(s) are {groups[0][0]}-D, {rest}; remove those "
-                         "demonstrations or keep them in another library")
 
 
 def _ticker(bar):
@@ -214,7 +200,7 @@ class Library(Adding):
             prims = self.store.primitives(load=True)
             if len(prims) < 2:
                 raise ValueError(f"library: expected at least 2 primitives to cluster, got {len(prims)}")
-            _check_one_dimension(prims)
+            check_one_dimension(prims)
             bar.update()
             bar.set_postfix_str("features")
             F = primitive_features([p.demo for p in prims], kind=features, n_points=n_points)

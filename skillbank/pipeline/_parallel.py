@@ -299,6 +299,11 @@ class _Job:
             self.submitted += count
 
     def flush(self) -> None:
+        if self.pending and not self.keep_going and self.args[1]["assign"] == "recluster":
+            try:  # all or nothing: what the recluster after this write would refuse, before it
+                self.lib._check_recluster([item for item, _ in self.pending])
+            except ValueError as exc:
+                raise ValueError(f"{exc}; nothing was added") from None
         if self.pending:
             written = self.lib.store.add_demonstrations([item for item, _ in self.pending])
             self.report["demonstrations"] += [did for did, _ in written]
