@@ -66,11 +66,12 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
     joints = "joints" in trajectory.streams
     fig = Figure(figsize=(12.0 if joints else 6.5, 5.5), layout="constrained")
     ax = fig.add_subplot(1, 2 if joints else 1, 1, projection="3d")
+    points = [P]
     for d in demos:
         D = np.asarray(d["position"] if isinstance(d, Demonstration) else d, dtype=float)
         ax.plot(*D[:, :3].T, color="0.7", lw=0.8)
+        points.append(D[:, :3])  # inside the box: a 3-D axes does not clip what lies beyond its limits
     ax.plot(*P.T, color="k", lw=2.0)
-    points = [P]
     if "orientation" in trajectory.streams:
         at = np.unique(np.linspace(0, P.shape[0] - 1, max(2, int(n_frames))).round().astype(int))
         R = quaternion_to_matrix(trajectory["orientation"][at])
@@ -123,7 +124,10 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
                 jx.plot([], [], color="k", ls="--", lw=1.0, label="gripper (right axis)")
             else:  # a constant gripper gets a line of the legend, not an axis of its own
                 jx.plot([], [], ls="none", label=f"gripper held at {G[0]:.3g}")
-        jx.legend(fontsize="small", loc="best")
+        # under the axes: six joint curves (and a gripper on the twin axis, which loc="best" does not
+        # see) leave no corner free
+        jx.legend(fontsize="small", loc="upper center", bbox_to_anchor=(0.5, -0.12), borderaxespad=0.0,
+                  ncol=3)
     if title:
         fig.suptitle(title, fontsize="medium")
     return _save(fig, path)
