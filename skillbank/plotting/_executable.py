@@ -66,12 +66,8 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
     joints = "joints" in trajectory.streams
     fig = Figure(figsize=(12.0 if joints else 6.5, 5.5), layout="constrained")
     ax = fig.add_subplot(1, 2 if joints else 1, 1, projection="3d")
-    points = [P]
-    for d in demos:
-        D = np.asarray(d["position"] if isinstance(d, Demonstration) else d, dtype=float)
-        ax.plot(*D[:, :3].T, color="0.7", lw=0.8)
-        points.append(D[:, :3])  # inside the box: a 3-D axes does not clip what lies beyond its limits
     ax.plot(*P.T, color="k", lw=2.0)
+    points = [P]
     if "orientation" in trajectory.streams:
         at = np.unique(np.linspace(0, P.shape[0] - 1, max(2, int(n_frames))).round().astype(int))
         R = quaternion_to_matrix(trajectory["orientation"][at])
@@ -96,6 +92,13 @@ def plot_executable(trajectory, path, *, demos=(), constraints=None, n_frames: i
         if constraints.obstacles:
             markers.append(Patch(facecolor="none", edgecolor=_OBSTACLE, label="obstacle"))
     _extent(ax, np.concatenate(points), True)
+    box = np.array([ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d()])
+    for d in demos:
+        # the box is the reproduction's; a 3-D axes does not clip, so the demonstrations' samples outside
+        # it (a press at another button) are left out rather than drawn past the panes
+        D = np.array(d["position"] if isinstance(d, Demonstration) else d, dtype=float)[:, :3]
+        D[~np.all((D >= box[:, 0]) & (D <= box[:, 1]), axis=1)] = np.nan
+        ax.plot(*D.T, color="0.7", lw=0.8)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")

@@ -57,10 +57,21 @@ def test_the_joint_legend_covers_no_curve_and_every_joint_is_named(tmp_path, dra
     assert mpimg.imread(out).shape[1] <= 2000
 
 
-def test_the_demonstrations_are_inside_the_3d_box(tmp_path, drawn):
+def test_the_demonstrations_are_drawn_only_inside_the_3d_box(tmp_path, drawn):
     traj = _trajectory()
-    other = traj["position"] + [0.05, 0.02, -0.03]  # a press at another button
-    plot_executable(traj, tmp_path / "x.png", demos=[other])
+    near = traj["position"] + [0.005, 0.0, 0.0]
+    far = traj["position"] + [0.0, 0.0, 0.02]  # a press at another button, half of it above the box
+    plot_executable(traj, tmp_path / "x.png", demos=[near, far])
     ax = drawn[-1].axes[0]
-    for lo_hi, values in zip((ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d()), other.T, strict=True):
-        assert lo_hi[0] <= values.min() and values.max() <= lo_hi[1]
+    box = np.array([ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d()])
+    P = traj["position"]
+    assert np.all(box[:, 0] <= P.min(axis=0)) and np.all(P.max(axis=0) <= box[:, 1])  # the reproduction's box
+    grey = [line for line in ax.get_lines() if line.get_color() == "0.7"]
+    assert len(grey) == 2
+    for line, given in zip(grey, (near, far), strict=True):
+        D = np.column_stack(line.get_data_3d()).astype(float)
+        shown = ~np.isnan(D).any(axis=1)
+        assert np.all((D[shown] >= box[:, 0]) & (D[shown] <= box[:, 1]))  # a 3-D axes would draw them past
+        inside = np.all((given >= box[:, 0]) & (given <= box[:, 1]), axis=1)
+        np.testing.assert_array_equal(shown, inside)  # what lies in the box is all drawn
+    assert 0 < shown.sum() < len(shown)  # the far one is cut, not dropped
