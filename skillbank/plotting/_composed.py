@@ -19,7 +19,8 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
 
     Left: the tool path seen from above (x, y in metres), one colour per plan step, each object's
     position at rest before the first step (circle) and at the end (cross, joined by an arrow).
-    Right: the tool's height (m) against time (s), with the steps' starts.
+    Right: the tool's height (m) against time (s), with the steps' starts. The legend lists the steps in
+    the order they were carried out; the title says when that is not the first plan (a replan).
 
     Examples
     --------
@@ -69,5 +70,11 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
     side.set_title("tool height")
     verdict = "success" if episode.get("success") else \
         f"failure: {episode.get('failure', {}).get('reason', '?')}"
+    carried = [f"({' '.join([st['action'], *st['args']])})" for st in steps]
+    replans = int(episode.get("replans") or 0)
+    if replans or carried != list(episode.get("plan", carried))[:len(carried)]:
+        # the legend lists the steps carried out; a title that quoted the first plan disagreed with it
+        times = f" {replans} time{'s' if replans != 1 else ''}" if replans else ""
+        verdict += f", replanned{times}: the legend lists the steps carried out"
     fig.suptitle(f"{title or 'plan in simulation'}: {verdict}")
     return _save(fig, path)
