@@ -24,7 +24,18 @@ from pathlib import Path
 import numpy as np
 
 from ..core._validation import check_positive
-from ._view_html import ASSETS_CSS, ASSETS_JS, link, page, table, text
+from ._segmentation import unit_text
+from ._view_html import (
+    ASSETS_CSS,
+    ASSETS_JS,
+    TOOLBAR,
+    link,
+    page,
+    stacked_layout,
+    stream_columns,
+    table,
+    text,
+)
 
 __all__ = ["LibraryView", "write_view", "write_site", "check_out", "scene", "plotly_js", "PAGE_SIZE",
            "MARKER"]
@@ -366,16 +377,18 @@ class LibraryView:
                                          f"demonstration {p.demonstration_id}"),
                          f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}", lab])
         drawn = [np.column_stack([tr["x"], tr["y"], tr["z"]]) for tr in traces]
-        layout = {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "showlegend": len(traces) <= 30,
-                  "legend": {"x": 1.0, "xanchor": "right", "y": 0.92}, "scene": scene(drawn),
+        # the top margin holds plotly's toolbar; the legend starts under it (it covered the first entry)
+        layout = {"margin": {"l": 0, "r": 0, "t": TOOLBAR, "b": 0}, "showlegend": len(traces) <= 30,
+                  "legend": {"x": 1.0, "xanchor": "right", "y": 1.0, "yanchor": "top"}, "scene": scene(drawn),
                   "hovermode": "closest", "uirevision": "keep"}
         heading = self._label_cell(label, source, note) if cluster is not None else ""
         body = [f"<h1>{text(title)}: {heading}</h1>",
                 f"<p>{len(ids)} member(s)" + (f" in clustering version {state['version']}"
                                               if cluster is not None else "")
-                + f"; showing {len(members)} (page {number} of {total}). Drag to rotate, scroll to zoom; "
-                "point at a path to see which primitive it is.</p>",
-                _pages_nav(name, number, total), '<div id="hover-info" class="note">-</div>']
+                + f"; showing {len(members)} (page {number} of {total}). Drag to rotate, scroll to zoom."
+                "</p>", _pages_nav(name, number, total),
+                # what the pointer is over; until then, how to use it (an empty bar read as a broken one)
+                '<div id="hover-info" class="note">Point at a path to see which primitive it is.</div>']
         figures = {}
         if traces:
             body.append('<div class="figure" id="members" data-figure="members"></div>')
@@ -417,16 +430,16 @@ class LibraryView:
             Y = np.asarray(Y, dtype=float).reshape(demo.n_steps, -1)
             lo = float(np.nanmin(Y)) if np.isfinite(Y).any() else 0.0
             hi = float(np.nanmax(Y)) if np.isfinite(Y).any() else 1.0
-            data = [{"type": "scatter", "mode": "lines", "x": t[keep], "y": Y[keep, j], "name": f"column {j}",
-                     "hovertemplate": f"column {j}: %{{y:.4g}} at %{{x:.3f}} s<extra></extra>"}
+            names, unit = stream_columns(sname, Y.shape[1]), unit_text(sname)
+            data = [{"type": "scatter", "mode": "lines", "x": t[keep], "y": Y[keep, j], "name": names[j],
+                     "hovertemplate": f"{names[j]}: %{{y:.4g}} {unit} at %{{x:.3f}} s<extra></extra>"}
                     for j in range(min(Y.shape[1], 16))]
             shapes = [{"type": "line", "x0": float(t[c]), "x1": float(t[c]), "y0": lo, "y1": hi,
                        "line": {"color": "#c0392b", "width": 1.5, "dash": "dot"}} for c in cuts]
             fid = f"stream-{k}"
-            figures[fid] = {"data": data, "layout": {"margin": {"l": 50, "r": 10, "t": 5, "b": 30},
-                                                     "showlegend": Y.shape[1] > 1, "shapes": shapes,
-                                                     "xaxis": {"title": {"text": "t (s)"}}}}
-            plots.append(f"<h3>{text(sname)} <span class=\"note\">({Y.shape[1]} column(s))</span></h3>"
+            figures[fid] = {"data": data, "layout": stacked_layout(t, Y.shape[1] > 1, unit, shapes=shapes)}
+            said = f"{', '.join(names[:16])} {unit}" if Y.shape[1] > 1 else unit  # one column: its unit
+            plots.append(f"<h3>{text(sname)} <span class=\"note\">{text(said)}</span></h3>"
                          f'<div class="figure small" id="{fid}" data-figure="{fid}"></div>')
         support = prov.get("cut_support")
         rows = []

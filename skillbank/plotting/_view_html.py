@@ -96,6 +96,47 @@ def table(headers, rows, *, cls: str = "") -> str:
     return f"<table{attr}>{head}<tbody>{body}</tbody></table>"
 
 
+#: Pixels above a plot for plotly's toolbar (about 25 px high, at the figure's top right corner), so that
+#: it covers no legend entry and no data.
+TOOLBAR = 34
+#: The pixels beside a stacked 2-D plot, the same for every one of a page, so that one time is at one x
+#: in all of them (a legend on the right, or tick labels that widen the margin, made them differ).
+_STACKED_MARGIN = {"l": 70, "r": 12, "t": TOOLBAR, "b": 38}
+#: What the columns of a stream the readers name are: axes, quaternion components (scalar-last), joints.
+_COLUMNS = {"position": ("x", "y", "z"), "force": ("x", "y", "z"), "torque": ("x", "y", "z"),
+            "orientation": ("qx", "qy", "qz", "qw")}
+
+
+def stream_columns(name: str, n: int) -> list[str]:
+    """Names of the ``n`` columns of stream ``name`` for a legend.
+
+    Examples
+    --------
+    >>> stream_columns("position", 3), stream_columns("joints", 2), stream_columns("gripper", 1)
+    (['x', 'y', 'z'], ['joint 1', 'joint 2'], ['gripper'])
+    >>> stream_columns("position", 2), stream_columns("odd", 2)
+    (['x', 'y'], ['column 1', 'column 2'])
+    """
+    known = _COLUMNS.get(name, ())
+    if n <= len(known):
+        return list(known[:n])
+    if name == "joints":
+        return [f"joint {j + 1}" for j in range(n)]
+    return [name] if n == 1 and name.isidentifier() else [f"column {j + 1}" for j in range(n)]
+
+
+def stacked_layout(t, legend: bool, unit: str, *, shapes=()) -> dict:
+    """A plotly layout for one of several 2-D plots over time stacked on a page: fixed margins, the whole
+    time range, the legend in a row above the plot (left, clear of the toolbar at the right) and the
+    y axis named by its unit (``"(N)"``, ``"(as recorded)"``)."""
+    t = np.asarray(t, dtype=float)
+    span = [float(t[0]), float(t[-1])] if t.size else [0.0, 1.0]
+    return {"margin": dict(_STACKED_MARGIN), "showlegend": legend, "shapes": list(shapes),
+            "legend": {"orientation": "h", "x": 0.0, "xanchor": "left", "y": 1.0, "yanchor": "bottom"},
+            "xaxis": {"title": {"text": "t (s)"}, "range": span, "automargin": False},
+            "yaxis": {"title": {"text": unit}, "automargin": False}}
+
+
 def page(title, body: str, *, figures: dict | None = None, plotly: bool = False, root: str = "") -> str:
     """A whole page: ``title`` (escaped), ``body`` (HTML), each figure's data as a JSON block.
 

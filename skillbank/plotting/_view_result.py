@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._view import PATH_POINTS, STREAM_POINTS, _num, _thin, _xyz, scene
-from ._view_html import link, table, text
+from ._view_html import TOOLBAR, link, stacked_layout, table, text
 
 __all__ = ["reuse_page", "plan_page"]
 
@@ -22,7 +22,7 @@ __all__ = ["reuse_page", "plan_page"]
 
 def _layout_3d(traces) -> dict:
     drawn = [np.column_stack([t["x"], t["y"], t["z"]]) for t in traces]
-    return {"margin": {"l": 0, "r": 0, "t": 10, "b": 0}, "hovermode": "closest",
+    return {"margin": {"l": 0, "r": 0, "t": TOOLBAR, "b": 0}, "hovermode": "closest",
             "scene": scene(drawn, unit="m")}
 
 
@@ -78,9 +78,7 @@ def _joints(trajectory) -> tuple[dict, str] | tuple[None, str]:
     keep = _thin(len(q), STREAM_POINTS)
     data = [{"type": "scatter", "mode": "lines", "x": trajectory.t[keep], "y": q[keep, j],
              "name": text(names[j] if j < len(names) else f"joint {j + 1}")} for j in range(q.shape[1])]
-    fig = {"data": data, "layout": {"margin": {"l": 50, "r": 10, "t": 5, "b": 35},
-                                    "xaxis": {"title": {"text": "t (s)"}},
-                                    "yaxis": {"title": {"text": "rad"}}}}
+    fig = {"data": data, "layout": stacked_layout(trajectory.t, True, "(rad)")}
     return fig, '<h2>Joints</h2><div class="figure small" id="joints" data-figure="joints"></div>'
 
 
@@ -110,10 +108,7 @@ def _simulation(sim) -> tuple[dict, str]:
         keep = _thin(len(t), STREAM_POINTS)
         data = [{"type": "scatter", "mode": "lines", "x": np.asarray(t)[keep], "y": np.asarray(f)[keep],
                  "name": text(b)} for b, f in forces.items()]
-        figures["buttons"] = {"data": data,
-                              "layout": {"margin": {"l": 50, "r": 10, "t": 5, "b": 35},
-                                         "xaxis": {"title": {"text": "t (s)"}},
-                                         "yaxis": {"title": {"text": "force on the button (N)"}}}}
+        figures["buttons"] = {"data": data, "layout": stacked_layout(t, True, "(N)")}
         parts.append('<h3>Force on each button</h3>'
                      '<div class="figure small" id="buttons" data-figure="buttons"></div>')
     return figures, "".join(parts)
