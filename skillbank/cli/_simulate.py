@@ -118,10 +118,16 @@ def _report(args, result, written) -> None:
             print(f"    {c['t']:.3f} s  {c['robot_body']} touched {c['other']}, peak {c['force']:.3g} N")
     else:
         print("  contacts: none unintended")
+    from ..simulation import PRESS_FORCE  # the force run_simulation's buttons need
+
     for name, b in result.buttons.items():
         when = f"at {b['t']:.3f} s" if b["pressed"] else "never"
+        # a spring pushes back 1.5 x the press force at full travel; a peak past that is the end stop's
+        stop = 1.5 * PRESS_FORCE
+        why = f" (needs {PRESS_FORCE:.3g} N; past {stop:.3g} N the tool pushes it against its end stop)" \
+            if b["peak_force"] > stop else ""
         print(f"  button {name}: {'pressed' if b['pressed'] else 'not pressed'} ({when}), peak force "
-              f"{b['peak_force']:.3g} N")
+              f"{b['peak_force']:.3g} N{why}")
     for name, o in result.objects.items():
         held = "held" if o["held"] else "not held"
         print(f"  object {name}: moved {o['displacement'] * 1000:.3g} mm, {held}, "
