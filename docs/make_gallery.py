@@ -89,16 +89,25 @@ def run(out: Path) -> list[dict]:
             rows.append(row)
             ax = axes[r, c]
             draw_edit(ax, Y, demo=demo, demos=demos[1:] if multi else (), constraints=constraints,
-                      legend=(r == 0 and c == 0))
+                      legend=False)  # one legend for the figure, above the panels: none covers a letter
             label = name + ("" if takes_via else " (no via-point)")
             ax.set_title(f"{label}\nangular {row['angular']:.3f}, error {row['error']:.1g} mm",
                          fontsize=9)
             ax.tick_params(labelsize=7)
             if c == 0:
-                ax.set_ylabel(shape, fontsize=11)
+                ax.set_ylabel(f"{shape}\ny (mm)", fontsize=10)
+            if r == len(SHAPES) - 1:
+                ax.set_xlabel("x (mm)", fontsize=9)
     fig.suptitle("LASA: new start (square), goal (star) and via-point (diamond); dashed: demonstration 0, "
                  "red: reproduction", fontsize=12)
-    fig.tight_layout(rect=(0, 0, 1, 0.98))
+    # the panel of the method fitted on every demonstration draws every kind of line (the others too)
+    multi = next(c for c, (_, is_multi, _) in enumerate(METHODS.values()) if is_multi)
+    handles, labels = axes[0, multi].get_legend_handles_labels()
+    names = {"demonstration": "demonstration 0", "demonstrations": "demonstrations 1-6 (ProMP)"}
+    labels = [names.get(label, label) for label in labels]
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.975), ncol=len(labels), fontsize=9,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 0.955))
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=90)
     return rows
