@@ -145,6 +145,8 @@ def plot_skills(skills, path, *, unit: str | None = "m", columns: int = 4, title
             ax.plot(*Y.T, color=_colour(k), lw=0.9)
         stacked = np.concatenate(drawn)
         _extent(ax, stacked, not flat)
+        if not flat:  # constrained layout does not see a 3-D axis' labels: a smaller box keeps them in
+            ax.set_box_aspect((1, 1, 1), zoom=0.85)
         axis_labels(ax, unit)
         ax.tick_params(labelsize="x-small")
         size = float(np.ptp(stacked, axis=0).max())
