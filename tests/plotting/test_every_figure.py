@@ -14,7 +14,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 import skillbank
 from skillbank.core import Constraints
-from skillbank.planning import scene_from_dict
+from skillbank.planning import PlanResult, PlanStep, scene_from_dict
 from skillbank.plotting import (
     plot_cluster_comparison,
     plot_composed,
@@ -22,6 +22,7 @@ from skillbank.plotting import (
     plot_executable,
     plot_jerk_profile,
     plot_keypoint_probability,
+    plot_plan,
     plot_reuse,
     plot_segment_grid,
     plot_segmentation_summary,
@@ -62,6 +63,18 @@ def _composed(out):
     return plot_composed(episode, out, title="unload")
 
 
+def _plan(out):
+    t = np.linspace(0.0, 1.0, 20)
+    traj = skillbank.Demonstration(t, {"position": np.c_[t, t, 0 * t]})
+    step = PlanStep("press", ("b1",), "press", 0, 20, [1], np.array([1.0, 1, 0]), None, "lte", 0.0, 0.0,
+                    False)
+    scene = scene_from_dict({"objects": {"b1": {"type": "button", "position": [1, 1, 0]}},
+                             "obstacles": ["sphere:0.5,0.2,0,0.1"], "goal": ["(pressed b1)"]})
+    result = PlanResult([("press", ("b1",))], [step], traj, False, 0.0, {})
+    return plot_plan(result, scene, out, demos={1: traj}, unit="m",
+                     title="four new buttons pressed in the code's order around a post, " * 3)
+
+
 FIGURES = {
     "segments 3-D": lambda out: plot_segments(_cut(), out, dims=3, unit="m", below=("force", "gripper")),
     "segments 2-D": lambda out: plot_segments(_cut(), out, dims=2, unit="m"),
@@ -81,6 +94,7 @@ FIGURES = {
         demos=[PATH], constraints=Constraints(goal=PATH[-1])),
     "simulation": _simulation,
     "composed": _composed,
+    "plan": _plan,
 }
 
 
