@@ -151,7 +151,11 @@ class Adding:
 
     def _check_recluster(self, items) -> None:
         """An add that reclusters refuses, before it writes, what the clustering would refuse after."""
-        check_one_dimension(self.store.primitives(load=True), items)
+        prims = self.store.primitives(load=True)
+        n = len(prims) + sum(len(item["bounds"]) for item in items)
+        if n < 2:  # Library.cluster's own check
+            raise ValueError(f"library: expected at least 2 primitives to cluster, got {n}")
+        check_one_dimension(prims, items)
 
     def _recluster(self, progress: bool = False) -> int:
         params = self.clustering_params() or {}

@@ -75,3 +75,38 @@ def test_a_library_already_mixed_is_named_by_ids():
                                          r"2 are 3-D \(ids 1, 2\); remove"):
         check_one_dimension(prims, [item])
     check_one_dimension(prims[:2])  # one dimension: nothing to say
+
+
+def test_a_recluster_of_one_primitive_adds_nothing_either(cli, tmp_path):
+    db = tmp_path / "lib.db"
+    t = np.linspace(0.0, 1.0, 60)
+    csv = tmp_path / "one.csv"
+    np.savetxt(csv, np.c_[t, t, 0.5 * t, 0.2 * t], delimiter=",", header="t,position_0,position_1,position_2",
+               comments="")
+    assert cli("library", "init", db)[0] == 0
+    code, out, err = cli("library", "add", db, csv, "--whole", "--assign", "recluster")
+    assert code == 2 and out == ""
+    assert err.endswith("library: expected at least 2 primitives to cluster, got 1; nothing was added\n")
+    with Library(db) as lib:
+        assert lib.store.demonstration_ids() == []
+        lib.add_many([_path(3, 0), _path(3, 1)], segment=False, assign="recluster")  # two can be
+        assert len(lib.primitives()) == 2 and lib.clustering_params() is not None
+
+
+def test_a_parallel_add_refuses_it_before_it_writes(tmp_path, library_content):
+    pytest.importorskip("distributed")
+    db = tmp_path / "lib.db"
+    with Library(db) as lib:
+        lib.add_many([_path(3, k) for k in range(3)], segment=False, assign="recluster")
+    before = library_content(db)
+    t = np.linspace(0.0, 1.0, 60)
+    files = []
+    for name, cols in [("a", [t, t, 0.2 * t]), ("flat", [t, t])]:
+        files.append(tmp_path / f"{name}.csv")
+        header = "t," + ",".join(f"position_{i}" for i in range(len(cols)))
+        np.savetxt(files[-1], np.column_stack([t, *cols]), delimiter=",", header=header, comments="")
+    with Library(db) as lib, pytest.raises(ValueError, match=r"4 primitive\(s\) are 3-D \(1 of them being "
+                                                             r"added\), 1 are 2-D \(1 being added\); .*; "
+                                                             r"nothing was added$"):
+        lib.add_files(files, workers=1, segment=False, assign="recluster")
+    assert library_content(db) == before
