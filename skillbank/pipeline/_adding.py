@@ -157,6 +157,29 @@ class Adding:
             raise ValueError(f"library: expected at least 2 primitives to cluster, got {n}")
         check_one_dimension(prims, items)
 
+    def _keep_one_dimension(self, by_file, fail) -> list:
+        """``keep_going`` with a recluster: set aside each file whose positions have another dimension
+        than the library's (the stored primitives', else most of those being added); the others' items."""
+        stored = {p.demo["position"].shape[1] for p in self.store.primitives(load=True)}
+        if len(stored) > 1:  # already mixed: the check after this one says which
+            return [item for _, items in by_file for item in items]
+        count: dict = {}
+        for _, items in by_file:
+            for item, _ in items:
+                d = item["demo"]["position"].shape[1]
+                count[d] = count.get(d, 0) + len(item["bounds"])
+        want = next(iter(stored)) if stored else max(sorted(count), key=count.get)
+        kept = []
+        for path, items in by_file:
+            other = sorted({item["demo"]["position"].shape[1] for item, _ in items} - {want})
+            if other:
+                whose = "the library's" if stored else "most of those added"
+                fail(path, "", ValueError(f"its positions are {other[0]}-D, {whose} are {want}-D: one "
+                                          "clustering cannot mix them"))
+            else:
+                kept.extend(items)
+        return kept
+
     def _recluster(self, progress: bool = False) -> int:
         params = self.clustering_params() or {}
         return self.cluster(**{k: params[k] for k in _RECLUSTER_KEEPS if k in params}, progress=progress)
@@ -284,6 +307,11 @@ class Adding:
             robomimic), e.g. ``{"topics": ["/ft=wrench"], "episodes": "0:100"}``
             (:func:`skillbank.io.load_all`); other formats ignore them.
         keep_going : bool, default=False
+            Set failing files aside (``report["failed"]``) and add the rest.
+            With ``assign="recluster"`` (not in parallel), a file whose
+            positions have another dimension than the library's is one of
+            them; without ``keep_going`` such a file stops the add before it
+            writes anything, as a recluster could not mix them.
         progress : bool, default=False
             tqdm bars while reading and cutting.
         segment, segmentation, label, assign
@@ -343,7 +371,7 @@ class Adding:
                 fail(path, "", exc)
                 continue
             read.append((path, demos))
-        cache, prepared = {}, []
+        cache, prepared, by_file = {}, [], []
         for path, demos in tqdm(read, desc="segmenting", unit="file", disable=not progress):
             items = []
             try:
@@ -354,6 +382,9 @@ class Adding:
                 fail(path, "" if len(demos) == 1 else f"demonstration {len(items)}: ", exc)
                 continue
             prepared.extend(items)
+            by_file.append((path, items))
+        if assign == "recluster" and prepared and keep_going:
+            prepared = self._keep_one_dimension(by_file, fail)
         if assign == "recluster" and prepared:
             try:
                 self._check_recluster([item for item, _ in prepared])
