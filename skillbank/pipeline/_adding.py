@@ -308,10 +308,10 @@ class Adding:
             (:func:`skillbank.io.load_all`); other formats ignore them.
         keep_going : bool, default=False
             Set failing files aside (``report["failed"]``) and add the rest.
-            With ``assign="recluster"`` (not in parallel), a file whose
-            positions have another dimension than the library's is one of
-            them; without ``keep_going`` such a file stops the add before it
-            writes anything, as a recluster could not mix them.
+            With ``assign="recluster"``, a file whose positions have another
+            dimension than the library's is one of them; without
+            ``keep_going`` such a file stops the add before it writes
+            anything, as a recluster could not mix them.
         progress : bool, default=False
             tqdm bars while reading and cutting.
         segment, segmentation, label, assign

@@ -284,6 +284,12 @@ class _Job:
         self.report = {"demonstrations": [], "primitives": [], "failed": {}, "unclustered": {},
                        "set_aside": {}, "version": None, "scheduler": client.scheduler.address}
         self.pending, self.done, self.inflight = [], {}, {}
+        # keep_going with a recluster: batches are written as they come, so a file of another dimension
+        # than the library's (the stored primitives', else the first file's) is set aside, not written
+        self.one_dimension = keep_going and args[1]["assign"] == "recluster"
+        stored = {p.demo["position"].shape[1] for p in lib.store.primitives(load=True)} \
+            if self.one_dimension else set()
+        self.dimension = next(iter(stored)) if len(stored) == 1 else None
         self.queue = dist.as_completed(loop=client.loop)
         self.submitted = self.consumed = 0
 
@@ -340,6 +346,14 @@ class _Job:
                     raise ValueError(f"{path}: {reason}; nothing was added")
                 self.report["failed"][path] = reason
                 continue
+            if self.one_dimension and items:
+                dims = sorted({item["demo"]["position"].shape[1] for item, _ in items})
+                self.dimension = dims[0] if self.dimension is None else self.dimension
+                other = [d for d in dims if d != self.dimension]
+                if other:
+                    self.report["failed"][path] = (f"its positions are {other[0]}-D, the library's are "
+                                                   f"{self.dimension}-D: one clustering cannot mix them")
+                    continue
             self.pending.extend(items)
             if self.keep_going and len(self.pending) >= self.batch_size:
                 self.flush()

@@ -128,3 +128,21 @@ def test_keep_going_sets_the_other_dimension_aside_and_adds_the_rest(tmp_path):
                                                    "clustering cannot mix them"}
         assert len(report["demonstrations"]) == 2 and report["version"] == 2
         assert len(lib.primitives()) == 5
+
+
+def test_a_parallel_keep_going_add_sets_it_aside_too(tmp_path):
+    pytest.importorskip("distributed")
+    db = tmp_path / "lib.db"
+    with Library(db) as lib:
+        lib.add_many([_path(3, k) for k in range(3)], segment=False, assign="recluster")
+    t = np.linspace(0.0, 1.0, 60)
+    files = []
+    for name, cols in [("a", [t, t, 0.2 * t]), ("flat", [t, t]), ("b", [t, 0.5 * t, 0.1 * t])]:
+        files.append(tmp_path / f"{name}.csv")
+        header = "t," + ",".join(f"position_{i}" for i in range(len(cols)))
+        np.savetxt(files[-1], np.column_stack([t, *cols]), delimiter=",", header=header, comments="")
+    with Library(db) as lib:
+        report = lib.add_files(files, workers=1, segment=False, assign="recluster", keep_going=True)
+        assert report["failed"] == {str(files[1]): "its positions are 2-D, the library's are 3-D: one "
+                                                   "clustering cannot mix them"}
+        assert len(report["demonstrations"]) == 2 and report["version"] == 2
