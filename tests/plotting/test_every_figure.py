@@ -2,7 +2,8 @@
 
 Each public ``plot_*`` is rendered on small known inputs; then every axis
 label, title, tick label and legend is inside the figure's canvas (nothing
-cut at an edge), and the saved image is at most 2,000 px wide.
+cut at an edge), the saved image is at most 2,000 px wide, and no legend
+covers a sample of a 2-D line or the panes of a 3-D axes.
 """
 
 from __future__ import annotations
@@ -126,3 +127,26 @@ def test_every_text_is_inside_the_canvas_and_the_image_is_bounded(name, tmp_path
         assert box.x0 - 1 <= extent.x0 and extent.x1 <= box.x1 + 1, where
         assert box.y0 - 1 <= extent.y0 and extent.y1 <= box.y1 + 1, where
     assert mpimg.imread(out).shape[1] <= 2000
+
+
+@pytest.mark.parametrize("name", list(FIGURES))
+def test_no_legend_covers_a_sample(name, tmp_path, drawn):
+    FIGURES[name](tmp_path / "f.png")
+    fig = drawn[-1]
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    boxes = [legend.get_window_extent(renderer) for legend in fig.legends]
+    boxes += [ax.get_legend().get_window_extent(renderer) for ax in fig.axes if ax.get_legend() is not None]
+    for ax in fig.axes:
+        if ax.name == "3d":  # no corner of a 3-D axes is free: every legend is beside it, off the panes
+            assert not any(box.overlaps(ax.get_window_extent(renderer)) for box in boxes), name
+            continue
+        for line in ax.get_lines():
+            x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+            if not x.size:
+                continue  # a legend-only entry
+            xy = line.get_transform().transform(np.column_stack([x, y]))  # (axvline: y in axes units)
+            for box in boxes:
+                inside = (xy[:, 0] > box.x0) & (xy[:, 0] < box.x1) & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1)
+                assert not inside.any(), (name, line.get_label())
