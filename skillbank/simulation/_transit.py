@@ -1,0 +1,538 @@
+"""Free-space moves of a robosuite arm planned in joint space, checked in the scene's own MuJoCo geometry.
+
+robosuite's operational-space controller drives the tool along a path; the links behind it go where
+inverse kinematics takes them, and on a far pick the forearm or a wrist link can sweep through a bin's
+wall that the tool itself passes above. Here the free part of a commanded tool path is checked for the
+whole arm, and where any body would come near the scene it is replaced by a planned joint path:
+
+- :class:`ArmScene` is the arm in a private copy of the environment's MuJoCo model and data: the arm's
+  joints are set, an object held in the hand is moved rigidly with it, and MuJoCo's own collision
+  detection (``mj_collision``, the geoms as they lie, every link, the gripper and the held object against
+  everything that does not move with the hand) says what comes within :data:`MARGIN` (the moving geoms'
+  margin is raised to it in the copy, so MuJoCo reports near misses as contacts with a positive
+  distance). Inverse kinematics is damped least squares on the same model: the grip site's position and
+  the end-effector body's orientation, the pose robosuite reports as ``robot0_eef_pos`` /
+  ``robot0_eef_quat``.
+- :func:`plan_transit` searches with OMPL's RRTConnect (BSD-3-Clause, the planners MoveIt uses; extra
+  ``plan``, set up as :func:`skillbank.robots.plan_motion` sets it up), every motion densified so that no
+  joint turns more than :data:`JOINT_STEP` between checked states, then shortened by OMPL's simplifier,
+  within a time bound; a failure is one line naming the start, the goal and the geom that blocks.
+- :func:`free_move` takes a tool path and the span of it that is free space, follows it with inverse
+  kinematics from the arm's joints and, only where that would bring a body within the margin, replaces
+  the span by the planned path's tool poses (forward kinematics at the control rate, minimum-jerk in
+  time, no joint faster than :data:`JOINT_SPEED`): what follows the span is driven as before, from where
+  the planned move ends.
+- :func:`free_span` says which part of an adapted segment is free space, from the data alone: after the
+  part that leaves as the demonstration did (:data:`~skillbank.simulation._evaluate.LEAVE`), up to where
+  the demonstration's own close-in is pinned (``CLOSE_IN``), or to the end for a segment that only
+  leaves what the last one let go of.
+"""
+
+from __future__ import annotations
+
+import copy
+import time as _time
+
+import numpy as np
+
+from ..core import matrix_to_quaternion, quaternion_to_matrix
+from ..robots._motion import MotionPlanningError, _ompl, _seed
+
+__all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "check_planner", "transit_timing",
+           "PLANNER_CHOICES", "MARGIN"]
+
+#: ``planner`` values: OMPL in the scene's MuJoCo geometry, or the tool paths as adapted.
+PLANNER_CHOICES = ("ompl", "none")
+#: Metres every moving body keeps from the scene in a planned move (the controller trails its commands
+#: by a centimetre or two on a fast move; the check itself is exact at the checked states).
+MARGIN = 0.01
+#: Radians any joint may turn between two checked states of a motion (about 1.5 cm at the gripper's end).
+JOINT_STEP = 0.02
+#: Seconds a search may take.
+TIME_LIMIT = 3.0
+#: Seconds OMPL's simplifier may take.
+SIMPLIFY_TIME = 0.5
+#: rad/s: the fastest any joint turns in a driven planned move (peak of its minimum-jerk profile).
+JOINT_SPEED = 0.8
+#: m/s: the fastest the tool moves in it.
+TOOL_SPEED = 0.25
+#: Free spans shorter than this (m, tool) are driven as they are.
+SHORTEST = 0.05
+#: Starts of inverse kinematics tried for a goal besides the arm's own joints (random turns about them).
+GOAL_TRIES = 12
+_FREQ = 20  # robosuite's control rate in skillbank's episodes (CONTROL_FREQ; not imported: no cycle)
+
+
+def check_planner(planner) -> str:
+    """``planner`` checked: one of :data:`PLANNER_CHOICES`.
+
+    Examples
+    --------
+    >>> check_planner("ompl")
+    'ompl'
+    """
+    if planner not in PLANNER_CHOICES:
+        raise ValueError(f"planner: expected one of {list(PLANNER_CHOICES)}, got {planner!r}")
+    return planner
+
+
+def transit_timing(per_episode_transits) -> dict:
+    """``{"planned_transits", "planning_seconds_mean", "planning_seconds_max"}`` over the episodes' lists of
+    planning seconds per planned transit.
+
+    Examples
+    --------
+    >>> transit_timing([[0.5, 1.5], [], [1.0]])
+    {'planned_transits': 3, 'planning_seconds_mean': 1.0, 'planning_seconds_max': 1.5}
+    """
+    every = [t for ts in per_episode_transits for t in ts]
+    return {"planned_transits": len(every),
+            "planning_seconds_mean": round(float(np.mean(every)), 4) if every else 0.0,
+            "planning_seconds_max": round(float(np.max(every)), 4) if every else 0.0}
+
+
+def _rotvec(R):
+    """The rotation vector of a rotation matrix."""
+    c = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arccos(c)
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = np.linalg.norm(w)
+    if s < 1e-9:
+        if c > 0:
+            return np.zeros(3)
+        # half a turn: the axis is the column of R + I with the largest norm
+        B = R + np.eye(3)
+        axis = B[:, np.argmax(np.linalg.norm(B, axis=0))]
+        return np.pi * axis / np.linalg.norm(axis)
+    return angle * w / s
+
+
+def _where(q):
+    return "[" + ", ".join(f"{v:.3g}" for v in q) + "]"
+
+
+class ArmScene:
+    """The arm of a robosuite environment in a private copy of its MuJoCo model: collisions, FK and IK.
+
+    Parameters
+    ----------
+    env : robosuite environment
+        A one-arm scene; its state now (objects, fingers) is the scene the arm moves in.
+    held : str, optional
+        The name of a robosuite object (``env.model.mujoco_objects``) held in the hand: it moves rigidly
+        with the hand, as it sits in it now, and is checked like a body of the arm.
+    margin : float, default=MARGIN
+        Metres the arm, gripper and held object keep from everything else.
+
+    Examples
+    --------
+    >>> scene = ArmScene(env)  # doctest: +SKIP
+    >>> scene.blocking(env.sim.data.qpos[:6]) is None  # the arm where it stands is clear  # doctest: +SKIP
+    True
+    """
+
+    def __init__(self, env, *, held=None, margin=MARGIN):
+        import mujoco  # extra 'sim': imported when a robosuite scene is planned in
+
+        self._mj = mujoco
+        self.margin = float(margin)
+        self.model = copy.deepcopy(env.sim.model._model)
+        m = self.model
+        src = env.sim.data._data
+        self.data = mujoco.MjData(m)
+        self.data.qpos[:] = src.qpos
+        self.data.mocap_pos[:], self.data.mocap_quat[:] = src.mocap_pos, src.mocap_quat
+        robot = env.robots[0]
+        ids = np.array([m.joint(name).id for name in robot.robot_joints])
+        self.qadr, self.dadr = m.jnt_qposadr[ids], m.jnt_dofadr[ids]
+        limited = m.jnt_limited[ids].astype(bool)
+        self.limits = np.where(limited[:, None], m.jnt_range[ids], [-2 * np.pi, 2 * np.pi])
+        gripper = robot.gripper["right"] if isinstance(robot.gripper, dict) else robot.gripper
+        self.site = m.site(gripper.important_sites["grip_site"]).id
+        eef = robot.robot_model.eef_name
+        self.body = m.body(eef["right"] if isinstance(eef, dict) else eef).id
+        moving = self._subtree(m.jnt_bodyid[ids[0]])
+        self.held = None
+        if held is not None:
+            obj = next((o for o in env.model.mujoco_objects if o.name == held), None)
+            if obj is None:
+                raise ValueError(f"held: the scene has no object {held!r}")
+            root = m.body(obj.root_body).id
+            if m.body_jntnum[root] < 1 or m.jnt_type[m.body_jntadr[root]] != mujoco.mjtJoint.mjJNT_FREE:
+                raise ValueError(f"held: object {held!r} is fixed in the scene, not held")
+            mujoco.mj_kinematics(m, self.data)
+            # the object as it sits in the hand now, in the hand body's frame
+            Rh, ph = self.data.xmat[self.body].reshape(3, 3), self.data.xpos[self.body]
+            Ro, po = self.data.xmat[root].reshape(3, 3), self.data.xpos[root]
+            self.held = (m.jnt_qposadr[m.body_jntadr[root]], Rh.T @ Ro, Rh.T @ (po - ph))
+            moving |= self._subtree(root)
+        self.moving = moving[m.geom_bodyid]
+        # the arm's own fixed base and mount are its self-collision, which its joint limits keep
+        top = m.jnt_bodyid[ids[0]]
+        while m.body_parentid[top] != 0:
+            top = m.body_parentid[top]
+        self.own = self._subtree(top)[m.geom_bodyid] & ~self.moving
+        # collidable moving geoms report what comes within the margin as a contact (MuJoCo takes the
+        # larger margin of a pair); the scene's own geoms keep theirs
+        m.geom_margin[self.moving] = np.maximum(m.geom_margin[self.moving], self.margin)
+        # a geom without a name (robosuite's bins' walls) goes by its body's and its number
+        self.names = [m.geom(i).name or f"{m.body(m.geom_bodyid[i]).name} (geom {i})" for i in range(m.ngeom)]
+        self.allowed = set()
+        self.checks = 0
+
+    def _subtree(self, root):
+        m = self.model
+        inside = np.zeros(m.nbody, bool)
+        inside[root] = True
+        for b in range(root + 1, m.nbody):  # MuJoCo numbers a body after its parent
+            inside[b] = inside[m.body_parentid[b]]
+        return inside
+
+    @property
+    def joints(self):
+        """The arm's joints in the copy now."""
+        return np.array(self.data.qpos[self.qadr], float)
+
+    def set(self, q):
+        """Put the arm at ``q`` (and the held object in the hand) and compute the kinematics."""
+        mj, m, d = self._mj, self.model, self.data
+        d.qpos[self.qadr] = q
+        mj.mj_kinematics(m, d)
+        if self.held is not None:
+            adr, R, p = self.held
+            Rh, ph = d.xmat[self.body].reshape(3, 3), d.xpos[self.body]
+            d.qpos[adr:adr + 3] = ph + Rh @ p
+            xyzw = matrix_to_quaternion(Rh @ R)
+            d.qpos[adr + 3:adr + 7] = np.r_[xyzw[3], xyzw[:3]]  # MuJoCo's (w, x, y, z)
+            mj.mj_kinematics(m, d)
+
+    def near(self, q):
+        """``(distance, moving geom, other geom)`` of every pair within the margin at ``q``, nearest first."""
+        self.checks += 1
+        self.set(q)
+        mj, m, d = self._mj, self.model, self.data
+        mj.mj_collision(m, d)
+        n = d.ncon
+        if n == 0:
+            return []
+        g1, g2, dist = d.contact.geom1[:n], d.contact.geom2[:n], d.contact.dist[:n]
+        mv1, mv2 = self.moving[g1], self.moving[g2]
+        hit = (mv1 != mv2) & (dist < self.margin) & ~self.own[g1] & ~self.own[g2]
+        out = [(float(dist[k]), int(g1[k]), int(g2[k])) if mv1[k] else
+               (float(dist[k]), int(g2[k]), int(g1[k])) for k in np.flatnonzero(hit)]
+        out = [c for c in out if (c[1], c[2]) not in self.allowed]
+        return sorted(out)
+
+    def blocking(self, q):
+        """The nearest ``(distance, moving geom, other geom)`` within the margin at ``q``, or None."""
+        near = self.near(q)
+        return near[0] if near else None
+
+    def allow(self, q):
+        """Let the pairs within the margin at ``q`` be (a hand that starts at what it just let go of)."""
+        self.allowed |= {(a, b) for _, a, b in self.near(q)}
+
+    def describe(self, contact) -> str:
+        d, a, b = contact
+        depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+        return f"{self.names[a]} comes {depth} {self.names[b]}"
+
+    def tool(self, q):
+        """The tool pose robosuite reports at ``q``: (position, quaternion (x, y, z, w))."""
+        self.set(q)
+        d = self.data
+        return (np.array(d.site_xpos[self.site], float),
+                matrix_to_quaternion(d.xmat[self.body].reshape(3, 3).copy()))
+
+    def ik(self, position, quat, q0, *, iters=100, tol=(1e-4, 1e-3), damping=0.05):
+        """Joints near ``q0`` that put the tool at ``position``, ``quat`` (x, y, z, w), within the limits;
+        None if damped least squares does not converge."""
+        mj, m, d = self._mj, self.model, self.data
+        target = quaternion_to_matrix(np.asarray(quat, float))
+        q = np.array(q0, float)
+        jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+        for _ in range(iters):
+            self.set(q)
+            mj.mj_comPos(m, d)  # the Jacobians use the bodies' frames relative to their subtree's centre
+            ep = np.asarray(position, float) - d.site_xpos[self.site]
+            er = _rotvec(target @ d.xmat[self.body].reshape(3, 3).T)
+            if np.linalg.norm(ep) < tol[0] and np.linalg.norm(er) < tol[1]:
+                return q
+            mj.mj_jacSite(m, d, jp, None, self.site)
+            mj.mj_jacBody(m, d, None, jr, self.body)
+            J = np.vstack([jp[:, self.dadr], jr[:, self.dadr]])
+            e = np.r_[ep, er]
+            dq = J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(6), e)
+            q = np.clip(q + dq, self.limits[:, 0], self.limits[:, 1])
+        return None
+
+    def motion_clear(self, a, b):
+        """Whether every state of the straight joint motion from ``a`` to ``b`` is clear (densified)."""
+        return self.motion_blocking(a, b) is None
+
+    def motion_blocking(self, a, b):
+        n = max(1, int(np.ceil(np.abs(b - a).max() / JOINT_STEP)))
+        for s in np.linspace(0.0, 1.0, n + 1)[1:]:
+            hit = self.blocking(a + s * (b - a))
+            if hit is not None:
+                return hit
+        return None
+
+
+def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time=SIMPLIFY_TIME,
+                 random_state=None):
+    """A joint path from ``q_start`` to ``q_goal`` on which the arm, gripper and held object stay clear.
+
+    Parameters
+    ----------
+    scene : ArmScene
+    q_start, q_goal : array of shape (n_joints,)
+    time_limit : float
+        Seconds the search may take.
+    simplify_time : float
+        Seconds OMPL's simplifier may shorten the path.
+    random_state : int, optional
+        OMPL's seed: the same seed, the same path.
+
+    Returns
+    -------
+    joints : ndarray of shape (n, n_joints)
+        Waypoints from the start to the goal, joined by straight joint motions, each checked densely.
+    seconds : float
+        The search's and the simplification's time.
+
+    Raises
+    ------
+    MotionPlanningError
+        One line: the start or the goal not clear, or no path within the time limit, naming the start,
+        the goal and the geoms that block.
+
+    Examples
+    --------
+    >>> joints, seconds = plan_transit(ArmScene(env), q0, q1, random_state=0)  # doctest: +SKIP
+    >>> joints[0].tolist() == list(q0)  # doctest: +SKIP
+    True
+    """
+    q0, q1 = np.asarray(q_start, float), np.asarray(q_goal, float)
+    for name, q in (("start", q0), ("goal", q1)):
+        hit = scene.blocking(q)
+        if hit is not None:
+            raise MotionPlanningError(
+                f"transit planning: the {name} {_where(q)} is not clear: {scene.describe(hit)} "
+                f"(margin {scene.margin * 1000:g} mm)")
+    tic = _time.perf_counter()
+    if scene.motion_clear(q0, q1):
+        return np.stack([q0, q1]), _time.perf_counter() - tic
+    ob, og, ou = _ompl()
+    ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
+    ou.RNG.setSeed(_seed(random_state))
+    n = len(q0)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    # within the limits and half a turn beyond the span of the two ends: no joint winds round
+    low = np.maximum(scene.limits[:, 0], np.minimum(q0, q1) - np.pi / 2)
+    high = np.minimum(scene.limits[:, 1], np.maximum(q0, q1) + np.pi / 2)
+    for j in range(n):
+        bounds.setLow(j, float(low[j]))
+        bounds.setHigh(j, float(max(high[j], low[j] + 1e-9)))
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    blocked = {}  # other geom -> [count, contact]
+
+    def array(state):
+        return np.fromiter((state[j] for j in range(n)), dtype=float, count=n)
+
+    def note(hit):
+        seen = blocked.setdefault(hit[2], [0, hit])
+        seen[0] += 1
+        if hit[0] < seen[1][0]:
+            seen[1] = hit
+
+    def valid(state):
+        hit = scene.blocking(array(state))
+        if hit is not None:
+            note(hit)
+        return hit is None
+
+    class _Motion(ob.MotionValidator):  # densified in joint space, stopping at the first contact
+        def checkMotion(self, s1, s2, *last):
+            hit = scene.motion_blocking(array(s1), array(s2))
+            if hit is not None:
+                note(hit)
+            return hit is None
+
+    si.setStateValidityChecker(valid)
+    validator = _Motion(si)
+    si.setMotionValidator(validator)
+    si.setup()
+    pdef = ob.ProblemDefinition(si)
+
+    def state(q):
+        out = si.allocState()
+        for j in range(n):
+            out[j] = float(q[j])
+        return out
+
+    pdef.setStartAndGoalStates(state(q0), state(q1))
+    search = og.RRTConnect(si)
+    search.setRange(0.5)  # rad: short motions are cheap to check and rarely blocked
+    search.setProblemDefinition(pdef)
+    search.setup()
+    search.solve(float(time_limit))
+    if not pdef.hasExactSolution():
+        if blocked:
+            count, hit = max(blocked.values(), key=lambda v: v[0])
+            why = f"blocked by {scene.names[hit[2]]} ({count} checks ran into it; {scene.describe(hit)})"
+        else:
+            why = "the search ran out of time"
+        raise MotionPlanningError(
+            f"transit planning: no collision-free path from {_where(q0)} to {_where(q1)} found by OMPL "
+            f"RRTConnect in {time_limit:g} s: {why} (margin {scene.margin * 1000:g} mm)")
+    path = pdef.getSolutionPath()
+    if simplify_time > 0:
+        og.PathSimplifier(si).simplify(path, float(simplify_time))
+    Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
+    Q[0], Q[-1] = q0, q1  # exactly, not to round-off
+    for a, b in zip(Q[:-1], Q[1:], strict=True):  # never a silent success
+        hit = scene.motion_blocking(a, b)
+        if hit is not None:
+            raise MotionPlanningError(
+                f"transit planning: the path OMPL found from {_where(q0)} to {_where(q1)} is not clear: "
+                f"{scene.describe(hit)}")
+    return Q, _time.perf_counter() - tic
+
+
+def _timed(scene, Q):
+    """The tool poses (positions, quaternions) along joint waypoints ``Q`` at the control rate: minimum
+    jerk over the path's joint length, no joint faster than :data:`JOINT_SPEED`, the tool than
+    :data:`TOOL_SPEED` (peak speeds; a minimum-jerk profile peaks at 1.875 times its mean)."""
+    fine = [Q[0]]
+    for a, b in zip(Q[:-1], Q[1:], strict=True):
+        k = max(1, int(np.ceil(np.abs(b - a).max() / (JOINT_STEP / 2))))
+        fine.extend(a + s * (b - a) for s in np.linspace(0.0, 1.0, k + 1)[1:])
+    fine = np.array(fine)
+    along = np.r_[0.0, np.cumsum(np.abs(np.diff(fine, axis=0)).max(axis=1))]
+    tools = np.array([scene.tool(q)[0] for q in fine])
+    length = float(np.linalg.norm(np.diff(tools, axis=0), axis=1).sum())
+    seconds = 1.875 * max(along[-1] / JOINT_SPEED, length / TOOL_SPEED)
+    n = max(_FREQ // 2, int(np.ceil(seconds * _FREQ)))
+    s = np.linspace(0.0, 1.0, n + 1)[1:]
+    u = s ** 3 * (10 - 15 * s + 6 * s ** 2)  # minimum jerk
+    at = u * along[-1]
+    Qs = np.column_stack([np.interp(at, along, fine[:, j]) for j in range(fine.shape[1])])
+    poses = [scene.tool(q) for q in Qs]
+    return np.array([p for p, _ in poses]), np.array([q for _, q in poses])
+
+
+def _int_seed(random_state):
+    """An integer seed for OMPL from an episode's ``random_state`` (None: 0, the same plan every time)."""
+    if random_state is None:
+        return 0
+    if isinstance(random_state, (int, np.integer)) and not isinstance(random_state, bool):
+        return int(random_state)
+    if hasattr(random_state, "integers"):
+        return int(random_state.integers(2 ** 31 - 1))
+    if hasattr(random_state, "randint"):
+        return int(random_state.randint(2 ** 31 - 1))
+    raise ValueError(f"random_state: expected an integer seed, a numpy generator or None, got "
+                     f"{random_state!r}")
+
+
+def free_span(n, grip, *, let_go=False, leave=0.25, close_in=0.5):
+    """The samples ``(start, stop)`` of an adapted path of ``n`` samples that are free space, or None.
+
+    The first ``leave`` of a segment leaves as its demonstration did (a lift off the table); from
+    ``close_in`` on the demonstration's own close-in is pinned. Between them the path relates to no
+    object and is free. A segment that keeps the gripper open right after one that let go (``let_go``)
+    only leaves: free to its end.
+
+    Examples
+    --------
+    >>> free_span(41, [-1] * 41), free_span(41, [-1] * 41, let_go=True), free_span(3, [-1] * 3)
+    ((10, 20), (10, 40), None)
+    """
+    grip = np.asarray(grip, float)
+    start = int(np.ceil(leave * (n - 1)))
+    stop = n - 1 if let_go and (grip <= 0).all() else int(np.floor(close_in * (n - 1)))
+    return (start, stop) if stop - start >= 2 else None
+
+
+def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN):
+    """The tool path ``P (n, 3)``, ``Q (n, 4)`` (gripper commands ``G (n,)``) with its free ``span``
+    planned for the whole arm where the path as it is would bring a body within ``margin`` of the scene.
+
+    The arm's joints are followed along the path from where they are now (inverse kinematics, each pose
+    from the last); if every state of the span, densified, is clear, the path is returned as it is.
+    Otherwise the span's end is reached by a joint path from :func:`plan_transit` (its end the span's
+    last pose on the followed branch, or, if that is not clear, the clear solution nearest it), driven
+    as tool poses, and the path goes on from there as before.
+
+    Returns
+    -------
+    P, Q, G : ndarray
+        The path (``n`` changes when the span is replaced: the planned move keeps the span's first
+        gripper command); the samples before the span are unchanged.
+    report : dict
+        ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int}`` (``samples``: the
+        planned move's samples that replace the span's).
+
+    Raises
+    ------
+    MotionPlanningError
+        The span is blocked and no planned path is found (one line, :func:`plan_transit`).
+
+    Examples
+    --------
+    >>> P2, Q2, G2, report = free_move(env, obs, P, Q, G, (10, 20))  # doctest: +SKIP
+    >>> report["planned"] in (True, False)  # doctest: +SKIP
+    True
+    """
+    tic = _time.perf_counter()
+    random_state = _int_seed(random_state)
+    a, b = span
+    report = {"planned": False, "seconds": 0.0, "span": (int(a), int(b)), "samples": 0}
+    if np.linalg.norm(np.diff(P[a:b + 1], axis=0), axis=1).sum() < SHORTEST:
+        return P, Q, G, report
+    scene = ArmScene(env, held=held, margin=margin)
+    q = np.asarray(obs["robot0_joint_pos"], float)
+    scene.allow(q)  # what the hand stands at now (what it just let go of) is not what a transit avoids
+    followed = []
+    for k in range(b + 1):
+        nxt = scene.ik(P[k], Q[k], q)
+        if nxt is None:
+            break  # unreachable on this branch: the planner's goal is looked for below
+        q = nxt
+        followed.append(q)
+    blocked = len(followed) < b + 1
+    if not blocked:
+        for k in range(a, b):
+            if scene.motion_blocking(followed[k], followed[k + 1]) is not None:
+                blocked = True
+                break
+    if not blocked:
+        report["seconds"] = _time.perf_counter() - tic
+        return P, Q, G, report
+    if len(followed) <= a:
+        raise MotionPlanningError(f"transit planning: the free span's start {_where(P[a])} m is not "
+                                  f"reachable from the arm's joints {_where(obs['robot0_joint_pos'])}")
+    start = followed[a]
+    goal = followed[b] if len(followed) == b + 1 else None
+    if goal is None or scene.blocking(goal) is not None:
+        # other solutions for the span's end: from turns about the start, the clear one nearest it
+        rng = np.random.default_rng(_seed(random_state))
+        options = []
+        for _ in range(GOAL_TRIES):
+            q = scene.ik(P[b], Q[b], start + rng.uniform(-1.0, 1.0, len(start)))
+            if q is not None and scene.blocking(q) is None:
+                options.append(q)
+        if options:
+            goal = min(options, key=lambda q: float(np.abs(q - start).sum()))
+        elif goal is None:
+            raise MotionPlanningError(f"transit planning: no joints reach the free span's end {_where(P[b])} "
+                                      f"m from the start {_where(start)}")
+    joints, _ = plan_transit(scene, start, goal, random_state=random_state)
+    Pm, Qm = _timed(scene, joints)
+    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm))
+    G = np.asarray(G)
+    return (np.vstack([P[:a + 1], Pm, P[b + 1:]]), np.vstack([Q[:a + 1], Qm, Q[b + 1:]]),
+            np.concatenate([G[:a + 1], np.full(len(Pm), G[a]), G[b + 1:]]), report)
