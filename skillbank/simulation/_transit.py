@@ -462,7 +462,9 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     planned for the whole arm where the path as it is would bring a body within ``margin`` of the scene.
 
     The arm's joints are followed along the path from where they are now (inverse kinematics, each pose
-    from the last); if every state of the span, densified, is clear, the path is returned as it is.
+    from the last). The span is narrowed to its first and last clear states (a path that starts or ends
+    at the scene is the skill's own there); if every state between them, densified, is clear, the path
+    is returned as it is.
     Otherwise the span's end is reached by a joint path from :func:`plan_transit` (its end the span's
     last pose on the followed branch, or, if that is not clear, the clear solution nearest it), driven
     as tool poses, and the path goes on from there as before.
@@ -503,33 +505,37 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
             break  # unreachable on this branch: the planner's goal is looked for below
         q = nxt
         followed.append(q)
-    blocked = len(followed) < b + 1
-    if not blocked:
-        for k in range(a, b):
-            if scene.motion_blocking(followed[k], followed[k + 1]) is not None:
-                blocked = True
-                break
-    if not blocked:
-        report["seconds"] = _time.perf_counter() - tic
-        return P, Q, G, report
     if len(followed) <= a:
         raise MotionPlanningError(f"transit planning: the free span's start {_where(P[a])} m is not "
                                   f"reachable from the arm's joints {_where(obs['robot0_joint_pos'])}")
+    # the span runs between clear states: where the path as adapted starts or ends at the scene (a lift
+    # still beside what it left, a demonstration's close-in that begins at a bin's wall) it is the
+    # skill's own, not free space, and is driven as it is
+    clear = [k for k in range(a, len(followed)) if scene.blocking(followed[k]) is None]
+    reached = len(followed) == b + 1
+    if not clear:
+        report["seconds"] = _time.perf_counter() - tic
+        return P, Q, G, report
+    a, b = clear[0], (clear[-1] if reached else b)
+    report["span"] = (int(a), int(b))
+    if reached and (b - a < 2 or all(scene.motion_clear(followed[k], followed[k + 1]) for k in range(a, b))):
+        report["seconds"] = _time.perf_counter() - tic
+        return P, Q, G, report
     start = followed[a]
-    goal = followed[b] if len(followed) == b + 1 else None
-    if goal is None or scene.blocking(goal) is not None:
-        # other solutions for the span's end: from turns about the start, the clear one nearest it
+    goal = followed[b] if reached else None
+    if goal is None:
+        # the followed branch does not reach the span's end: another solution, from turns about the start,
+        # the clear one nearest it
         rng = np.random.default_rng(_seed(random_state))
         options = []
         for _ in range(GOAL_TRIES):
             q = scene.ik(P[b], Q[b], start + rng.uniform(-1.0, 1.0, len(start)))
             if q is not None and scene.blocking(q) is None:
                 options.append(q)
-        if options:
-            goal = min(options, key=lambda q: float(np.abs(q - start).sum()))
-        elif goal is None:
-            raise MotionPlanningError(f"transit planning: no joints reach the free span's end {_where(P[b])} "
-                                      f"m from the start {_where(start)}")
+        if not options:
+            raise MotionPlanningError(f"transit planning: no clear joints reach the free span's end "
+                                      f"{_where(P[b])} m from the start {_where(start)}")
+        goal = min(options, key=lambda q: float(np.abs(q - start).sum()))
     joints, _ = plan_transit(scene, start, goal, random_state=random_state)
     Pm, Qm = _timed(scene, joints)
     report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm))
