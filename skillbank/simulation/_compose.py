@@ -473,7 +473,7 @@ def _plan(domain, world, facts, goal, search, name):
 def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=None, method: str = "lte",
                  replan: bool = False, horizon: int = 600, placement=None, disturb=None, search="satisficing",
                  random_state=None, paths: bool = False, progress=None, robot: str = DRIVEN_ROBOT,
-                 workers=None, scheduler=None, verbose: bool = False, planner: str = "none") -> dict:
+                 workers=None, scheduler=None, verbose: bool = False, planner: str = "ompl") -> dict:
     """Plan a task over the library's described skills and carry it out in ``episodes`` robosuite scenes.
 
     Parameters
@@ -513,7 +513,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         recorded on another arm is refused before anything runs).
     progress : callable, optional
         ``progress(done, successes)`` after each episode.
-    planner : {"none", "ompl"}, default="none"
+    planner : {"ompl", "none"}, default="ompl"
         ``"ompl"``: free-space moves (the transit to a reach's start, each adapted segment's free span)
         are followed for the whole arm in the scene's MuJoCo geometry and planned in joint space by
         OMPL where a link, the gripper or a held object would come near the scene
@@ -611,7 +611,7 @@ class _PlanJob:
     random_state: object
     paths: bool
     robot: str = DRIVEN_ROBOT  # robosuite's arm that carries the plan out
-    planner: str = "none"  # "ompl": free-space moves planned for the whole arm (_transit)
+    planner: str = "ompl"  # free-space moves planned for the whole arm (_transit); "none": as adapted
 
 
 def _plan_episode(job, seed):

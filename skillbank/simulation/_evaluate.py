@@ -1151,7 +1151,7 @@ class _Evaluation:
     method: str
     random_state: object
     paths: bool
-    planner: str = "none"  # "ompl": free spans planned for the whole arm (_transit)
+    planner: str = "ompl"  # free spans planned for the whole arm (_transit); "none": as adapted
 
 
 def _evaluate_episode(job, seed):
@@ -1225,7 +1225,7 @@ def _evaluate_episode(job, seed):
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
              horizon: int | None = None, order=None, random_state=None, paths: bool = False,
              progress=None, robot: str = DRIVEN_ROBOT, workers=None, scheduler=None,
-             verbose: bool = False, planner: str = "none") -> dict:
+             verbose: bool = False, planner: str = "ompl") -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -1244,7 +1244,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         default centre.
     method : str, default="lte"
         A name of :data:`skillbank.selection.METHODS`, or a baseline of :data:`BASELINES`.
-    planner : {"none", "ompl"}, default="none"
+    planner : {"ompl", "none"}, default="ompl"
         ``"ompl"``: the free span of each adapted segment (between the part that leaves as its
         demonstration did and the demonstration's own close-in) is followed for the whole arm in the
         scene's MuJoCo geometry and, where a link, the gripper or a held object would come near the scene,

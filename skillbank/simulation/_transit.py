@@ -64,15 +64,21 @@ _FREQ = 20  # robosuite's control rate in skillbank's episodes (CONTROL_FREQ; no
 
 
 def check_planner(planner) -> str:
-    """``planner`` checked: one of :data:`PLANNER_CHOICES`.
+    """``planner`` checked: one of :data:`PLANNER_CHOICES`, and for ``"ompl"`` OMPL importable (before
+    any episode runs, not at the first move that needs it).
 
     Examples
     --------
-    >>> check_planner("ompl")
-    'ompl'
+    >>> check_planner("none")
+    'none'
     """
     if planner not in PLANNER_CHOICES:
         raise ValueError(f"planner: expected one of {list(PLANNER_CHOICES)}, got {planner!r}")
+    if planner == "ompl":
+        try:
+            _ompl()
+        except ImportError as error:
+            raise ImportError(f"planner 'ompl': {error} (or planner 'none': free moves as adapted)") from None
     return planner
 
 

@@ -122,3 +122,12 @@ def test_free_span_is_decided_by_the_gripper_and_the_phases():
     assert free_span(41, [-1] * 20 + [1] * 21) == (10, 20)  # a reach: up to its close-in
     assert free_span(41, [-1] * 41, let_go=True) == (10, 40)  # a retreat after a release: to its end
     assert free_span(5, [-1] * 5) is None
+
+
+@pytest.mark.parametrize("run", ["evaluate", "execute_plan"])
+def test_a_planner_not_known_is_refused_before_the_library_is_read(tmp_path, run):
+    from skillbank import simulation
+
+    scene = "robosuite:Lift" if run == "evaluate" else "robosuite:PickPlace"
+    with pytest.raises(ValueError, match=r"^planner: expected one of \['ompl', 'none'\], got 'rrt'$"):
+        getattr(simulation, run)(tmp_path / "absent.db", scene, planner="rrt")
