@@ -58,8 +58,6 @@ JOINT_SPEED = 0.8
 TOOL_SPEED = 0.25
 #: Free spans shorter than this (m, tool) are driven as they are.
 SHORTEST = 0.05
-#: Starts of inverse kinematics tried for a goal besides the arm's own joints (random turns about them).
-GOAL_TRIES = 12
 _FREQ = 20  # robosuite's control rate in skillbank's episodes (CONTROL_FREQ; not imported: no cycle)
 
 
@@ -250,9 +248,10 @@ class ArmScene:
         return (np.array(d.site_xpos[self.site], float),
                 matrix_to_quaternion(d.xmat[self.body].reshape(3, 3).copy()))
 
-    def ik(self, position, quat, q0, *, iters=100, tol=(1e-4, 1e-3), damping=0.05):
+    def ik(self, position, quat, q0, *, iters=200, tol=(1e-4, 1e-3), near=(5e-3, 5e-2), damping=0.05):
         """Joints near ``q0`` that put the tool at ``position``, ``quat`` (x, y, z, w), within the limits;
-        None if damped least squares does not converge."""
+        None if damped least squares does not come within ``near`` (m, rad; the controller tracks to a
+        centimetre) of it (a joint held at its limit can stall it short of ``tol``)."""
         mj, m, d = self._mj, self.model, self.data
         target = quaternion_to_matrix(np.asarray(quat, float))
         q = np.array(q0, float)
@@ -270,7 +269,7 @@ class ArmScene:
             e = np.r_[ep, er]
             dq = J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(6), e)
             q = np.clip(q + dq, self.limits[:, 0], self.limits[:, 1])
-        return None
+        return q if np.linalg.norm(ep) < near[0] and np.linalg.norm(er) < near[1] else None
 
     def motion_clear(self, a, b):
         """Whether every state of the straight joint motion from ``a`` to ``b`` is clear (densified)."""
@@ -468,12 +467,12 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     planned for the whole arm where the path as it is would bring a body within ``margin`` of the scene.
 
     The arm's joints are followed along the path from where they are now (inverse kinematics, each pose
-    from the last). The span is narrowed to its first and last clear states (a path that starts or ends
-    at the scene is the skill's own there); if every state between them, densified, is clear, the path
-    is returned as it is.
-    Otherwise the span's end is reached by a joint path from :func:`plan_transit` (its end the span's
-    last pose on the followed branch, or, if that is not clear, the clear solution nearest it), driven
-    as tool poses, and the path goes on from there as before.
+    from the last, as far as the arm reaches). The span is narrowed to its first and last clear followed
+    states (a path that starts or ends at the scene is the skill's own there; one that leaves the arm's
+    reach is driven as adapted beyond it); if every state between them, densified, is clear, the path
+    is returned as it is. Otherwise the narrowed span is replaced by a joint path from
+    :func:`plan_transit` between the followed joints at its ends, driven as tool poses, and the path
+    goes on from there as before.
 
     Returns
     -------
@@ -481,8 +480,9 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
         The path (``n`` changes when the span is replaced: the planned move keeps the span's first
         gripper command); the samples before the span are unchanged.
     report : dict
-        ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int}`` (``samples``: the
-        planned move's samples that replace the span's).
+        ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int, "why": str}``
+        (``samples``: the planned move's samples that replace the span's; ``why``: ``"blocked"`` (planned),
+        or why not: ``"short"``, ``"clear"``, ``"no clear state"``, ``"out of reach at sample K"``).
 
     Raises
     ------
@@ -498,7 +498,7 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     tic = _time.perf_counter()
     random_state = _int_seed(random_state)
     a, b = span
-    report = {"planned": False, "seconds": 0.0, "span": (int(a), int(b)), "samples": 0}
+    report = {"planned": False, "seconds": 0.0, "span": (int(a), int(b)), "samples": 0, "why": "short"}
     if np.linalg.norm(np.diff(P[a:b + 1], axis=0), axis=1).sum() < SHORTEST:
         return P, Q, G, report
     scene = ArmScene(env, held=held, margin=margin)
@@ -512,39 +512,29 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
         q = nxt
         followed.append(q)
     if len(followed) <= a:
-        raise MotionPlanningError(f"transit planning: the free span's start {_where(P[a])} m is not "
-                                  f"reachable from the arm's joints {_where(obs['robot0_joint_pos'])}")
+        # the path leaves the arm's reach before the span starts: no joints to plan from; it is driven as
+        # adapted, and where the tool stops short is the episode's to judge
+        report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {len(followed)}")
+        return P, Q, G, report
     # the span runs between clear states: where the path as adapted starts or ends at the scene (a lift
     # still beside what it left, a demonstration's close-in that begins at a bin's wall) it is the
     # skill's own, not free space, and is driven as it is
     clear = [k for k in range(a, len(followed)) if scene.blocking(followed[k]) is None]
-    reached = len(followed) == b + 1
     if not clear:
-        report["seconds"] = _time.perf_counter() - tic
+        report.update(seconds=_time.perf_counter() - tic, why="no clear state")
         return P, Q, G, report
-    a, b = clear[0], (clear[-1] if reached else b)
+    # a path that leaves the arm's reach inside the span (an adaptation that runs beyond it) is planned up
+    # to where the arm still follows it, and driven as adapted from there
+    a, b = clear[0], clear[-1]
     report["span"] = (int(a), int(b))
-    if reached and (b - a < 2 or all(scene.motion_clear(followed[k], followed[k + 1]) for k in range(a, b))):
-        report["seconds"] = _time.perf_counter() - tic
+    if b - a < 2 or all(scene.motion_clear(followed[k], followed[k + 1]) for k in range(a, b)):
+        report.update(seconds=_time.perf_counter() - tic,
+                      why="clear" if len(followed) == span[1] + 1 else f"clear to sample {len(followed)}")
         return P, Q, G, report
-    start = followed[a]
-    goal = followed[b] if reached else None
-    if goal is None:
-        # the followed branch does not reach the span's end: another solution, from turns about the start,
-        # the clear one nearest it
-        rng = np.random.default_rng(_seed(random_state))
-        options = []
-        for _ in range(GOAL_TRIES):
-            q = scene.ik(P[b], Q[b], start + rng.uniform(-1.0, 1.0, len(start)))
-            if q is not None and scene.blocking(q) is None:
-                options.append(q)
-        if not options:
-            raise MotionPlanningError(f"transit planning: no clear joints reach the free span's end "
-                                      f"{_where(P[b])} m from the start {_where(start)}")
-        goal = min(options, key=lambda q: float(np.abs(q - start).sum()))
+    start, goal = followed[a], followed[b]
     joints, _ = plan_transit(scene, start, goal, random_state=random_state)
     Pm, Qm = _timed(scene, joints)
-    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm))
+    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="blocked")
     G = np.asarray(G)
     return (np.vstack([P[:a + 1], Pm, P[b + 1:]]), np.vstack([Q[:a + 1], Qm, Q[b + 1:]]),
             np.concatenate([G[:a + 1], np.full(len(Pm), G[a]), G[b + 1:]]), report)
