@@ -131,3 +131,16 @@ def test_a_planner_not_known_is_refused_before_the_library_is_read(tmp_path, run
     scene = "robosuite:Lift" if run == "evaluate" else "robosuite:PickPlace"
     with pytest.raises(ValueError, match=r"^planner: expected one of \['ompl', 'none'\], got 'rrt'$"):
         getattr(simulation, run)(tmp_path / "absent.db", scene, planner="rrt")
+
+
+def test_a_clear_span_and_one_beyond_reach_are_driven_as_adapted(env):
+    obs = env.reset()
+    quat = np.array(obs["robot0_eef_quat"], float)
+    here = np.array(obs["robot0_eef_pos"], float)
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)  # high over the bins: nothing near
+    P2, Q2, G2, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
+    assert report["why"] == "clear" and not report["planned"]
+    assert P2 is P and Q2 is Q and G2 is G
+    P, Q, G = _line(here, here + [2.0, 0.0, 0.0], quat)  # two metres out: the arm follows it part way
+    P2, _, _, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
+    assert report["why"].startswith("clear to sample") and P2 is P
