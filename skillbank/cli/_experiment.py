@@ -69,6 +69,12 @@ def add_parser(sub):
         c.add_argument("--method", default="lte",
                        help="lte (default) or another method; replay: the phases' recorded actions in the "
                             "planned order (the baseline)")
+        c.add_argument("--planner", choices=["ompl", "none"], default="ompl",
+                       help="free-space moves (the transit to a reach's start, the far part of a reach or a "
+                            "carry, a retreat after a release) followed for the whole arm in the scene's "
+                            "MuJoCo geometry and, where a link, the gripper or a held object would come near "
+                            "it, planned in joint space by OMPL's RRTConnect ('ompl', default; "
+                            "skillbank[plan]); 'none' drives them as adapted, as 'sim evaluate --planner'")
         c.add_argument("--replan", action="store_true", help="plan again from the observed facts when a "
                                                              "step's effect did not happen")
         c.add_argument("--robot", default="UR5e", metavar="ARM",
@@ -145,7 +151,7 @@ def _composition(args) -> int:
     parallel = parallel_params(args)
     check_options(args.experiment, episodes=args.episodes, seed=args.seed, demos=args.demos,
                   method=args.method, replan=args.replan, robot=args.robot, record_robot=args.record_robot,
-                  **parallel)
+                  planner=args.planner, **parallel)
 
     check_folder(args.out, "out")
     if args.out is not None and os.path.lexists(args.out) and not Path(args.out).is_dir():
@@ -169,6 +175,7 @@ def _composition(args) -> int:
         with _kept(args.out) as folder:
             report = composition_experiment(args.experiment, episodes=args.episodes, seed=args.seed,
                                             demos=args.demos, method=args.method, replan=args.replan,
+                                            planner=args.planner,
                                             progress=progress, robot=args.robot,
                                             record_robot=args.record_robot, verbose=args.verbose,
                                             folder=folder, paths=folder is not None, **parallel)

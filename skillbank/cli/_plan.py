@@ -72,7 +72,10 @@ def add_parser(sub):
     p.add_argument("--planner", choices=["ompl", "none"], default="ompl",
                    help="with --robot: a step whose skill (and transit) cannot keep the robot clear has its "
                         "move planned in joint space by OMPL's RRTConnect, every link, the gripper and the "
-                        "scene checked ('ompl', default; skillbank[plan]); 'none' refuses such a step")
+                        "scene checked ('ompl', default; skillbank[plan]); 'none' refuses such a step. In a "
+                        "robosuite scene (--simulate): free-space moves are planned so in its MuJoCo "
+                        "geometry where the adapted path would bring the arm near it; 'none' drives them "
+                        "as adapted")
     p.add_argument("--motion-time-limit", type=float, default=None, metavar="SECONDS",
                    help="seconds the motion planner may search per transit (default 5)")
     p.add_argument("--out", type=Path, default=None,
@@ -357,7 +360,7 @@ def _plan_physics(args) -> int:
                           seed=0 if args.seed is None else args.seed, goal=goal, method=args.method,
                           replan=args.replan, placement=args.placement, disturb=disturb, search=args.search,
                           paths=args.plot is not None, progress=progress, robot=robot, verbose=args.verbose,
-                          **parallel_params(args))
+                          planner=args.planner, **parallel_params(args))
     written = []
     if args.plot is not None:
         from ..plotting import plot_composed  # matplotlib only when a figure is asked for

@@ -94,6 +94,11 @@ def add_parser(sub):
                    help="how a primitive is adapted: lte (default), ja, promp, elmap or dmp; or a baseline, "
                         "rigid (the recorded segment moved rigidly into the object's new frame) or replay "
                         "(the source's actions, open loop)")
+    e.add_argument("--planner", choices=["ompl", "none"], default="ompl",
+                   help="free-space moves (the far part of a reach or a carry, a retreat after a release) "
+                        "followed for the whole arm in the scene's MuJoCo geometry and, where a link, the "
+                        "gripper or a held object would come near it, planned in joint space by OMPL's "
+                        "RRTConnect ('ompl', default; skillbank[plan]); 'none' drives them as adapted")
     e.add_argument("--horizon", type=int, default=None,
                    help="control steps per episode (20 a second; default: what the library's longest "
                         "demonstration needs, its samples and the executor's waits, at least 1000)")
@@ -128,7 +133,7 @@ def _evaluate(args) -> int:
         report = evaluate(_target(args.db), args.env, episodes=args.episodes, seed=args.seed,
                           placement=args.placement, method=args.method, horizon=args.horizon,
                           order=args.order, progress=tick, robot=args.robot, verbose=args.verbose,
-                          **parallel_params(args))
+                          planner=args.planner, **parallel_params(args))
     if args.json:
         print(json.dumps(report))
         return 0

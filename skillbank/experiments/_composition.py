@@ -33,6 +33,7 @@ from ..simulation._episodes import check_episode_cluster
 from ..simulation._evaluate import DRIVEN_ROBOT
 from ..simulation._robosuite import robosuite_robot
 from ..simulation._stack3 import CUBES
+from ..simulation._transit import check_planner
 
 __all__ = ["composition_experiment", "check_options", "COMPOSITIONS", "PICK", "PLACE"]
 
@@ -53,7 +54,7 @@ LAST_SEED = 2 ** 32 - 1
 
 
 def check_options(name: str, *, episodes, seed, demos, method, replan=False, robot=DRIVEN_ROBOT,
-                  record_robot=DRIVEN_ROBOT, workers=None, scheduler=None) -> dict:
+                  record_robot=DRIVEN_ROBOT, workers=None, scheduler=None, planner="ompl") -> dict:
     """Every option of a composition experiment checked, before anything is recorded; the checked values.
 
     Each is a one-line ValueError naming its own option (``demos``, not ``episodes``), so that a bad
@@ -82,6 +83,7 @@ def check_options(name: str, *, episodes, seed, demos, method, replan=False, rob
     if not isinstance(replan, bool):
         raise ValueError(f"replan: expected True or False, got {replan!r}")
     robot = robosuite_robot(robot)
+    planner = check_planner(planner)
     try:
         record_robot = robosuite_robot(record_robot)
     except ValueError as e:  # the same rule, named by its own option
@@ -90,7 +92,8 @@ def check_options(name: str, *, episodes, seed, demos, method, replan=False, rob
     if isinstance(scheduler, str):
         probe_scheduler(scheduler)  # a cluster out of reach is found before the recordings, not after
     return {"episodes": episodes, "seed": int(seed), "demos": demos, "method": method, "replan": replan,
-            "robot": robot, "record_robot": record_robot, "workers": workers, "scheduler": scheduler}
+            "robot": robot, "record_robot": record_robot, "workers": workers, "scheduler": scheduler,
+            "planner": planner}
 
 
 def _label_one_each(lib) -> dict:
@@ -122,7 +125,8 @@ def _tower_goal(seed) -> list:
 def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demos: int = 10,
                            method: str = "lte", replan: bool = False, folder=None, paths: bool = False,
                            progress=None, robot: str = DRIVEN_ROBOT, record_robot: str = DRIVEN_ROBOT,
-                           workers=None, scheduler=None, verbose: bool = False) -> dict:
+                           workers=None, scheduler=None, verbose: bool = False,
+                           planner: str = "ompl") -> dict:
     """Record, build, label, describe, plan and execute: the whole loop of a composed task.
 
     Parameters
@@ -136,6 +140,9 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
     method : str, default="lte"
         As :func:`~skillbank.simulation.execute_plan`: ``replay`` is the baseline (each phase's recorded
         actions in the planned order, no adaptation).
+    planner : {"ompl", "none"}, default="ompl"
+        As :func:`~skillbank.simulation.execute_plan`: ``"ompl"`` plans the free-space moves for the whole
+        arm where the adapted tool paths would bring it near the scene.
     replan : bool, default=False
         Plan again from the observed facts when a step's effect did not happen.
     folder : path-like, optional
@@ -181,7 +188,8 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
     ValueError: experiment: expected one of ['stack3', 'unload'], got 'dishes'
     """
     checked = check_options(name, episodes=episodes, seed=seed, demos=demos, method=method, replan=replan,
-                            robot=robot, record_robot=record_robot, workers=workers, scheduler=scheduler)
+                            robot=robot, record_robot=record_robot, workers=workers, scheduler=scheduler,
+                            planner=planner)
     episodes, seed, demos = checked["episodes"], checked["seed"], checked["demos"]
     robot, record_robot = checked["robot"], checked["record_robot"]
     tasks, scene = COMPOSITIONS[name]
@@ -211,6 +219,7 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
         report = execute_plan(db, scene, episodes=episodes, seed=first, method=method, replan=replan,
                               goal=_tower_goal if name == "stack3" else None, paths=paths, robot=robot,
                               workers=checked["workers"], scheduler=scheduler, verbose=verbose,
+                              planner=checked["planner"],
                               progress=None if progress is None else
                               (lambda done, successes: progress("episodes", done, episodes, successes)))
         rows = report["per_episode"]
@@ -218,6 +227,7 @@ def composition_experiment(name: str, *, episodes: int = 10, seed: int = 0, demo
     # every episode's report says the same of the arms (one library, one arm): the last one's is kept
     return {"experiment": name, "scene": scene, "robot": report["robot"],
             "recorded_on": report["recorded_on"], "notes": report["notes"], "method": method,
+            "planner": checked["planner"], "timing": report["timing"],
             "seed": int(seed), "demos": demos,
             "episodes": episodes, "successes": successes, "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,

@@ -42,6 +42,7 @@ from ..core._validation import check_positive
 from ..planning import parse_atom, problem_text, skill_domain, solve
 from ..planning._binding import check_binding
 from ..planning._pddl import atoms_of
+from ..robots import MotionPlanningError
 from ..selection import METHODS
 from ..store import open_store
 from ._episodes import check_episode_cluster, fresh, run_episodes
@@ -68,6 +69,7 @@ from ._evaluate import (
 from ._reach import Reach
 from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite, robosuite_robot
 from ._stack3 import CUBES, stack3_class
+from ._transit import check_planner, free_move, transit_timing
 
 __all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
 
@@ -104,6 +106,7 @@ STEP_REASONS = {
     "world changed": "what the plan expects before a step (its facts so far) no longer holds in the scene",
     "no skill": "no demonstration's phase is labelled like the step's action",
     "no plan": "the planner found no plan from the facts observed",
+    "no transit": "with planner 'ompl': no collision-free joint path was found for a free-space move",
 }
 MAX_REPLANS = 3
 TRANSIT_FROM = 0.05  # m: a reach starting farther than this from its demonstration's start goes there first
@@ -470,7 +473,7 @@ def _plan(domain, world, facts, goal, search, name):
 def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=None, method: str = "lte",
                  replan: bool = False, horizon: int = 600, placement=None, disturb=None, search="satisficing",
                  random_state=None, paths: bool = False, progress=None, robot: str = DRIVEN_ROBOT,
-                 workers=None, scheduler=None, verbose: bool = False) -> dict:
+                 workers=None, scheduler=None, verbose: bool = False, planner: str = "ompl") -> dict:
     """Plan a task over the library's described skills and carry it out in ``episodes`` robosuite scenes.
 
     Parameters
@@ -510,6 +513,11 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
         recorded on another arm is refused before anything runs).
     progress : callable, optional
         ``progress(done, successes)`` after each episode.
+    planner : {"ompl", "none"}, default="ompl"
+        ``"ompl"``: free-space moves (the transit to a reach's start, each adapted segment's free span)
+        are followed for the whole arm in the scene's MuJoCo geometry and planned in joint space by
+        OMPL where a link, the gripper or a held object would come near the scene
+        (:mod:`skillbank.simulation._transit`), as :func:`~skillbank.simulation.evaluate`'s.
     workers, scheduler, verbose
         The episodes on Dask, as :func:`~skillbank.simulation.evaluate` runs them: each builds its own
         environment from its seed, and the rows are those of a run in this process, in seed order.
@@ -543,6 +551,7 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     if disturb is not None:
         disturb = _check_disturb(disturb)
     robot = robosuite_robot(robot)
+    planner = check_planner(planner)
     workers = check_episode_cluster(workers, scheduler)  # before the library is read, and no process starts
     store = open_store(library, create=False)
     try:
@@ -566,19 +575,20 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
                          "(skillbank library label DB --primitive ID NAME)")
     job = _PlanJob(spec=spec, name=name, domain=domain, bindings=bindings, phases=phases, goal=goal,
                    method=method, replan=replan, horizon=horizon, placement=placement, disturb=disturb,
-                   search=search, random_state=random_state, paths=paths, robot=robot)
+                   search=search, random_state=random_state, paths=paths, robot=robot, planner=planner)
     # each episode builds its own environment from its seed: the same rows here and on any worker
     results, address = run_episodes(_plan_episode, job, [int(seed) + k for k in range(episodes)],
                                     workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
     rows = [row for row, _ in results]
     timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments", "plan")}
     successes, failures = tally(rows)
-    return {"scene": scene, **arm, "method": method, "seed": int(seed),
+    return {"scene": scene, **arm, "method": method, "seed": int(seed), "planner": planner,
             "placement": placement, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)), "failures": failures,
             "timing": {"plan_seconds": timings["plan"], "adapt_seconds": timings["adapt"],
-                       "driven_seconds": timings["driven"], "segments": timings["segments"]},
+                       "driven_seconds": timings["driven"], "segments": timings["segments"],
+                       **transit_timing(t.get("transits", []) for _, t in results)},
             "per_episode": rows, **({} if address is None else {"scheduler": address})}
 
 
@@ -601,6 +611,7 @@ class _PlanJob:
     random_state: object
     paths: bool
     robot: str = DRIVEN_ROBOT  # robosuite's arm that carries the plan out
+    planner: str = "ompl"  # free-space moves planned for the whole arm (_transit); "none": as adapted
 
 
 def _plan_episode(job, seed):
@@ -617,7 +628,7 @@ def _plan_episode(job, seed):
             _widen(environment, job.placement)
         row = _episode(environment, job.spec, job.name, job.domain, job.bindings, job.phases, seed, goal,
                        job.method, job.replan, job.horizon, job.disturb, job.search, fresh(job.random_state),
-                       job.paths, timings)
+                       job.paths, timings, job.planner)
     finally:
         environment.close()
     return row, timings
@@ -635,7 +646,7 @@ def _check_disturb(disturb):
 
 
 def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, replan, horizon, disturb, search,
-             random_state, paths, timings):
+             random_state, paths, timings, planner="none"):
     _reseed(env, seed)
     obs = env.reset()
     world = _World(env, spec, obs)
@@ -684,7 +695,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
         else:
             starts.append(episode.steps)
             _run_step(episode, world, step, action, args, effects, bindings[act], phases, method, horizon,
-                      random_state, timings)
+                      random_state, timings, planner)
         row["steps"].append(step)
         if step["ok"]:
             expected = _apply(expected, effects)
@@ -729,7 +740,7 @@ def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, repl
 
 
 def _run_step(episode, world, step, action, args, effects, binding, phases, method, horizon, random_state,
-              timings):
+              timings, planner="none"):
     """Carry out one plan step by the nearest phase bound to its arguments; fill ``step``'s facts."""
     chosen = _chosen(episode, phases, action, args, binding)
     if chosen is None:
@@ -746,10 +757,16 @@ def _run_step(episode, world, step, action, args, effects, binding, phases, meth
         # the tool goes back there first, as the demonstrations' robot did, rather than sweep across
         # the scene from where the last step left it
         demo = segments[0].primitive.demo
-        step["transit"] = _transit(episode, np.asarray(demo["position"][0], float),
-                                   np.asarray(demo["orientation"][0], float))
+        try:
+            step["transit"] = _transit(episode, np.asarray(demo["position"][0], float),
+                                       np.asarray(demo["orientation"][0], float), planner=planner,
+                                       random_state=random_state, timings=timings)
+        except MotionPlanningError as error:
+            step.update(ok=False, reason="no transit", detail=str(error).splitlines()[0])
+            return
     misses = []  # the step is judged by its effect, which the world shows, not by where the tool stopped
-    failure = _run_segments(episode, segments, phase.source.actions, method, random_state, timings, misses)
+    failure = _run_segments(episode, segments, phase.source.actions, method, random_state, timings, misses,
+                            planner=planner)
     if misses:
         step["notes"] = misses
     timings["segments"] += len(segments)
@@ -825,14 +842,17 @@ def _beyond(episode, segments) -> int:
     return int((~episode.reach.reaches(P, Q, episode.obs["robot0_joint_pos"])).sum())
 
 
-def _transit(episode, position, quat) -> float:
+def _transit(episode, position, quat, *, planner="none", random_state=None, timings=None) -> float:
     """Move the tool to ``position``, ``quat`` if it is farther than :data:`TRANSIT_FROM`: up by
     :data:`TRANSIT_RISE` above the higher of the two ends, across, and down, each a straight minimum-jerk
     line at most :data:`TRANSIT_SPEED` (the wrist turning on the way across); returns the distance moved.
 
     Rising first takes the arm out of what it has just reached into (a bin's far corner: its forearm
     lies over the bin's wall) before it swings back; the path keeps the arm's reach margin
-    (:class:`~skillbank.simulation._reach.Reach`), so the rise does not straighten the elbow.
+    (:class:`~skillbank.simulation._reach.Reach`), so the rise does not straighten the elbow. With
+    ``planner="ompl"`` the whole move is a free span (:func:`~skillbank.simulation._transit.free_move`):
+    where the arm would come near the scene on it, it is planned in joint space instead (its planning
+    seconds appended to ``timings["transits"]``).
     """
     here_p = np.array(episode.obs["robot0_eef_pos"], float)
     here_q = np.array(episode.obs["robot0_eef_quat"], float)
@@ -855,6 +875,12 @@ def _transit(episode, position, quat) -> float:
     P = np.concatenate(P)
     if episode.reach is not None:
         P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
+    if planner == "ompl":
+        G = np.full(len(P), episode.driver.grip)
+        P, Q, _, report = free_move(episode.env, episode.obs, P, Q, G, (0, len(P) - 1),
+                                    random_state=random_state)
+        if report["planned"] and timings is not None:
+            timings.setdefault("transits", []).append(round(report["seconds"], 4))
     for p, q in zip(P, Q, strict=True):
         if episode.over:
             return round(distance, 4)

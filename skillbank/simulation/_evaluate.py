@@ -49,6 +49,7 @@ from ..core import (
 )
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
+from ..robots import MotionPlanningError
 from ..selection import METHODS, acted_on, compose, object_streams, reuse
 from ..store import open_store
 from ._arms import check_pads, pose_points
@@ -68,6 +69,7 @@ from ._robosuite import (
     robosuite_robot,
 )
 from ._support import fixtures, object_extents, object_symmetry, pad_half_width, support
+from ._transit import check_planner, free_move, free_span, transit_timing
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
 
@@ -83,6 +85,7 @@ REASONS = {
                  "segment that failed (a touch in an episode that succeeds is reported as arm_contact)",
     "unreachable": "the segment's goal could not be adapted to, or the tool ended more than 2 cm from it",
     "timeout": "the episode used up its horizon",
+    "no transit": "with planner 'ompl': no collision-free joint path was found for a free-space move",
     "misplaced": "every segment did what it was for, yet the environment's check fails at the end",
 }
 #: Methods that do not adapt: the baselines.
@@ -998,10 +1001,12 @@ def _check(seg, before, episode):
     return None
 
 
-def _run_segments(episode, segments, actions, method, random_state, timings, misses=None):
+def _run_segments(episode, segments, actions, method, random_state, timings, misses=None, planner="none"):
     """Run ``segments`` (of one source, whose recorded ``actions`` replay uses); ``(index, reason, detail)``
     of the first failure, or None. With a list ``misses``, a tool that stops short of a segment's goal is
-    noted there instead of being a failure."""
+    noted there instead of being a failure. ``planner="ompl"``: each adapted segment's free span is
+    planned for the whole arm where its path would bring a body near the scene
+    (:func:`~skillbank.simulation._transit.free_move`)."""
     let_go = False  # whether the last segment opened the gripper: what follows only leaves
     for i, seg in enumerate(segments):
         if episode.over:
@@ -1030,6 +1035,16 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             if episode.reach is not None:
                 P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"],
                                        need=episode.reach.needed(G, let_go=let_go))
+            if planner == "ompl" and method != "rigid":
+                span = free_span(len(P), G, let_go=let_go, leave=LEAVE[-1], close_in=CLOSE_IN[0])
+                try:
+                    P, Q, G, report = (P, Q, G, None) if span is None else free_move(
+                        episode.env, episode.obs, P, Q, G, span, random_state=random_state,
+                        held=carried if G[span[0]] > 0 else None)
+                except MotionPlanningError as error:
+                    return i, "no transit", str(error).splitlines()[0]
+                if report is not None and report["planned"]:
+                    timings.setdefault("transits", []).append(round(report["seconds"], 4))
             let_go = bool(G[-1] <= 0 < G.max())
             timings["adapt"] += time.perf_counter() - tic
             steps0 = episode.steps
@@ -1136,6 +1151,7 @@ class _Evaluation:
     method: str
     random_state: object
     paths: bool
+    planner: str = "ompl"  # free spans planned for the whole arm (_transit); "none": as adapted
 
 
 def _evaluate_episode(job, seed):
@@ -1170,7 +1186,7 @@ def _evaluate_episode(job, seed):
         for part in runnable:
             source = _nearest(groups[part], episode.obs, episode.fingers)
             failure = _run_segments(episode, source.segments, source.actions, job.method, random_state,
-                                    timings)
+                                    timings, planner=job.planner)
             timings["segments"] += len(source.segments)
             if failure is not None:
                 failure = (len(chain) + failure[0], *failure[1:])
@@ -1209,7 +1225,7 @@ def _evaluate_episode(job, seed):
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
              horizon: int | None = None, order=None, random_state=None, paths: bool = False,
              progress=None, robot: str = DRIVEN_ROBOT, workers=None, scheduler=None,
-             verbose: bool = False) -> dict:
+             verbose: bool = False, planner: str = "ompl") -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -1228,6 +1244,12 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         default centre.
     method : str, default="lte"
         A name of :data:`skillbank.selection.METHODS`, or a baseline of :data:`BASELINES`.
+    planner : {"ompl", "none"}, default="ompl"
+        ``"ompl"``: the free span of each adapted segment (between the part that leaves as its
+        demonstration did and the demonstration's own close-in) is followed for the whole arm in the
+        scene's MuJoCo geometry and, where a link, the gripper or a held object would come near the scene,
+        planned in joint space by OMPL (:mod:`skillbank.simulation._transit`); a move it cannot plan fails
+        the episode with reason ``"no transit"``.
     horizon : int, optional
         Control steps an episode may take (20 per second). Default: what the executor may need to carry
         out the library's longest demonstration of each part (its samples, plus the waits to arrive and
@@ -1288,6 +1310,7 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     if method not in METHODS and method not in BASELINES:
         raise ValueError(f"method: expected one of {sorted(METHODS) + list(BASELINES)}, got {method!r}")
     robot = robosuite_robot(robot)
+    planner = check_planner(planner)
     workers = check_episode_cluster(workers, scheduler)  # before the library is read, and no process starts
     store = open_store(library, create=False)
     try:
@@ -1303,7 +1326,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
     if horizon is None:
         horizon = _horizon(groups)
     job = _Evaluation(task=task, groups=groups, order=order, horizon=horizon, robot=robot,
-                      placement=placement, method=method, random_state=random_state, paths=paths)
+                      placement=placement, method=method, random_state=random_state, paths=paths,
+                      planner=planner)
     # each episode builds its own environment from its seed: the same rows here and on any worker
     results, address = run_episodes(_evaluate_episode, job, [int(seed) + k for k in range(episodes)],
                                     workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
@@ -1320,6 +1344,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
             "placement": placement, "horizon": horizon, "episodes": episodes, "successes": successes,
             "success_rate": successes / episodes,
             "interval": list(binomial_interval(successes, episodes)),
+            "planner": planner,
             "timing": {"adapt_seconds": timings["adapt"], "driven_seconds": timings["driven"],
-                       "segments": timings["segments"]},
+                       "segments": timings["segments"],
+                       **transit_timing(t.get("transits", []) for _, t in results)},
             "per_episode": rows, **({} if address is None else {"scheduler": address})}

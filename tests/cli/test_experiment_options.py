@@ -45,6 +45,7 @@ def test_a_bad_option_is_one_line_before_anything_is_recorded(name, extra, messa
     ({"method": "bogus"}, r"^method: expected one of \[.*'lte'.*'replay'\], got 'bogus'$"),
     ({"seed": 1.0}, r"^seed: expected a non-negative integer, got 1\.0$"),
     ({"replan": "yes"}, r"^replan: expected True or False, got 'yes'$"),
+    ({"planner": "rrt"}, r"^planner: expected one of \['ompl', 'none'\], got 'rrt'$"),
 ])
 def test_the_api_checks_them_first_too(options, match, no_recording, tmp_path):
     kwargs = {"episodes": 2, "seed": 0, "demos": 1, "method": "lte", **options}
@@ -58,7 +59,7 @@ def test_the_api_checks_them_first_too(options, match, no_recording, tmp_path):
 def test_good_options_come_back_checked():
     assert check_options("unload", episodes=3, seed=5, demos=2, method="replay") == {
         "episodes": 3, "seed": 5, "demos": 2, "method": "replay", "replan": False, "workers": None,
-        "scheduler": None, "robot": "UR5e", "record_robot": "UR5e"}
+        "scheduler": None, "robot": "UR5e", "record_robot": "UR5e", "planner": "ompl"}
 
 
 @pytest.mark.parametrize("seed", ["-1", str(2 ** 32)])

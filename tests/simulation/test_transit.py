@@ -1,0 +1,146 @@
+"""Free-space moves planned for the whole arm in a robosuite scene's own MuJoCo geometry (issue 43)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("robosuite")
+pytest.importorskip("ompl")
+
+from skillbank.robots import MotionPlanningError  # noqa: E402
+from skillbank.simulation._evaluate import _Episode, _make  # noqa: E402
+from skillbank.simulation._robosuite import import_robosuite  # noqa: E402
+from skillbank.simulation._transit import ArmScene, free_move, free_span, plan_transit  # noqa: E402
+
+# two corners of PickPlace's second bin, low enough that a straight move between them takes the fingers
+# through the bin's dividers (their tops at z = 0.9 m)
+A, B = np.array([0.0, 0.15, 0.88]), np.array([0.2, 0.41, 0.88])
+
+
+@pytest.fixture(scope="module")
+def env():
+    environment = _make(import_robosuite(), "PickPlace", 900, 10 ** 6)
+    yield environment
+    environment.close()
+
+
+def _line(a, b, quat, n=40):
+    P = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
+    return P, np.tile(quat, (n, 1)), np.full(n, -1.0)
+
+
+def _touches(env) -> list:
+    """The robot's (arm's or gripper's) geoms touching anything else now, by name."""
+    m, d = env.sim.model, env.sim.data._data
+    names = [m.geom_id2name(i) or m.body_id2name(m.geom_bodyid[i]) for i in range(m.ngeom)]
+    robot = np.array([n.startswith(("robot0_", "gripper0_")) for n in names])
+    g1, g2 = d.contact.geom1[:d.ncon], d.contact.geom2[:d.ncon]
+    return [f"{names[a]}/{names[b]}" for a, b in zip(g1, g2, strict=True) if robot[a] != robot[b]]
+
+
+def _drive(episode, P, Q):
+    touched = []
+    for p, q in zip(P, Q, strict=True):
+        episode.step(p, q, -1.0)
+        touched += _touches(episode.env)
+    episode.settle(P[-1], Q[-1])
+    return touched
+
+
+def _run(env, planner, seed=0):
+    """Reset, go to A (planned), then A -> B straight or planned: (touches on A -> B, report, tool end)."""
+    obs = env.reset()
+    episode = _Episode(env, obs, 10 ** 6)
+    quat = np.array(obs["robot0_eef_quat"], float)
+    P, Q, G = _line(np.array(obs["robot0_eef_pos"], float), A + [0, 0, 0.03], quat)
+    P, Q, G, _ = free_move(env, episode.obs, P, Q, G, (0, len(P) - 1), random_state=seed)
+    _drive(episode, P, Q)
+    P, Q, G = _line(A + [0, 0, 0.03], A, quat, n=20)
+    _drive(episode, P, Q)
+    assert not _touches(env)
+    P, Q, G = _line(np.array(episode.obs["robot0_eef_pos"], float), B, quat)
+    report = None
+    if planner == "ompl":
+        P, Q, G, report = free_move(env, episode.obs, P, Q, G, (0, len(P) - 1), random_state=seed)
+    return _drive(episode, P, Q), report, np.array(episode.obs["robot0_eef_pos"], float)
+
+
+def test_a_straight_move_that_hits_the_bin_is_planned_clear(env):
+    touched, _, _ = _run(env, "none")
+    assert any("bin2" in t for t in touched)  # today's straight move: the fingers hit the divider
+    touched, report, end = _run(env, "ompl")
+    assert report["planned"] and report["samples"] > 0
+    assert touched == []
+    assert np.linalg.norm(end - B) < 0.01  # and it still arrives
+
+
+def test_the_plan_is_deterministic_and_clear_at_every_checked_state(env):
+    env.reset()
+    scene = ArmScene(env)
+    q0 = np.array(env.sim.data.qpos[scene.qadr], float)
+    quat = scene.tool(q0)[1]
+    qa, qb = scene.ik(A, quat, q0), None
+    qb = scene.ik(B, quat, qa)
+    assert scene.blocking(qa) is None and scene.blocking(qb) is None
+    assert not scene.motion_clear(qa, qb)  # straight in joint space it hits the divider too
+    J1, _ = plan_transit(scene, qa, qb, random_state=3)
+    J2, _ = plan_transit(scene, qa, qb, random_state=3)
+    np.testing.assert_array_equal(J1, J2)
+    assert np.allclose(J1[0], qa) and np.allclose(J1[-1], qb)
+    assert all(scene.motion_clear(a, b) for a, b in zip(J1[:-1], J1[1:], strict=True))
+
+
+def test_a_blocked_goal_is_one_line_naming_the_obstacle(env):
+    env.reset()
+    scene = ArmScene(env)
+    q0 = np.array(env.sim.data.qpos[scene.qadr], float)
+    quat = scene.tool(q0)[1]
+    inside = scene.ik([0.1, 0.28, 0.86], quat, q0)  # the fingers down through the divider's crossing
+    with pytest.raises(MotionPlanningError, match=r"^transit planning: the goal \[.*\] is not clear: "
+                                                  r"gripper0_\w+ comes .* bin2 \(geom \d+\)") as error:
+        plan_transit(scene, q0, inside, random_state=0)
+    assert "\n" not in str(error.value)
+
+
+def test_a_held_object_moves_with_the_hand_and_is_checked(env):
+    obs = env.reset()
+    scene = ArmScene(env, held="Can")  # as if the can sat where it is, rigidly in the hand
+    q0 = np.array(obs["robot0_joint_pos"], float)
+    assert any(scene.names[g].startswith("Can") for g in np.flatnonzero(scene.moving))
+    p, quat = scene.tool(q0)
+    can = np.array(obs["Can_pos"], float)
+    q = scene.ik(p + [0.0, 0.0, 0.05], quat, q0)
+    scene.set(q)
+    body = scene.model.body("Can_main").id
+    np.testing.assert_allclose(scene.data.xpos[body], can + [0.0, 0.0, 0.05], atol=1e-3)
+    with pytest.raises(ValueError, match="held: the scene has no object 'Mug'"):
+        ArmScene(env, held="Mug")
+
+
+def test_free_span_is_decided_by_the_gripper_and_the_phases():
+    assert free_span(41, [-1] * 20 + [1] * 21) == (10, 20)  # a reach: up to its close-in
+    assert free_span(41, [-1] * 41, let_go=True) == (10, 40)  # a retreat after a release: to its end
+    assert free_span(5, [-1] * 5) is None
+
+
+@pytest.mark.parametrize("run", ["evaluate", "execute_plan"])
+def test_a_planner_not_known_is_refused_before_the_library_is_read(tmp_path, run):
+    from skillbank import simulation
+
+    scene = "robosuite:Lift" if run == "evaluate" else "robosuite:PickPlace"
+    with pytest.raises(ValueError, match=r"^planner: expected one of \['ompl', 'none'\], got 'rrt'$"):
+        getattr(simulation, run)(tmp_path / "absent.db", scene, planner="rrt")
+
+
+def test_a_clear_span_and_one_beyond_reach_are_driven_as_adapted(env):
+    obs = env.reset()
+    quat = np.array(obs["robot0_eef_quat"], float)
+    here = np.array(obs["robot0_eef_pos"], float)
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)  # high over the bins: nothing near
+    P2, Q2, G2, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
+    assert report["why"] == "clear" and not report["planned"]
+    assert P2 is P and Q2 is Q and G2 is G
+    P, Q, G = _line(here, here + [2.0, 0.0, 0.0], quat)  # two metres out: the arm follows it part way
+    P2, _, _, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
+    assert report["why"].startswith("clear to sample") and P2 is P
