@@ -716,18 +716,20 @@ def _object_goal(seg, obs) -> np.ndarray:
     return end
 
 
-def _aimed(seg, obs, p) -> np.ndarray:
-    """How far to shift the tool's last stretch, which ends at ``p`` where the carried object is let go,
-    so that the object comes down where the segment's frame says, as the object sits in the hand now.
+def _aimed(obs, obj, held, p, q) -> np.ndarray:
+    """How far to shift the tool's last stretch, which lets the carried ``obj`` go at the pose ``p``, ``q``,
+    so that the object comes down where the path put it, as the object sits in the hand now.
 
-    A held object turns and slides a little in the fingers while the wrist turns and the arm brakes (a
-    nut hanging from its handle pivots by degrees, a centimetre at its centre); the path was planned
-    for where it sat when the carry began. The frame is read again too (a target that moved).
+    The path was planned with the object at ``held`` in the tool's frame (where it sat when the carry
+    began). A held object turns and slides a little in the fingers while the wrist turns and the arm
+    brakes (a nut hanging from its handle pivots by degrees, a centimetre at its centre): the shift is
+    where the path meant the object to be let go less where it would be, as it sits now, with the tool
+    at ``p``. The aim is the path's own, whichever executor chose its goal (a skill's frame in ``sim
+    evaluate``, a plan step's binding in a composed task).
     """
-    obj = seg.scene(seg.relation.object)
     tool = np.asarray(obs["robot0_eef_pos"], float)
     there = np.asarray(obs[f"{obj}_pos"], float) + (np.asarray(p, float) - tool)
-    return _object_goal(seg, obs) - there
+    return np.asarray(p, float) + quaternion_to_matrix(np.asarray(q, float)) @ held - there
 
 
 def _about_vertical(v, angle) -> np.ndarray:
@@ -1049,12 +1051,18 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             timings["adapt"] += time.perf_counter() - tic
             steps0 = episode.steps
             shift = np.zeros(3)
+            held = None  # where the carried object sits in the tool's frame as the path was planned
+            if _carries(seg.relation) and method != "rigid":
+                obj = seg.scene(seg.relation.object)
+                here = episode.obs
+                held = quaternion_to_matrix(np.asarray(here["robot0_eef_quat"], float)).T @ (
+                    np.asarray(here[f"{obj}_pos"], float) - np.asarray(here["robot0_eef_pos"], float))
             for p, q, g in zip(P, Q, G, strict=True):
                 if episode.over:
                     break
-                if g != episode.driver.grip and g <= 0 and _carries(seg.relation) and method != "rigid":
+                if g != episode.driver.grip and g <= 0 and held is not None:
                     # about to let go of what it carries: aimed again from where it sits in the hand now
-                    shift = _aimed(seg, episode.obs, p)
+                    shift = _aimed(episode.obs, obj, held, p, q)
                 p = p + shift
                 if g != episode.driver.grip:
                     # the gripper acts where the path says, once the tool is there: the controller trails

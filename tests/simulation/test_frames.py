@@ -244,22 +244,22 @@ def test_a_place_turns_the_tool_so_the_object_ends_as_it_did_whatever_the_grasp(
 
 def test_a_carry_is_aimed_again_from_where_the_object_sits_in_the_hand_before_letting_go():
     """The cube slid 1 cm in the fingers on the way: at the release, the tool's last stretch is shifted so
-    that the cube, not the tool, comes down where the demonstration put it (a fixed place in the world);
-    a target that moved is followed too."""
+    that the cube, not the tool, comes down where the path meant to let it go (planned with the cube 1 cm
+    below the tool); the wrist's turn at the release turns where the path meant it with it."""
     from skillbank.simulation._evaluate import _aimed
 
-    n = 30
-    cube0, place = np.array([0.0, 0.0, 0.83]), np.array([0.2, 0.1, 0.9])
-    cube = cube0 + np.linspace(0.0, 1.0, n)[:, None] * (place - cube0)
-    prim = _primitive(cube + [0.0, 0.0, 0.01], cube, 0.0, 0.0, 0)
-    seg = _Segment(prim, acted_on(prim.demo), ("world",), ("world",), 1, released=True)
+    place = np.array([0.2, 0.1, 0.9])
+    held = np.array([0.0, 0.0, 0.01])  # 1 cm below the tool pointing down (its z is the world's -z)
     tool = place + [0.0, 0.0, 0.05]  # on its way down, 4 cm above where it lets go
-    p = place + [0.0, 0.0, 0.01]  # the path's release point, planned with the cube 1 cm below the tool
-    obs = {"robot0_eef_pos": tool, "robot0_eef_quat": DOWN, "cube_pos": tool + [0.01, 0.0, -0.01],
-           "cube_quat": np.array([0.0, 0.0, 0.0, 1.0])}
-    np.testing.assert_allclose(_aimed(seg, obs, p), [-0.01, 0.0, 0.0], atol=1e-12)
+    p = place + [0.0, 0.0, 0.01]  # the path's release point
+    obs = {"robot0_eef_pos": tool, "robot0_eef_quat": DOWN, "cube_pos": tool + [0.01, 0.0, -0.01]}
+    np.testing.assert_allclose(_aimed(obs, "cube", held, p, DOWN), [-0.01, 0.0, 0.0], atol=1e-12)
     obs["cube_pos"] = tool + [0.0, 0.0, -0.01]  # where the plan had it: no shift
-    np.testing.assert_allclose(_aimed(seg, obs, p), 0.0, atol=1e-12)
+    np.testing.assert_allclose(_aimed(obs, "cube", held, p, DOWN), 0.0, atol=1e-12)
+    # held 2 cm along the tool's x, the release a quarter turn round: the path meant it 2 cm along y
+    side = np.array([0.02, 0.0, 0.0])
+    obs["cube_pos"] = tool + [0.0, 0.02, 0.0]  # already turned as the path turns it
+    np.testing.assert_allclose(_aimed(obs, "cube", side, p, _yawed(DOWN, math.pi / 2)), 0.0, atol=1e-12)
 
 
 @pytest.mark.parametrize(("offset", "pad", "expected"), [(0.0275, 0.01, 0.01), (0.0275, 0.008, 0.012),
