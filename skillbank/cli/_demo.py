@@ -50,6 +50,8 @@ def run(args) -> int:
                 continue
             print(f"composed in physics, experiment {name}: {r['successes']}/{r['episodes']} by robosuite's "
                   f"check ({r['command']}; {r['figure']})")
+            if r.get("why"):
+                print(f"  failed: {r['why']}")
         if summary.get("view"):
             print(f"the library's web view: open {summary['view']}")
         print(f"figures and summary written to {summary['out']}")

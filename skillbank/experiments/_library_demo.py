@@ -248,7 +248,7 @@ def _markdown(result, rows, reuses, seg) -> str:
         for name, r in composed.items():
             lines += [f"- `{r['command']}`: {r['successes']}/{r['episodes']} by the environment's check; "
                       f"first plan {' '.join(r['plans'][0])}" +
-                      (f"; failures {r['failures']}" if r["failures"] else ""),
+                      (f"; failures {r['failures']}; first: {r['why']}" if r.get("why") else ""),
                       "", f"![{name}](composed/{Path(r['figure']).name})", ""]
     if seg is not None:
         lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
@@ -344,6 +344,23 @@ def _build_and_reuse(lib, out: Path, data, random_state, step) -> tuple:
     return rows, source, features, figures, reuses, lib.summary(), pages
 
 
+def _why(rows) -> str | None:
+    """One line on the first episode of ``rows`` that failed: its seed, the plan step and what the world
+    showed; None when none failed.
+
+    >>> _why([{"seed": 3, "success": False, "failure": {"step": 2, "reason": "missed grasp",
+    ...                                                "detail": "Cereal stayed where it was"}}])
+    'seed 3, step 2: missed grasp (Cereal stayed where it was)'
+    """
+    for row in rows:
+        failure = row.get("failure")
+        if not row.get("success") and failure:
+            step = f", step {failure['step']}" if failure.get("step") is not None else ""
+            detail = " ".join(str(failure.get("detail", "")).split())
+            return f"seed {row['seed']}{step}: {failure['reason']}" + (f" ({detail})" if detail else "")
+    return None
+
+
 def _composed(out: Path, seed) -> dict:
     """A short run of ``experiment stack3`` and ``experiment unload``: three demonstrations per task, two
     and one scenes; each with the figure of its first episode. Empty without robosuite."""
@@ -365,7 +382,7 @@ def _composed(out: Path, seed) -> dict:
             row.pop("path", None)
         done[name] = {"successes": report["successes"], "episodes": report["episodes"],
                       "failures": report["failures"], "plans": [r["plan"] for r in report["per_episode"]],
-                      "figure": str(figure),
+                      "why": _why(report["per_episode"]), "figure": str(figure),
                       "command": f"skillbank experiment {name} --episodes {episodes} --demos 3 "
                                  f"--seed {seed or 0}"}
     return done
