@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from ._library_location import _DB_READ, _location, _open, _target
@@ -91,8 +93,15 @@ def _serve(args, size: int) -> int:
             print(json.dumps({"url": server.url, "library": str(args.db)}), flush=True)
         else:
             print(f"{args.db}: serving its view read-only at {server.url} (Ctrl-C stops)", flush=True)
+        # Ctrl-C stops it whatever the process inherited: started by one that ignores SIGINT (a pytest-xdist
+        # worker, a shell's background job), Python installs no handler of its own and it would never stop
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler) \
+            if threading.current_thread() is threading.main_thread() else None
         try:
             server.serve_forever()
         except KeyboardInterrupt:
             print("stopped", file=sys.stderr)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
     return 0

@@ -350,8 +350,10 @@ def test_a_missing_library_is_one_line(cli, tmp_path):
 def test_the_command_serves_until_interrupted(view_library):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     argv = ["library", "view", str(view_library["path"]), "--serve", "0", "--json"]  # the host: 127.0.0.1
+    # started with SIGINT ignored (by a pytest-xdist worker, a shell's background job): Ctrl-C still stops it
     proc = subprocess.Popen([sys.executable, "-m", "skillbank.cli", *argv], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, stdin=subprocess.DEVNULL)
+                            stderr=subprocess.PIPE, text=True, env=env, stdin=subprocess.DEVNULL,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     try:
         doc = json.loads(proc.stdout.readline())
         assert doc["url"].startswith("http://127.0.0.1:")
