@@ -19,6 +19,19 @@ def _path(dims: int, k: int) -> Demonstration:
     return Demonstration.from_array(np.column_stack(cols), t)
 
 
+def _csvs(folder, names):
+    """CSV recordings written in ``folder`` by name: ``a`` and ``b`` 3-D paths, ``flat`` a 2-D one."""
+    t = np.linspace(0.0, 1.0, 60)
+    columns = {"a": [t, t, 0.2 * t], "flat": [t, t], "b": [t, 0.5 * t, 0.1 * t]}
+    files = []
+    for name in names:
+        files.append(folder / f"{name}.csv")
+        header = "t," + ",".join(f"position_{i}" for i in range(len(columns[name])))
+        np.savetxt(files[-1], np.column_stack([t, *columns[name]]), delimiter=",", header=header,
+                   comments="")
+    return files
+
+
 @pytest.mark.parametrize("how", ["add", "add_many", "add_files"])
 def test_a_2d_demonstration_in_a_3d_library_leaves_it_unchanged(new_library, library_content, tmp_path, how):
     db = new_library()
@@ -99,12 +112,7 @@ def test_a_parallel_add_refuses_it_before_it_writes(tmp_path, library_content):
     with Library(db) as lib:
         lib.add_many([_path(3, k) for k in range(3)], segment=False, assign="recluster")
     before = library_content(db)
-    t = np.linspace(0.0, 1.0, 60)
-    files = []
-    for name, cols in [("a", [t, t, 0.2 * t]), ("flat", [t, t])]:
-        files.append(tmp_path / f"{name}.csv")
-        header = "t," + ",".join(f"position_{i}" for i in range(len(cols)))
-        np.savetxt(files[-1], np.column_stack([t, *cols]), delimiter=",", header=header, comments="")
+    files = _csvs(tmp_path, ["a", "flat"])
     with Library(db) as lib, pytest.raises(ValueError, match=r"4 primitive\(s\) are 3-D \(1 of them being "
                                                              r"added\), 1 are 2-D \(1 being added\); .*; "
                                                              r"nothing was added$"):
@@ -116,12 +124,7 @@ def test_keep_going_sets_the_other_dimension_aside_and_adds_the_rest(tmp_path):
     db = tmp_path / "lib.db"
     with Library(db) as lib:
         lib.add_many([_path(3, k) for k in range(3)], segment=False, assign="recluster")
-    t = np.linspace(0.0, 1.0, 60)
-    files = []
-    for name, cols in [("a", [t, t, 0.2 * t]), ("flat", [t, t]), ("b", [t, 0.5 * t, 0.1 * t])]:
-        files.append(tmp_path / f"{name}.csv")
-        header = "t," + ",".join(f"position_{i}" for i in range(len(cols)))
-        np.savetxt(files[-1], np.column_stack([t, *cols]), delimiter=",", header=header, comments="")
+    files = _csvs(tmp_path, ["a", "flat", "b"])
     with Library(db) as lib:
         report = lib.add_files(files, segment=False, assign="recluster", keep_going=True)
         assert report["failed"] == {str(files[1]): "its positions are 2-D, the library's are 3-D: one "
@@ -135,12 +138,7 @@ def test_a_parallel_keep_going_add_sets_it_aside_too(tmp_path):
     db = tmp_path / "lib.db"
     with Library(db) as lib:
         lib.add_many([_path(3, k) for k in range(3)], segment=False, assign="recluster")
-    t = np.linspace(0.0, 1.0, 60)
-    files = []
-    for name, cols in [("a", [t, t, 0.2 * t]), ("flat", [t, t]), ("b", [t, 0.5 * t, 0.1 * t])]:
-        files.append(tmp_path / f"{name}.csv")
-        header = "t," + ",".join(f"position_{i}" for i in range(len(cols)))
-        np.savetxt(files[-1], np.column_stack([t, *cols]), delimiter=",", header=header, comments="")
+    files = _csvs(tmp_path, ["a", "flat", "b"])
     with Library(db) as lib:
         report = lib.add_files(files, workers=1, segment=False, assign="recluster", keep_going=True)
         assert report["failed"] == {str(files[1]): "its positions are 2-D, the library's are 3-D: one "
