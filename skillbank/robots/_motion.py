@@ -177,6 +177,133 @@ def _seed(random_state) -> int:
     return int(np.random.default_rng(int(random_state)).integers(1, 2 ** 31 - 1))
 
 
+def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN, planner="RRTConnect",
+               step=STEP, time_limit=MOTION_TIME_LIMIT, simplify_time=SIMPLIFY_TIME, random_state=None):
+    """A joint path from one of ``starts`` to one of ``goals`` found by OMPL and shortened by its simplifier:
+    the one OMPL set-up of :func:`plan_motion` and of the simulation's transits, whatever checks them.
+
+    Parameters
+    ----------
+    limits : array-like of shape (n_joints, 2)
+        The joints' lower and upper limits.
+    starts, goals : ndarray of shape (k, n_joints)
+        Clear configurations, within the limits, of which any one will do; the path starts and ends on
+        ones given, exactly.
+    state_ok : callable
+        ``state_ok(q) -> bool``: the configuration ``q (n_joints,)`` is clear.
+    motion_ok : callable
+        ``motion_ok(q_a, q_b) -> bool``: the straight joint-space motion from ``q_a`` to ``q_b`` is clear
+        (checked whole: OMPL's own validator, which samples at a resolution, is not used).
+    failure : callable
+        ``failure() -> str``: the one-line message of the error raised when no path is found; called after
+        the search, so that it can name what the checks ran into.
+    span : float, default=SPAN
+        Radians beyond the range of the starts and goals that a joint may take in the search (within the
+        limits).
+    planner : str, default="RRTConnect"
+        The class name of an OMPL geometric planner.
+    step : float, default=STEP
+        The longest motion (rad) the search grows by, for planners that take one (OMPL's range).
+    time_limit : float, default=MOTION_TIME_LIMIT
+        Seconds the search may take.
+    simplify_time : float, default=SIMPLIFY_TIME
+        Seconds OMPL's simplifier may take; 0: the path as the search found it.
+    random_state : int, optional
+        Seeds OMPL's random numbers (:func:`_seed`): the same seed and checks, the same path.
+
+    Returns
+    -------
+    joints : ndarray of shape (n, n_joints)
+        The waypoints, joined by straight motions each of which ``motion_ok`` allowed.
+    planning_time, simplify_time : float
+        Seconds the search took, and the simplification with the choice of ends.
+
+    Raises
+    ------
+    MotionPlanningError
+        ``failure()``: no path within the time limit.
+    ImportError
+        OMPL is not installed (one line naming the extra).
+    """
+    ob, og, ou = _ompl()
+    ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
+    ou.RNG.setSeed(_seed(random_state))  # before the planner's samplers exist: they draw their seeds from it
+    lo, hi = np.asarray(limits, dtype=float).T
+    n = len(lo)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    both = np.concatenate([starts, goals])
+    # within the limits and ``span`` beyond the range of the ends: no joint winds round further
+    low = np.maximum(lo, both.min(axis=0) - span)
+    high = np.minimum(hi, both.max(axis=0) + span)
+    for j in range(n):
+        bounds.setLow(j, float(low[j]))
+        bounds.setHigh(j, float(max(high[j], low[j] + 1e-9)))  # OMPL refuses an empty range
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+
+    def array(state):
+        return np.fromiter((state[j] for j in range(n)), dtype=float, count=n)
+
+    def valid(state):
+        return state_ok(array(state))
+
+    class _Motion(ob.MotionValidator):  # the caller's check, one call per motion
+        def checkMotion(self, s1, s2, *last):
+            return motion_ok(array(s1), array(s2))
+
+    si.setStateValidityChecker(valid)
+    validator = _Motion(si)  # held here for as long as OMPL calls it
+    si.setMotionValidator(validator)
+    si.setup()
+    pdef = ob.ProblemDefinition(si)
+
+    def state(q):
+        out = si.allocState()
+        for j in range(n):
+            out[j] = float(q[j])
+        return out
+
+    # any start will do (a first step's pose), and any goal (every branch and turn of a pose)
+    for q in starts:
+        pdef.addStartState(state(q))
+    ends = ob.GoalStates(si)
+    for q in goals:
+        ends.addState(state(q))
+    pdef.setGoal(ends)
+    search = getattr(og, planner)(si)
+    if hasattr(search, "setRange"):  # the longest motion a tree grows by: short ones are cheap to check
+        search.setRange(float(step))
+    search.setProblemDefinition(pdef)
+    search.setup()
+    t0 = _time.perf_counter()
+    search.solve(float(time_limit))
+    planning_time = _time.perf_counter() - t0
+    if not pdef.hasExactSolution():
+        raise MotionPlanningError(failure())
+    path = pdef.getSolutionPath()
+    Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
+    # the start and the goal reached, exactly (not to round-off)
+    Q[0] = starts[np.argmin(np.abs(starts - Q[0]).max(axis=1))]
+    Q[-1] = goals[np.argmin(np.abs(goals - Q[-1]).max(axis=1))]
+    t1 = _time.perf_counter()
+
+    def pair_ok(pair):
+        return motion_ok(pair[0], pair[1])
+
+    Q = _nearer_ends(Q, starts, goals, pair_ok)
+    if simplify_time > 0:
+        path = og.PathGeometric(si)
+        for q in Q:
+            path.append(state(q))
+        og.PathSimplifier(si).simplify(path, float(simplify_time))
+        kept = Q[[0, -1]]
+        Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
+        Q[0], Q[-1] = kept  # the simplifier keeps the ends: exactly, not to round-off
+        Q = _nearer_ends(Q, starts, goals, pair_ok)
+    return Q, planning_time, _time.perf_counter() - t1
+
+
 def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace=None, held=None,
                 margin=0.005, ignore=(), self_collision=True, planner="rrtconnect",
                 time_limit=MOTION_TIME_LIMIT, max_move=PLANNER_MAX_MOVE, span=SPAN,
@@ -285,26 +412,8 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
 
     Q0, Q1 = clear("start", Q0), clear("goal", Q1)
     q0, q1 = Q0[0], Q1[0]
-    ob, og, ou = _ompl()
-    ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
-    ou.RNG.setSeed(_seed(random_state))  # before the planner's samplers exist: they draw their seeds from it
-
-    n = model.n_joints
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    both = np.concatenate([Q0, Q1])
-    low = np.maximum(lo, both.min(axis=0) - span)
-    high = np.minimum(hi, both.max(axis=0) + span)
-    for j in range(n):
-        bounds.setLow(j, float(low[j]))
-        bounds.setHigh(j, float(high[j] if high[j] > low[j] else low[j] + 1e-9))
-    space.setBounds(bounds)
-    si = ob.SpaceInformation(space)
     blocked = {}  # what the failed checks ran into: other -> [count, distance, body, q]
     checked = [0]
-
-    def array(state):
-        return np.fromiter((state[j] for j in range(n)), dtype=float, count=n)
 
     def measure(Q):
         checked[0] += 1
@@ -328,40 +437,7 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
             seen[1:] = [res.min_distance, res.body, Q[res.index]]
         return False
 
-    def valid(state):
-        return measure(array(state)[None])
-
-    class _Motion(ob.MotionValidator):  # one vectorised, densified clearance call per motion
-        def checkMotion(self, s1, s2, *last):
-            return measure(np.stack([array(s1), array(s2)]))
-
-    si.setStateValidityChecker(valid)
-    validator = _Motion(si)
-    si.setMotionValidator(validator)
-    si.setup()
-    pdef = ob.ProblemDefinition(si)
-
-    def state(q):
-        out = si.allocState()
-        for j in range(n):
-            out[j] = float(q[j])
-        return out
-
-    for q in Q0:  # any start will do (a first step's pose), and any goal (every branch and turn of a pose)
-        pdef.addStartState(state(q))
-    goals = ob.GoalStates(si)
-    for q in Q1:
-        goals.addState(state(q))
-    pdef.setGoal(goals)
-    search = getattr(og, _OMPL_NAMES[planner])(si)
-    if hasattr(search, "setRange"):  # the longest motion a tree grows by: short ones are cheap to check
-        search.setRange(float(step))
-    search.setProblemDefinition(pdef)
-    search.setup()
-    t0 = _time.perf_counter()
-    search.solve(float(time_limit))
-    planning_time = _time.perf_counter() - t0
-    if not pdef.hasExactSolution():
+    def failure():
         if not blocked:
             why = "no configuration it reached came near anything: the search ran out of time"
         else:
@@ -370,27 +446,14 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
             why = (f"blocked by {label(other)} ({count} of the {checked[0]} motions checked ran into it; "
                    f"the robot's {body} came {depth} it at {where(q)})")
         others = [f" (or {len(Q) - 1} other configuration(s))" if len(Q) > 1 else "" for Q in (Q0, Q1)]
-        raise MotionPlanningError(
-            f"motion planning: no collision-free path from {where(q0)}{others[0]} to {where(q1)}{others[1]} "
-            f"found by OMPL "
-            f"{_OMPL_NAMES[planner]} in {time_limit:g} s: {why} (clearance margin {margin * 1000:g} mm)")
-    path = pdef.getSolutionPath()
-    Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
-    # the start and the goal reached, exactly (not to round-off)
-    Q[0] = Q0[np.argmin(np.abs(Q0 - Q[0]).max(axis=1))]
-    Q[-1] = Q1[np.argmin(np.abs(Q1 - Q[-1]).max(axis=1))]
-    t1 = _time.perf_counter()
-    Q = _nearer_ends(Q, Q0, Q1, measure)
-    if simplify_time > 0:
-        path = og.PathGeometric(si)
-        for q in Q:
-            path.append(state(q))
-        og.PathSimplifier(si).simplify(path, float(simplify_time))
-        ends = Q[[0, -1]]
-        Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
-        Q[0], Q[-1] = ends  # the simplifier keeps the ends: exactly, not to round-off
-        Q = _nearer_ends(Q, Q0, Q1, measure)
-    spent = _time.perf_counter() - t1
+        return (f"motion planning: no collision-free path from {where(q0)}{others[0]} to "
+                f"{where(q1)}{others[1]} found by OMPL {_OMPL_NAMES[planner]} in {time_limit:g} s: {why} "
+                f"(clearance margin {margin * 1000:g} mm)")
+
+    Q, planning_time, spent = _ompl_path(
+        model.limits, Q0, Q1, lambda q: measure(q[None]), lambda a, b: measure(np.stack([a, b])),
+        failure=failure, span=span, planner=_OMPL_NAMES[planner], step=step, time_limit=time_limit,
+        simplify_time=simplify_time, random_state=random_state)
     q0, q1 = Q[0], Q[-1]
     final = clearance(robot, Q, **world)
     if final.min_distance < margin:  # never a silent success: the bound says this cannot happen

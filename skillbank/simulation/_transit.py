@@ -12,9 +12,10 @@ whole arm, and where any body would come near the scene it is replaced by a plan
   least-squares inverse kinematics to the pose robosuite reports (``robot0_eef_pos`` /
   ``robot0_eef_quat``).
 - :func:`plan_transit` searches with OMPL's RRTConnect (BSD-3-Clause, the planners MoveIt uses; extra
-  ``plan``, set up as :func:`skillbank.robots.plan_motion` sets it up), every motion densified so that no
-  joint turns more than :data:`JOINT_STEP` between checked states, then shortened by OMPL's simplifier,
-  within a time bound; a failure is one line naming the start, the goal and the geom that blocks.
+  ``plan``, set up by ``skillbank.robots._motion._ompl_path`` as for :func:`skillbank.robots.plan_motion`),
+  every motion densified so that no joint turns more than :data:`JOINT_STEP` between checked states, then
+  shortened by OMPL's simplifier, within a time bound; a failure is one line naming the start, the goal
+  and the geom that blocks.
 - :func:`free_move` takes a tool path and the span of it that is free space, follows it with inverse
   kinematics from the arm's joints and, only where that would bring a body within the margin, replaces
   the span by the planned path's tool poses (forward kinematics at the control rate, minimum-jerk in
@@ -32,7 +33,7 @@ import time as _time
 
 import numpy as np
 
-from ..robots._motion import MotionPlanningError, _ompl, _seed
+from ..robots._motion import MotionPlanningError, _ompl, _ompl_path
 from ._arm_scene import JOINT_STEP, MARGIN, ArmScene, _where
 from ._robosuite import CONTROL_FREQ
 
@@ -131,76 +132,34 @@ def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time
     tic = _time.perf_counter()
     if scene.motion_clear(q0, q1):
         return np.stack([q0, q1]), _time.perf_counter() - tic
-    ob, og, ou = _ompl()
-    ou.setLogLevel(ou.LOG_NONE)  # OMPL's own output is not ours to print; failures are raised below
-    ou.RNG.setSeed(_seed(random_state))
-    n = len(q0)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    # within the limits and half a turn beyond the span of the two ends: no joint winds round
-    low = np.maximum(scene.limits[:, 0], np.minimum(q0, q1) - np.pi / 2)
-    high = np.minimum(scene.limits[:, 1], np.maximum(q0, q1) + np.pi / 2)
-    for j in range(n):
-        bounds.setLow(j, float(low[j]))
-        bounds.setHigh(j, float(max(high[j], low[j] + 1e-9)))
-    space.setBounds(bounds)
-    si = ob.SpaceInformation(space)
     blocked = {}  # other geom -> [count, contact]
 
-    def array(state):
-        return np.fromiter((state[j] for j in range(n)), dtype=float, count=n)
-
-    def note(hit):
+    def noted(hit):
+        """True for no contact; a contact is kept to name what blocks the search."""
+        if hit is None:
+            return True
         seen = blocked.setdefault(hit[2], [0, hit])
         seen[0] += 1
         if hit[0] < seen[1][0]:
             seen[1] = hit
+        return False
 
-    def valid(state):
-        hit = scene.blocking(array(state))
-        if hit is not None:
-            note(hit)
-        return hit is None
-
-    class _Motion(ob.MotionValidator):  # densified in joint space, stopping at the first contact
-        def checkMotion(self, s1, s2, *last):
-            hit = scene.motion_blocking(array(s1), array(s2))
-            if hit is not None:
-                note(hit)
-            return hit is None
-
-    si.setStateValidityChecker(valid)
-    validator = _Motion(si)
-    si.setMotionValidator(validator)
-    si.setup()
-    pdef = ob.ProblemDefinition(si)
-
-    def state(q):
-        out = si.allocState()
-        for j in range(n):
-            out[j] = float(q[j])
-        return out
-
-    pdef.setStartAndGoalStates(state(q0), state(q1))
-    search = og.RRTConnect(si)
-    search.setRange(0.5)  # rad: short motions are cheap to check and rarely blocked
-    search.setProblemDefinition(pdef)
-    search.setup()
-    search.solve(float(time_limit))
-    if not pdef.hasExactSolution():
+    def failure():
         if blocked:
             count, hit = max(blocked.values(), key=lambda v: v[0])
             why = f"blocked by {scene.names[hit[2]]} ({count} checks ran into it; {scene.describe(hit)})"
         else:
             why = "the search ran out of time"
-        raise MotionPlanningError(
-            f"transit planning: no collision-free path from {_where(q0)} to {_where(q1)} found by OMPL "
-            f"RRTConnect in {time_limit:g} s: {why} (margin {scene.margin * 1000:g} mm)")
-    path = pdef.getSolutionPath()
-    if simplify_time > 0:
-        og.PathSimplifier(si).simplify(path, float(simplify_time))
-    Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
-    Q[0], Q[-1] = q0, q1  # exactly, not to round-off
+        return (f"transit planning: no collision-free path from {_where(q0)} to {_where(q1)} found by OMPL "
+                f"RRTConnect in {time_limit:g} s: {why} (margin {scene.margin * 1000:g} mm)")
+
+    # the search stays within the limits and a quarter turn beyond the span of the two ends (no joint
+    # winds round); each motion is checked densified in joint space, stopping at the first contact; a tree
+    # grows by at most half a radian (short motions are cheap to check and rarely blocked)
+    Q, _, _ = _ompl_path(scene.limits, q0[None], q1[None], lambda q: noted(scene.blocking(q)),
+                         lambda a, b: noted(scene.motion_blocking(a, b)), failure=failure, span=np.pi / 2,
+                         step=0.5, time_limit=time_limit, simplify_time=simplify_time,
+                         random_state=random_state)
     for a, b in zip(Q[:-1], Q[1:], strict=True):  # never a silent success
         hit = scene.motion_blocking(a, b)
         if hit is not None:

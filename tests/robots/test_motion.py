@@ -12,7 +12,7 @@ pytest.importorskip("ompl")  # the extra skillbank[plan]
 
 from skillbank.core import Box, Sphere  # noqa: E402
 from skillbank.robots import MotionPlanningError, clearance, plan_motion, robot_model  # noqa: E402
-from skillbank.robots._motion import _held_capsule  # noqa: E402
+from skillbank.robots._motion import _held_capsule, _ompl_path  # noqa: E402
 
 DOWN = [0.0, 1.0, 0.0, 0.0]
 TABLE = Box([-2.0, -2.0, -0.05], [2.0, 2.0, 0.0])
@@ -160,3 +160,47 @@ def test_any_of_several_starts_and_goals_will_do(robot):
     np.testing.assert_array_equal(path.joints[0], turned)  # it starts on one given, exactly
     np.testing.assert_array_equal(path.joints[-1], b)
     assert path.clearance.min_distance >= 0.005
+
+
+#: Two joints in [-1, 1]: a disc of radius 0.5 about the origin is blocked.
+SQUARE = np.array([[-1.0, 1.0], [-1.0, 1.0]])
+
+
+def _free(q):
+    return bool(np.linalg.norm(q) > 0.5)
+
+
+def _free_motion(a, b):
+    return all(_free(a + s * (b - a)) for s in np.linspace(0.0, 1.0, 101))
+
+
+def test_the_one_ompl_set_up_goes_round_what_the_callers_checks_refuse():
+    """``_ompl_path`` (plan_motion's and the simulation's transits' one OMPL set-up) knows nothing of robots:
+    a disc in a two-joint space, checked by plain callables."""
+    a, b = np.array([[-0.8, 0.0]]), np.array([[0.8, 0.0], [0.8, 0.9]])
+    Q, planning, simplifying = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused",
+                                          random_state=0)
+    np.testing.assert_array_equal(Q[0], a[0])  # on ends given, exactly
+    assert any(np.array_equal(Q[-1], g) for g in b)
+    assert all(_free_motion(p, q) for p, q in zip(Q[:-1], Q[1:], strict=True))
+    assert np.all(Q >= -1.0) and np.all(Q <= 1.0) and planning >= 0.0 and simplifying >= 0.0
+    again, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", random_state=0)
+    np.testing.assert_array_equal(again, Q)  # the same seed, the same path
+    raw, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", simplify_time=0.0,
+                           planner="PRM", random_state=0)
+    assert all(_free_motion(p, q) for p, q in zip(raw[:-1], raw[1:], strict=True))
+
+
+def test_the_one_ompl_set_up_raises_the_callers_message_when_no_path_is_found():
+    walled = []  # the goal is inside a ring: no motion reaches it
+
+    def ring_motion(p, q):
+        walled.append(1)
+        return all(abs(np.linalg.norm(p + s * (q - p)) - 0.6) > 0.05 for s in np.linspace(0.0, 1.0, 101))
+
+    with pytest.raises(MotionPlanningError, match=r"^no way in after \d+ motions checked$") as error:
+        _ompl_path(SQUARE, np.array([[-0.9, -0.9]]), np.array([[0.0, 0.0]]), lambda q: True, ring_motion,
+                   failure=lambda: f"no way in after {len(walled)} motions checked", time_limit=0.2,
+                   random_state=0)
+    # the message is asked for after the search: it can count every check that ran
+    assert walled and str(error.value) == f"no way in after {len(walled)} motions checked"
