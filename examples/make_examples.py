@@ -122,44 +122,8 @@ def robomimic(folder: Path) -> None:
         h5["mask/valid"] = np.array([b"demo_3"])
 
 
-def _typestore(ros1: bool):
-    from rosbags.typesys import Stores, get_typestore  # the extra skillbank[ros]
-
-    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
-
-
-def _header(ts, ns: int, frame: str = ""):
-    header, time = ts.types["std_msgs/msg/Header"], ts.types["builtin_interfaces/msg/Time"]
-    stamp = time(sec=int(ns // NS), nanosec=int(ns % NS))
-    if "seq" in header.__dataclass_fields__:  # ROS 1
-        return header(seq=0, stamp=stamp, frame_id=frame)
-    return header(stamp=stamp, frame_id=frame)
-
-
-def _message(ts, msgtype: str, ns: int, value):
-    cls = ts.types[msgtype]
-    vector = ts.types["geometry_msgs/msg/Vector3"]
-    if msgtype == "sensor_msgs/msg/JointState":
-        names, position = value
-        empty = np.array([], dtype=float)
-        return cls(header=_header(ts, ns), name=list(names), position=np.asarray(position, float),
-                   velocity=empty, effort=empty)
-    if msgtype == "geometry_msgs/msg/PoseStamped":
-        xyz, q = value
-        point, quat = ts.types["geometry_msgs/msg/Point"], ts.types["geometry_msgs/msg/Quaternion"]
-        pose = ts.types["geometry_msgs/msg/Pose"](position=point(*map(float, xyz)),
-                                                  orientation=quat(*map(float, q)))
-        return cls(header=_header(ts, ns, "base"), pose=pose)
-    if msgtype == "geometry_msgs/msg/WrenchStamped":
-        force, torque = value
-        wrench = ts.types["geometry_msgs/msg/Wrench"](force=vector(*map(float, force)),
-                                                      torque=vector(*map(float, torque)))
-        return cls(header=_header(ts, ns, "tool0"), wrench=wrench)
-    raise ValueError(msgtype)
-
-
 def _recording(duration: float, rates: dict, gap=None) -> dict:
-    """``{topic: (msgtype, [(stamp_ns, value), ...])}`` of a UR5e moving its tool down and back."""
+    """``{topic: (msgtype, [(seconds, value), ...])}`` of a UR5e moving its tool down and back."""
     out = {}
     for topic, rate in rates.items():
         t = np.arange(0.0, duration, 1.0 / rate)
@@ -186,25 +150,14 @@ def _recording(duration: float, rates: dict, gap=None) -> dict:
 
 
 def _write_bag(path: Path, storage: str, recording: dict) -> None:
-    from rosbags.rosbag1 import Writer as Ros1Writer  # the extra skillbank[ros]
-    from rosbags.rosbag2 import StoragePlugin
-    from rosbags.rosbag2 import Writer as Ros2Writer
+    from skillbank.io._ros_write import write_bag  # rosbags: the extra skillbank[ros]
 
-    ros1 = storage == "ros1"
-    ts = _typestore(ros1)
-    if ros1:
-        writer = Ros1Writer(path)
-    else:
-        plugin = StoragePlugin.SQLITE3 if storage == "sqlite3" else StoragePlugin.MCAP
-        writer = Ros2Writer(path, version=9, storage_plugin=plugin)
-    messages = sorted((round(T0 + ti * NS), topic, msgtype, value)
-                      for topic, (msgtype, items) in recording.items() for ti, value in items)
-    serialise = ts.serialize_ros1 if ros1 else ts.serialize_cdr
-    with writer:
-        conns = {topic: writer.add_connection(topic, msgtype, typestore=ts)
-                 for topic, (msgtype, _) in recording.items()}
-        for ns, topic, msgtype, value in messages:
-            writer.write(conns[topic], ns + 1_000_000, serialise(_message(ts, msgtype, ns, value), msgtype))
+    def logged(ti, value):  # stamped from T0 to the nanosecond, logged by the recorder 1 ms later
+        ns = round(T0 + ti * NS)
+        return ns, ns + 1_000_000, value
+
+    write_bag(path, storage, {topic: (msgtype, [logged(ti, value) for ti, value in items])
+                              for topic, (msgtype, items) in recording.items()})
 
 
 def ros(folder: Path) -> None:
@@ -212,9 +165,7 @@ def ros(folder: Path) -> None:
                _recording(3.0, {"/joint_states": 100, "/tool_pose": 50, "/ft_sensor": 100, "/gripper": 20}))
     _write_bag(folder / "run.bag", "ros1",
                _recording(4.0, {"/joint_states": 50, "/tool_pose": 25}, gap=(1.8, 2.8)))
-    _write_bag(folder / "run2", "mcap", _recording(2.0, {"/joint_states": 50, "/tool_pose": 25}))
-    shutil.move(str(next((folder / "run2").glob("*.mcap"))), folder / "run2.mcap")
-    shutil.rmtree(folder / "run2")
+    _write_bag(folder / "run2.mcap", "plain-mcap", _recording(2.0, {"/joint_states": 50, "/tool_pose": 25}))
 
 
 def lerobot(folder: Path) -> None:

@@ -1,10 +1,10 @@
-"""ROS 1 bags, ROS 2 bags (sqlite3, MCAP) and plain MCAP files, written here with rosbags' own writers."""
+"""ROS 1 bags, ROS 2 bags (sqlite3, MCAP) and plain MCAP files, written here with rosbags' own writers
+(message by message, through ``skillbank.io._ros_write`` as the examples are)."""
 
 from __future__ import annotations
 
 import json
 import re
-import shutil
 import sys
 
 import h5py
@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import StoragePlugin
 from rosbags.rosbag2 import Writer as Ros2Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from skillbank.io import FormatError, detect_format, load, load_all, parse_topics, read_robot_h5, read_rosbag
 from skillbank.io._align import check_split
+from skillbank.io._ros_write import header, message, typestore
+from skillbank.io._ros_write import write_bag as _write_bag
 from skillbank.segmentation import MultimodalSegmenter
 
 NS = 1_000_000_000
@@ -36,28 +36,10 @@ _EXTRA_TYPES = {
 }
 
 
-def _typestore(ros1: bool):
-    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
-    extra = {}
-    for name, text in _EXTRA_TYPES.items():
-        if name not in store.types:
-            extra.update(get_types_from_msg(text, name))
-    store.register(extra)
-    return store
-
-
-TYPESTORES = {True: _typestore(True), False: _typestore(False)}
+TYPESTORES = {True: typestore(True, _EXTRA_TYPES), False: typestore(False, _EXTRA_TYPES)}
 
 
 # ---------------------------------------------------------------- building messages
-
-
-def _header(ts, ns: int, frame: str = ""):
-    header, time = ts.types["std_msgs/msg/Header"], ts.types["builtin_interfaces/msg/Time"]
-    stamp = time(sec=int(ns // NS), nanosec=int(ns % NS))
-    if "seq" in header.__dataclass_fields__:  # ROS 1
-        return header(seq=0, stamp=stamp, frame_id=frame)
-    return header(stamp=stamp, frame_id=frame)
 
 
 def _vec(ts, name, xyz):
@@ -71,28 +53,16 @@ def _quat(ts, q):
 def _transform(ts, stamp, parent, child, xyz, q):
     tr = ts.types["geometry_msgs/msg/Transform"](translation=_vec(ts, "geometry_msgs/msg/Vector3", xyz),
                                                  rotation=_quat(ts, q))
-    return ts.types["geometry_msgs/msg/TransformStamped"](header=_header(ts, stamp, parent),
+    return ts.types["geometry_msgs/msg/TransformStamped"](header=header(ts, stamp, parent),
                                                           child_frame_id=child, transform=tr)
 
 
 def _message(ts, msgtype: str, stamp: int, value):
     """A message of ``msgtype`` stamped ``stamp`` (ns) carrying ``value`` (its numbers)."""
+    if msgtype in ("sensor_msgs/msg/JointState", "geometry_msgs/msg/PoseStamped",
+                   "geometry_msgs/msg/WrenchStamped"):
+        return message(ts, msgtype, stamp, value)  # as the examples' recordings build them
     cls = ts.types[msgtype]
-    if msgtype == "sensor_msgs/msg/JointState":
-        names, position = value
-        empty = np.array([], dtype=float)
-        return cls(header=_header(ts, stamp), name=list(names), position=np.asarray(position, dtype=float),
-                   velocity=empty, effort=empty)
-    if msgtype == "geometry_msgs/msg/PoseStamped":
-        xyz, q = value
-        pose = ts.types["geometry_msgs/msg/Pose"](position=_vec(ts, "geometry_msgs/msg/Point", xyz),
-                                                  orientation=_quat(ts, q))
-        return cls(header=_header(ts, stamp, "base"), pose=pose)
-    if msgtype == "geometry_msgs/msg/WrenchStamped":
-        force, torque = value
-        wrench = ts.types["geometry_msgs/msg/Wrench"](force=_vec(ts, "geometry_msgs/msg/Vector3", force),
-                                                      torque=_vec(ts, "geometry_msgs/msg/Vector3", torque))
-        return cls(header=_header(ts, stamp), wrench=wrench)
     if msgtype == "geometry_msgs/msg/TransformStamped":
         return _transform(ts, stamp, *value)
     if msgtype == "tf2_msgs/msg/TFMessage":
@@ -107,34 +77,14 @@ def _message(ts, msgtype: str, stamp: int, value):
 
 
 def write_bag(folder, storage: str, recording: dict, name: str = "rec"):
-    """Write ``{topic: (msgtype, [(stamp_ns, log_ns, value), ...])}``; return the path to read.
+    """Write ``{topic: (msgtype, [(stamp_ns, log_ns, value), ...])}`` with rosbags' own writers; return the
+    path to read.
 
     ``storage`` is ``"ros1"`` (a .bag), ``"sqlite3"`` or ``"mcap"`` (ROS 2
     bag folders), or ``"plain-mcap"`` (the .mcap file alone).
     """
-    ros1 = storage == "ros1"
-    ts = TYPESTORES[ros1]
-    messages = sorted((log, topic, msgtype, stamp, value)
-                      for topic, (msgtype, items) in recording.items() for stamp, log, value in items)
-    if ros1:
-        path = folder / f"{name}.bag"
-        writer = Ros1Writer(path)
-    else:
-        path = folder / name
-        plugin = StoragePlugin.SQLITE3 if storage == "sqlite3" else StoragePlugin.MCAP
-        writer = Ros2Writer(path, version=9, storage_plugin=plugin)
-    with writer:
-        conns = {topic: writer.add_connection(topic, msgtype, typestore=ts)
-                 for topic, (msgtype, _) in recording.items()}
-        serialise = ts.serialize_ros1 if ros1 else ts.serialize_cdr
-        for log, topic, msgtype, stamp, value in messages:
-            writer.write(conns[topic], log, serialise(_message(ts, msgtype, stamp, value), msgtype))
-    if storage == "plain-mcap":
-        plain = folder / f"{name}.mcap"
-        shutil.move(str(next(path.glob("*.mcap"))), plain)
-        shutil.rmtree(path)
-        return plain
-    return path
+    path = folder / {"ros1": f"{name}.bag", "plain-mcap": f"{name}.mcap"}.get(storage, name)
+    return _write_bag(path, storage, recording, ts=TYPESTORES[storage == "ros1"], build=_message)
 
 
 def raises_format(path, match: str):
