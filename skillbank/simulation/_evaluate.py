@@ -1024,6 +1024,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 episode.act(action)
         else:
             tic = time.perf_counter()
+            carried = None  # the scene's name of what the segment carries (None: nothing, or a rigid path)
             try:
                 if method == "rigid":
                     P, Q, G = _path_rigid(seg, episode.obs)
@@ -1052,17 +1053,16 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             steps0 = episode.steps
             shift = np.zeros(3)
             held = None  # where the carried object sits in the tool's frame as the path was planned
-            if _carries(seg.relation) and method != "rigid":
-                obj = seg.scene(seg.relation.object)
+            if carried is not None:
                 here = episode.obs
                 held = quaternion_to_matrix(np.asarray(here["robot0_eef_quat"], float)).T @ (
-                    np.asarray(here[f"{obj}_pos"], float) - np.asarray(here["robot0_eef_pos"], float))
+                    np.asarray(here[f"{carried}_pos"], float) - np.asarray(here["robot0_eef_pos"], float))
             for p, q, g in zip(P, Q, G, strict=True):
                 if episode.over:
                     break
                 if g != episode.driver.grip and g <= 0 and held is not None:
                     # about to let go of what it carries: aimed again from where it sits in the hand now
-                    shift = _aimed(episode.obs, obj, held, p, q)
+                    shift = _aimed(episode.obs, carried, held, p, q)
                 p = p + shift
                 if g != episode.driver.grip:
                     # the gripper acts where the path says, once the tool is there: the controller trails
