@@ -49,11 +49,13 @@ def run(args) -> int:
                 print(f"composed tasks in physics: not run ({r})")
                 continue
             print(f"composed in physics, experiment {name}: {r['successes']}/{r['episodes']} by robosuite's "
-                  f"check ({r['command']}; {r['figure']})")
+                  f"check in {r['seconds']:.0f} s ({r['command']}; {r['figure']})")
             if r.get("why"):
                 print(f"  failed: {r['why']}")
         if summary.get("view"):
             print(f"the library's web view: open {summary['view']}")
         print(f"figures and summary written to {summary['out']}")
+        # the run's own clock, not a claim in the docs; each part's time is in summary.md
+        print(f"done in {summary['seconds']:.1f} s (each part's time: {summary['summary']}, 'Timing')")
         print(f"open {summary['summary']}")
     return 0

@@ -382,12 +382,12 @@ def check_robot(args) -> None:
 
 def _binding(text):
     """``--binding``: a JSON object, or a file holding one (size and nesting bounded as a scene's)."""
-    # planning only for describe: the other library commands never load it
-    from ..planning._json import load_json, parse_json  # only when a binding is given
-    from ..planning._scene import MAX_SCENE_BYTES  # the same size bound as a scene's
-
     if text is None:
         return None
+    # The planning package imports scipy: only when a binding is given (showing a description needs none).
+    from ..planning._json import load_json, parse_json
+    from ..planning._scene import MAX_SCENE_BYTES  # the same size bound as a scene's
+
     if not text.lstrip().startswith("{"):
         path = Path(text)
         if not path.is_file():

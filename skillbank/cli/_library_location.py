@@ -58,7 +58,8 @@ def _target(location):
 
 
 def _library(location, **kwargs):
-    # The pipeline pulls in scikit-learn; imported when a library command runs, not for --help.
+    # The pipeline and its store: imported when a library command runs, not for --help (what it needs of
+    # scikit-learn and scipy, only when the command clusters, cuts, reuses or plans).
     from ..pipeline import Library
 
     return Library(_target(location), **kwargs)

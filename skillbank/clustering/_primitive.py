@@ -6,6 +6,7 @@ import numpy as np
 from sklearn.preprocessing import minmax_scale
 
 from ..core import resample_many
+from ..core._defaults import FEATURE_KINDS  # defined beside the store's check, which imports no scikit-learn
 from ..core._validation import check_array, numerical_errors, summarise
 from ._dtw import DTWFeatures
 from ._em import assign
@@ -17,8 +18,6 @@ __all__ = [
     "primitive_features", "nearest_centre", "trajectory_features", "FEATURE_KINDS", "TRAJECTORY_FEATURES",
 ]
 
-
-FEATURE_KINDS = ("default", "position")
 
 
 def primitive_features(demos, *, kind: str = "default", n_points: int = 16) -> np.ndarray:

@@ -45,15 +45,30 @@ def _lift(demo: Demonstration) -> Demonstration:
 
 
 class _Steps:
-    """A tqdm bar (on stderr) over the job's steps, each named as it starts."""
+    """A tqdm bar (on stderr) over the job's steps, each named as it starts, and each step's duration.
+
+    ``timing`` lists ``{"part", "seconds"}`` of every finished step in order, measured with
+    ``time.perf_counter`` whether the bar is shown or not: summary.md reports the run's own times, so
+    the docs need not claim any.
+    """
 
     def __init__(self, total: int, enabled: bool):
         # no rate or time left: the steps take from 0.1 s to seconds each
         self._bar = tqdm(total=total, desc="demo", disable=not enabled, leave=False,
                          bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}{postfix}]")
         self._started = False
+        self.timing: list = []
+        self._current = None  # (name, start) of the step under way
+
+    def _finish(self) -> None:
+        if self._current is not None:
+            name, start = self._current
+            self.timing.append({"part": name, "seconds": time.perf_counter() - start})
+            self._current = None
 
     def __call__(self, what: str) -> None:
+        self._finish()
+        self._current = (what, time.perf_counter())
         self._bar.set_postfix_str(what, refresh=False)
         if self._started:
             self._bar.update()
@@ -61,6 +76,8 @@ class _Steps:
         self._bar.refresh()  # now, whatever tqdm's minimum interval: a step may last seconds
 
     def close(self) -> None:
+        """End the last step (its time kept) and the bar; calling it again changes nothing."""
+        self._finish()
         self._bar.close()
 
 
@@ -197,7 +214,7 @@ def _markdown(result, rows, reuses, seg) -> str:
     held = sum(r["count"] for r in rows)  # a primitive the clustering left out is in no skill
     left = result["n_primitives"] - held
     lines = ["# skillbank demo: a motion-primitive library, end to end", "",
-             f"Library `{Path(result['library']).name}` ({result['seconds']:.1f} s): {result['source']}.", "",
+             f"Library `{Path(result['library']).name}`: {result['source']}.", "",
              f"{result['n_demonstrations']} demonstrations, {result['n_primitives']} primitives, clustered "
              f"with elastic clustering on `{result['features']}` features into {len(rows)} skills"
              + (f", which hold {held} of them ({left} in no skill)." if left else "."), "",
@@ -246,14 +263,37 @@ def _markdown(result, rows, reuses, seg) -> str:
                   "step checked against what the simulation shows (a short run of `skillbank experiment`):",
                   ""]
         for name, r in composed.items():
-            lines += [f"- `{r['command']}`: {r['successes']}/{r['episodes']} by the environment's check; "
+            lines += [f"- `{r['command']}` ({r['seconds']:.0f} s): {r['successes']}/{r['episodes']} by the "
+                      "environment's check; "
                       f"first plan {' '.join(r['plans'][0])}" +
                       (f"; failures {r['failures']}; first: {r['why']}" if r.get("why") else ""),
                       "", f"![{name}](composed/{Path(r['figure']).name})", ""]
     if seg is not None:
         lines += ["## Segmentation", "", "The segmentation demo (a LASA shape and the synthetic multi-stream "
                   "demonstration): [segmentation/summary.md](segmentation/summary.md).", ""]
+    lines += _timing_lines(result)
     return "\n".join(lines)
+
+
+def _timing_lines(result) -> list:
+    """summary.md's last section: how long each part of this run took, and the whole run.
+
+    >>> rows = [{"part": "clustering", "seconds": 0.25}]
+    >>> print("\\n".join(_timing_lines({"timing": rows, "seconds": 1.5})))
+    ## Timing
+    <BLANKLINE>
+    Measured in this run (wall clock, `time.perf_counter`), each part from its start to the next's:
+    <BLANKLINE>
+    | part | seconds |
+    | --- | ---: |
+    | clustering | 0.2 |
+    | **total** (start to summary) | **1.5** |
+    <BLANKLINE>
+    """
+    lines = ["## Timing", "", "Measured in this run (wall clock, `time.perf_counter`), each part from its "
+             "start to the next's:", "", "| part | seconds |", "| --- | ---: |"]
+    lines += [f"| {row['part']} | {row['seconds']:.1f} |" for row in result["timing"]]
+    return lines + [f"| **total** (start to summary) | **{result['seconds']:.1f}** |", ""]
 
 
 #: The executable reproduction's task: the first move's goal moved by this much (m), and its goal
@@ -374,6 +414,7 @@ def _composed(out: Path, seed) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     done = {}
     for name, episodes in (("stack3", 2), ("unload", 1)):
+        tic = time.perf_counter()
         report = composition_experiment(name, episodes=episodes, seed=int(seed or 0), demos=3, paths=True)
         first = report["per_episode"][0]
         figure = plot_composed(first, out / f"{name}.png",
@@ -383,6 +424,7 @@ def _composed(out: Path, seed) -> dict:
         done[name] = {"successes": report["successes"], "episodes": report["episodes"],
                       "failures": report["failures"], "plans": [r["plan"] for r in report["per_episode"]],
                       "why": _why(report["per_episode"]), "figure": str(figure),
+                      "seconds": time.perf_counter() - tic,
                       "command": f"skillbank experiment {name} --episodes {episodes} --demos 3 "
                                  f"--seed {seed or 0}"}
     return done
@@ -419,7 +461,8 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
     dict
         JSON-able: ``out``, ``summary`` (summary.md), ``library``, ``figures``,
         ``skills`` (cluster rows), ``reuse`` (one item per reused skill), ``view``
-        (the library's web view, ``out/view/index.html``), timing.
+        (the library's web view, ``out/view/index.html``), ``timing`` (``{"part", "seconds"}`` of
+        each part, in order) and ``seconds`` (the whole run), both measured in the run.
 
     Examples
     --------
@@ -467,7 +510,7 @@ def run_library_demo(out, *, data=None, segmentation: bool = True, composed: boo
               "n_demonstrations": summary["n_demonstrations"], "n_primitives": len(summary["primitives"]),
               "skills": rows, "reuse": reuses, "figures": figures, "executable": executable,
               "planning": planning["summary"], "view": view["index"], "composed": composed,
-              "segmentation": None if seg is None else seg["summary"]}
+              "segmentation": None if seg is None else seg["summary"], "timing": step.timing}
     result["seconds"] = time.perf_counter() - t0
     path = out / "summary.md"
     with atomic_output(path) as tmp:  # whole; a link there is replaced, not written through

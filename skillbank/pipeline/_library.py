@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from sklearn.decomposition import PCA
 from tqdm import tqdm
 
-from ..clustering import FEATURE_KINDS, ElasticClustering, primitive_features
+# Clustering, reuse and planning import scikit-learn and scipy (about 0.9 s); each method that needs them
+# imports them, so opening a library to list, export or copy it does not (tests/cli/test_light_imports.py).
 from ..core import POSE_OF, Demonstration
+from ..core._defaults import FEATURE_KINDS, SHORTLIST, TIME_LIMIT
 from ..core._validation import check_id, check_positive
-from ..planning import TIME_LIMIT, describe_skill, plan_task
-from ..selection import SHORTLIST, reuse
 from ..store import SCHEMA_VERSION, Store, open_store
 from ..store._rows import MAX_N_POINTS
 from ._adding import Adding, check_one_dimension
@@ -194,6 +193,11 @@ class Library(Adding):
         if not 2 <= n_points <= MAX_N_POINTS:  # what a copy, export and import of the library accept
             raise ValueError(f"n_points: expected an integer in 2..{MAX_N_POINTS}, got {n_points}")
         self._check_writable("record a clustering")
+        # scikit-learn, only when a clustering is fitted
+        from sklearn.decomposition import PCA
+
+        from ..clustering import ElasticClustering, primitive_features
+
         with tqdm(total=4, desc="clustering", unit="step", disable=not progress) as bar:
             bar.set_postfix_str("loading primitives")
             old = self.store.current_version()
@@ -408,6 +412,8 @@ class Library(Adding):
         >>> lib.reuse("reach", Constraints(goal=[0.1, -0.5, 0.2], goal_orientation=[1.0, 0, 0, 0]),
         ...           robot="ur5e", limits={"joint_velocity": 1.0})  # doctest: +SKIP
         """
+        from ..selection import reuse  # scipy, only when a skill is reused
+
         prims = self.skill(skill)  # a clear error for an empty skill before any fitting
         with tqdm(total=len(prims), desc="adapting", unit="candidate", disable=not progress) as bar:
             return reuse([p.demo for p in prims], constraints, method=method, k=k,
@@ -431,6 +437,8 @@ class Library(Adding):
         ...              {"offset": [0, 0, 0.002]})  # doctest: +SKIP
         1
         """
+        from ..planning import describe_skill  # the planner, only when a description is written
+
         return describe_skill(self.store, label, action, binding)
 
     def descriptions(self, *, history: bool = False) -> list:
@@ -459,6 +467,8 @@ class Library(Adding):
         >>> [(s.action, s.args) for s in res.steps]  # doctest: +SKIP
         [('press', ('b3',)), ('press', ('b1',))]
         """
+        from ..planning import plan_task  # the planner, only when a task is planned
+
         with tqdm(desc="plan steps", unit="step", disable=not progress) as bar:
             return plan_task(self.store, scene, domain=domain, robot=robot, limits=limits,
                              random_state=random_state, progress=_ticker(bar) if progress else None,

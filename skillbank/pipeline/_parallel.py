@@ -42,14 +42,13 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..clustering import nearest_centre, primitive_features
+# Clustering, segmentation and selection import scikit-learn and scipy: each function that needs them
+# imports them, so that a Library opened to list or export does not (tests/cli/test_light_imports.py).
 from ..core import Demonstration, __version__
 from ..core._dask import DIED, INSTALL, check_parallel, dask_client
 from ..core._dask import distributed as dask_distributed
 from ..core._validation import check_positive
 from ..io import FormatError, load, load_all
-from ..segmentation import MultimodalSegmenter
-from ..selection import acted_on, object_streams
 
 __all__ = ["INSTALL", "check_demo", "file_reason", "read_file", "bounds", "assignment", "prepare",
            "prepare_file", "prepare_files", "files_per_task", "distributed", "add_in_parallel", "BATCH_SIZE"]
@@ -107,6 +106,8 @@ def bounds(demo, segment, segmentation):
     """
     if not segment:
         return [(0, demo.n_steps)], {"segment": False}
+    from ..segmentation import MultimodalSegmenter  # scipy, only when a demonstration is cut
+
     params = dict(segmentation or {})
     streams = params.pop("streams", None)
     result = MultimodalSegmenter(**params).fit(demo, streams).result_
@@ -141,6 +142,8 @@ def assignment(parts, snapshot):
     if fitted is not None and dims != [fitted]:
         return None, (f"its positions have {', '.join(map(str, dims))} dimension(s), clustering version "
                       f"{version} was fitted on {fitted}-D positions")
+    from ..clustering import nearest_centre, primitive_features  # scikit-learn, only to assign
+
     try:
         F = primitive_features(parts, kind=p["features"], n_points=p["n_points"])
     except ValueError as exc:
@@ -168,6 +171,8 @@ def relations(demo, cuts) -> list:
     primitives; values are rounded to the nanometre (and 1e-9 of a quaternion) so that the same samples
     give the same record on any worker.
     """
+    from ..selection import acted_on  # scipy, only for object poses
+
     out = []
     for a, b in cuts:
         r = acted_on(demo.slice(a, b))
@@ -191,6 +196,8 @@ def prepare(demo, *, segment, segmentation, label, source, assign, snapshot) -> 
     if label is None and isinstance(task, str) and task.strip():
         # The recording says what it shows (a LeRobot episode's task): its primitives' own label, as if given.
         label, provenance["label_from"] = task.strip(), "metadata['task']"
+    from ..selection import object_streams  # scipy, only when a demonstration is prepared
+
     if object_streams(demo):
         provenance["relations"] = relations(demo, cuts)
     members, why = None, None

@@ -24,6 +24,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from ..core._defaults import TIME_LIMIT  # defined where Library takes it as a default, importing no planner
 from ..core._validation import check_positive, summarise
 from . import _search
 from ._pddl import Domain, _typed_list, parse_sexpr
@@ -41,10 +42,6 @@ MAX_GROUNDINGS = 100_000
 #: those relaxed reachability allows, at about 20 µs and 1.4 kB each: 103041 in 2.1 s and 146 MB), so
 #: at most about 5 s and 350 MB of grounding.
 MAX_REACHABLE_GROUNDINGS = 250_000
-#: Seconds the search may run before it gives up (a button task takes well under one). With up to
-#: MAX_GROUNDINGS actions an expansion under LM-cut can take tens of milliseconds, so MAX_EXPANSIONS
-#: alone could keep a hard problem searching for hours.
-TIME_LIMIT = 600.0
 _CAP = 10 ** 18
 INSTALL = "pip install 'skillbank[plan]'"
 #: The searches :func:`solve` offers, by name, and the planner that runs each.

@@ -20,7 +20,8 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
     Left: the tool path seen from above (x, y in metres), one colour per plan step, each object's
     position at rest before the first step (circle) and at the end (cross, joined by an arrow).
     Right: the tool's height (m) against time (s), with the steps' starts. The legend lists the steps in
-    the order they were carried out; the title says when that is not the first plan (a replan).
+    the order they were carried out; the title says when that is not the first plan: a replan, or the
+    moves the goal leaves free ordered in the world before each step.
 
     Examples
     --------
@@ -72,9 +73,13 @@ def plot_composed(episode: dict, path, *, title=None) -> Path:
         f"failure: {episode.get('failure', {}).get('reason', '?')}"
     carried = [f"({' '.join([st['action'], *st['args']])})" for st in steps]
     replans = int(episode.get("replans") or 0)
-    if replans or carried != list(episode.get("plan", carried))[:len(carried)]:
-        # the legend lists the steps carried out; a title that quoted the first plan disagreed with it
-        times = f" {replans} time{'s' if replans != 1 else ''}" if replans else ""
-        verdict += f", replanned{times}: the legend lists the steps carried out"
+    # the legend lists the steps carried out; a title that quoted the first plan disagreed with it
+    if replans:
+        verdict += (f", replanned {replans} time{'s' if replans != 1 else ''}: the legend lists the steps "
+                    "carried out")
+    elif carried != list(episode.get("plan", carried))[:len(carried)]:
+        # no replan: the moves the goal leaves free were ordered in the world before each step (tallest
+        # first), which "replanned" misnamed
+        verdict += ", steps in the order the world chose (the legend's), not the plan's"
     fig.suptitle(f"{title or 'plan in simulation'}: {verdict}")
     return _save(fig, path)

@@ -12,13 +12,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core import Constraints, Demonstration, resample
+from ..core._defaults import SHORTLIST  # defined where Library takes it as a default, importing no scipy
 from ..core._validation import check_array, check_positive, check_time, numerical_errors
 from ..editing import lte
 
 __all__ = ["Candidate", "Selection", "select_candidates", "RANKINGS", "SHORTLIST"]
 
 RANKINGS = ("shortlist", "length", "endpoints", "deformation")
-SHORTLIST = 3  # candidates the paper's curve-length criterion chooses among, by default
 
 
 @dataclass

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..clustering import FEATURE_KINDS
+from ..core._defaults import FEATURE_KINDS  # not skillbank.clustering: it imports scikit-learn
 
 __all__ = ["MAX_ID", "MAX_N_POINTS", "ASSIGNED", "check_row_id", "check_demonstration_record",
            "check_version_params", "check_version_record", "damaged"]

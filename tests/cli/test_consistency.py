@@ -139,7 +139,8 @@ class _Recorder:
 
     def __call__(self, out, **kwargs):
         self.kwargs = kwargs
-        return {"out": str(out), "summary": str(Path(out) / "summary.md"), "reuse": []}
+        return {"out": str(out), "summary": str(Path(out) / "summary.md"), "reuse": [], "seconds": 0.5,
+                "timing": []}
 
 
 @pytest.mark.parametrize(("json_flag", "tty", "progress"), [
@@ -155,6 +156,8 @@ def test_demo_progress_only_for_a_person_watching(cli, monkeypatch, tmp_path, js
     assert code == 0 and job.kwargs["progress"] is progress
     if json_flag:
         assert json.loads(out)["out"] == str(tmp_path)
+    else:  # the total the run measured, on the terminal
+        assert "done in 0.5 s (each part's time: " in out
 
 
 # --- one coherent command line (issue 44, item 2) ---

@@ -24,6 +24,14 @@ def check_result(res, out):
         assert "error" not in item, item
         assert item["constraint_error"] < 1e-6 and not item["collision"]
     assert "majority" in Path(res["summary"]).read_text()
+    # how long each part took, measured in the run, a line each in summary.md, and the total
+    text = Path(res["summary"]).read_text()
+    assert res["timing"] and all(row["seconds"] >= 0.0 for row in res["timing"])
+    assert sum(row["seconds"] for row in res["timing"]) <= res["seconds"]
+    timing = text.split("## Timing", 1)[1]
+    for row in res["timing"]:
+        assert f"| {row['part']} | {row['seconds']:.1f} |" in timing
+    assert f"| **total** (start to summary) | **{res['seconds']:.1f}** |" in timing
     # one reproduction a UR5e executes, as CSV: pose, gripper and joints from t = 0
     ex = res["executable"]
     lines = Path(ex["csv"]).read_text().splitlines()
@@ -92,6 +100,10 @@ def test_lasa_library_demo(tmp_path, capsys, monkeypatch):
     # a second run replaces the library rather than adding to it; this one shows its progress
     again = run_library_demo(tmp_path, segmentation=False, composed=False, progress=True)
     assert again["n_demonstrations"] == 32 and again["n_primitives"] == res["n_primitives"]
+    assert [row["part"] for row in res["timing"]] == [
+        "loading LASA", "adding demonstrations", "clustering", "labelling", "figure of the clusters",
+        "reusing WShape", "reusing place", "executable reproduction (UR5e)", "web view of the library",
+        "planning (tasks never demonstrated)"]
     err = capsys.readouterr().err
     for step in ("loading LASA", "adding demonstrations", "clustering", "labelling",
                  "figure of the clusters", "reusing WShape", "reusing place", "executable reproduction",
@@ -112,10 +124,14 @@ def test_progress_steps_are_named_as_they_start(capsys):
     err = capsys.readouterr().err
     assert "0/3" in err and "first" in err and "1/3" in err and "second" in err
     assert "1/3 [00:00, first]" not in err  # a step's count is shown with its own name
+    assert [row["part"] for row in step.timing] == ["first", "second"]
     quiet = _Steps(3, False)
     quiet("first")
     quiet.close()
+    quiet.close()  # again: the last step is not counted twice
     assert capsys.readouterr().err == ""
+    # timed whether the bar is shown or not
+    assert [row["part"] for row in quiet.timing] == ["first"] and quiet.timing[0]["seconds"] >= 0.0
 
 
 def test_reused_trajectory_meets_the_task(tmp_path):

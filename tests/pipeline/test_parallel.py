@@ -188,7 +188,13 @@ def plant(client, poison: str, mode: str, marker=None):
         name = "poison"
 
         def setup(self, worker):
+            # Warm, as a worker that has prepared a file is: _parallel imports scipy and scikit-learn only
+            # when a task first cuts or assigns, and a cold worker's first task would lag the other's by
+            # that second (the tests here are about what is retried and committed, not about start-up).
+            import skillbank.clustering  # noqa: F401
             import skillbank.pipeline._parallel as parallel
+            import skillbank.segmentation  # noqa: F401
+            import skillbank.selection  # noqa: F401
 
             original = parallel.read_file
 

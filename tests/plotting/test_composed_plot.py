@@ -36,6 +36,17 @@ def test_the_legend_lists_the_steps_carried_out_and_the_title_says_replanned(tmp
                      "the legend lists the steps carried out")
 
 
+def test_an_order_chosen_in_the_world_is_not_called_a_replan(tmp_path, drawn):
+    # the goal left the order free: the moves were taken in the world's order, with no replan
+    steps = [_step("pick", "Milk"), _step("place", "Milk", "Milk_place")]
+    plan = ["(pick Can)", "(place Can Can_place)", "(pick Milk)", "(place Milk Milk_place)"]
+    plot_composed(_episode(steps, plan), tmp_path / "u.png", title="robosuite:PickPlace, seed 101")
+    title = " ".join(drawn[-1]._suptitle.get_text().split())
+    assert title == ("robosuite:PickPlace, seed 101: failure: dropped, steps in the order the world chose "
+                     "(the legend's), not the plan's")
+    assert "replanned" not in title
+
+
 def test_a_plan_carried_out_as_planned_says_nothing_more(tmp_path, drawn):
     steps = [_step("pick", "Milk"), _step("place", "Milk", "Milk_place")]
     plan = ["(pick Milk)", "(place Milk Milk_place)", "(pick Can)"]  # stopped after two steps, as planned
