@@ -238,6 +238,11 @@ def _across(tool_q, object_q, closing, axis) -> np.ndarray:
     return _turn(tool_q, a)
 
 
+#: m: how far a 4 cm cube's top stands above where it is grasped, the object the approach's heights were
+#: set for (:func:`_episode`)
+CUBE_TOP = 0.02
+
+
 def _facing(tool_q, object_q, closing, neighbours=()) -> np.ndarray:
     """``tool_q`` turned about the vertical so the gripper closes on two faces of the object.
 
@@ -284,11 +289,18 @@ def _episode(env, task: Task, rng) -> tuple:
     else:
         driver.quat = _facing(driver.quat, driver.obs[f"{task.pick}_quat"], _closing_axis(env), others)
     grasp = target + np.r_[rng.uniform(-0.006, 0.006, 2), rng.uniform(-0.004, 0.002)]
+    # the heights below are a 4 cm cube's (its top 2 cm above where it is grasped): a taller object (a
+    # cereal box's top 7.5 cm above its centre) is approached as much higher, so that the last move comes
+    # straight down past its top, not slanting through it from the side the approach came from
+    from ._support import object_top  # the scene's geometry, read where it is read for every use
+
+    top = object_top(env, task.pick)
+    taller = 0.0 if top is None else max(0.0, top - target[2] - CUBE_TOP)
     side = rng.uniform(0, 2 * math.pi)
-    above = grasp + np.r_[0.04 * math.cos(side), 0.04 * math.sin(side), rng.uniform(0.10, 0.16)]
+    above = grasp + np.r_[0.04 * math.cos(side), 0.04 * math.sin(side), rng.uniform(0.10, 0.16) + taller]
     driver.move(above, steps(1.6))  # the approach comes from a side that varies ...
     driver.hold(steps(rng.uniform(0.0, 0.4)))
-    driver.move(grasp + [0.0, 0.0, 0.05], steps(0.8))  # ... and ends straight down onto the object
+    driver.move(grasp + [0.0, 0.0, 0.05 + taller], steps(0.8))  # ... and ends straight down onto the object
     driver.move(grasp, steps(0.8))
     driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)  # close and let the fingers settle
     if task.peg is not None:

@@ -162,6 +162,16 @@ def object_extents(env, name):
     return np.abs(local).max(axis=0) + radii.max(initial=0.0)
 
 
+def object_top(env, name):
+    """The height (m, world) of the highest point of the scene object ``name``'s collision geometry as it
+    lies now; None for an object the scene does not model."""
+    found = _object(env, name)
+    if found is None:
+        return None
+    points, radii = _points(env.sim, found[0])
+    return float((points[:, 2] + radii).max())
+
+
 def pad_half_width(env, closing) -> float:
     """Half the width (m) of the gripper's finger pads across the horizontal closing direction
     ``closing`` (world): how far a pad reaches sideways on the face it closes on."""

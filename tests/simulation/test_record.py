@@ -126,6 +126,23 @@ def test_a_can_goes_into_its_own_bin(tmp_path):
     assert can[-1, 1] - can[0, 1] > 0.3  # carried from the first bin to the second, where the can's place is
 
 
+def test_a_tall_box_is_approached_straight_down_past_its_top(tmp_path):
+    """The approach's heights are measured from the object's top: below a cereal box's top (15 cm tall,
+    3 cm across the fingers' closing) the tool is over the grasp, not slanting in from the side."""
+    out = tmp_path / "cereal.hdf5"
+    assert record("robosuite:PickPlaceCereal", episodes=1, out=out, seed=4)["episodes"] == 1
+    with h5py.File(out, "r") as h5:
+        demo = h5["data"]["demo_0"]
+        tool, box = demo["obs"]["robot0_eef_pos"][()], demo["obs"]["Cereal_pos"][()]
+        closed = int(np.argmax(demo["actions"][:, 6] > 0))
+    top = box[closed, 2] + 0.075  # the box's half height
+    high = np.flatnonzero(tool[:closed, 2] >= top + 0.02)
+    assert len(high)  # it came from above the top (the robot starts lower, beside it) ...
+    low = np.arange(high[-1] + 1, closed)
+    lateral = np.linalg.norm(tool[low, :2] - tool[closed, :2], axis=1)
+    assert lateral.max() < 0.015  # ... over where it grasps
+
+
 def test_a_square_nut_goes_round_its_peg(tmp_path):
     out = tmp_path / "nut.hdf5"
     assert record("robosuite:NutAssemblySquare", episodes=1, out=out, seed=7)["episodes"] == 1
