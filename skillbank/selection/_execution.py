@@ -47,7 +47,7 @@ from ..core._validation import numerical_errors
 from ..editing import edit_orientation
 from ..robots import TIME_LAWS, KinematicsError, RobotModel, robot_model, tool_point
 from ._limits import DURATION_RANGE, LIMITS, check_duration, check_limits, robot_limits
-from ._timing import _JOINT_KEYS, _check_stretch, _joint_law, _plain, _scale_needed, _uniform, peak_rates
+from ._timing import _check_stretch, _plain, _scale_needed, peak_rates, timed_to_limits
 
 __all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
            "DISCRETE_STREAMS", "DURATION_RANGE", "check_duration", "robot_limits"]
@@ -326,24 +326,7 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         law = "as given"  # the time base met every limit
         if scale > 1.0:
             _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
-            joint_limits = "joints" in streams and any(k in limits for k in _JOINT_KEYS)
-            law = "uniform"
-            stretched, note = _uniform(demo, limits, scale, key, model)
-            if time_law == "toppra" and joint_limits:
-                try:
-                    timed, law_scale, law_note = _joint_law(demo, limits, scale, model)
-                except ValueError as exc:  # the uniform stretch meets the limits: kept, with the reason
-                    timed, law_scale, law_note = None, np.inf, str(exc)
-                # task-space limits bound after the joint law can make it slower than a uniform stretch:
-                # both meet every limit, the shorter is kept
-                if law_scale <= scale:
-                    stretched, scale, note, law = timed, law_scale, law_note, "toppra"
-                elif timed is None:
-                    note += f" (the toppra time law failed: {law_note})"
-                else:
-                    note += (f" (shorter than the toppra time law's {float(timed.t[-1] - timed.t[0]):.6g} s, "
-                             "which task-space limits slowed down)")
-            demo = stretched
+            demo, scale, law, note = timed_to_limits(demo, limits, scale, key, model, time_law)
             notes.append(note)
         demo.metadata["timing"] = {"law": law, "limits": {k: _plain(v) for k, v in limits.items()}}
     with numerical_errors("reuse (peak rates)"):
