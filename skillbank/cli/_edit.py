@@ -118,7 +118,7 @@ def run(args) -> int:
         done = make_executable(Demonstration(out.t - out.t[0], {"position": out["position"]}, dict(meta)),
                                sources, task, ids=[Path(p).name for p in args.input],
                                robot=execution["robot"], limits=execution["limits"], kind="file",
-                               branch=execution["branch"])
+                               branch=execution["branch"], clearance_margin=margin)
         return (collision, notes, done), done.trajectory
 
     if execution["robot"] is None:

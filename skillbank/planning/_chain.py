@@ -25,10 +25,11 @@ from ..core import (
     quaternion_to_matrix,
     slerp,
 )
-from ..core._validation import check_positive, summarise
-from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, robot_model, tool_point
+from ..core._validation import check_positive, numerical_errors, summarise
+from ..robots import CLEARANCE, RobotModel, clearance, clearing_move, rate_ratio, robot_model, tool_point
 from ..selection import reuse, shift_near
 from ..selection._execution import check_limits, peak_rates, robot_limits
+from ..selection._timing import _JOINT_KEYS, _MARGIN, _plain, _scale_needed, timed_to_limits
 from ._start import clear_starts
 from ._transit import PLANNERS, planned_end, planned_transit
 
@@ -45,6 +46,9 @@ MAX_VIA_POINTS = 12
 _SAME_PLACE = 0.04
 #: The note of a plan of no steps.
 EMPTY_PLAN = "the goal already holds in the initial facts: the plan has no steps and nothing is reproduced"
+
+#: A limit counts as met up to this ratio (round-off of a timing fitted to it exactly: a time law's).
+_ROUND_OFF = 1.0 + 1e-9
 
 _TASK_LIMITS = ("velocity", "acceleration", "angular_velocity", "angular_acceleration")
 
@@ -539,7 +543,8 @@ def _planned_step(failure, *, model, scene, skill, where, position, orientation,
                   gripper, steps, args, margin, task_limits, limits, random_state, time_limit):
     """The step with its move planned by the motion planner (:mod:`._transit`), checked as every step is.
 
-    Returns ``(res, streams, segments, G, arm, resting, notes)`` as the step's own reproduction gives them;
+    Returns ``(res, streams, segments, G, arm, resting, notes, law)`` as the step's own reproduction gives
+    them (``law``: how the step was timed, :func:`_timed_step`);
     raises ``failure`` with the planner's reason appended when the planner finds no clear move either.
     """
     b = skill.binding
@@ -601,11 +606,10 @@ def _planned_step(failure, *, model, scene, skill, where, position, orientation,
                  f"{motion.planning_time:.3g} s ({len(motion.joints)} waypoints, the whole robot "
                  f"{motion.clearance.min_distance * 1000:.3g} mm clear): the skill's own move was refused "
                  f"({' '.join(str(failure).split())})"]
-        scale = _joint_scale(J, t, limits)
-        if scale > 1.0:
-            t = t * scale
-            notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint limits: "
-                         f"{t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
+        t, note, law = _timed_step(streams, t, limits, model, where)
+        if note:
+            notes.append(note)
+        law = "toppra" if law == "as given" else law  # the transit itself is timed by the time law
         G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, len(t))
         if G is not None:
             streams["gripper"] = G[:, None]
@@ -617,7 +621,7 @@ def _planned_step(failure, *, model, scene, skill, where, position, orientation,
     except ValueError as exc:
         why = " ".join(str(exc).split()).removeprefix(f"{where}: ")
         raise ValueError(f"{failure}; the motion planner found no clear move either ({why})") from None
-    return res, streams, segments, G, arm, resting, notes
+    return res, streams, segments, G, arm, resting, notes, law
 
 
 def _shape(scene, other):
@@ -724,19 +728,35 @@ def _first_joints(model, scene, streams, reference, where, names, margin, args) 
     raise first
 
 
-def _joint_scale(J, t, limits) -> float:
-    """The uniform time stretch that keeps every joint within the joint limits (1.0: none needed)."""
-    scale = 1.0
-    if len(t) < 3:
-        return scale
-    dt = np.diff(t)
-    v = np.diff(J, axis=0) / dt[:, None]
-    a = np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
-    if "joint_velocity" in limits:
-        scale = max(scale, float((np.abs(v) / limits["joint_velocity"]).max()) * (1 + 1e-12))
-    if "joint_acceleration" in limits:
-        scale = max(scale, float(np.sqrt((np.abs(a) / limits["joint_acceleration"]).max())) * (1 + 1e-12))
-    return scale
+def _timed_step(streams, t, limits, model, where, ends="rest"):
+    """The step's time base, re-timed where it breaks the plan's limits, as reuse re-times a reproduction.
+
+    Kept when it meets every limit; else the one choice :func:`timed_to_limits` makes for
+    ``make_executable`` too: the step's joint path timed by the time law (TOPP-RA, the samples kept, never
+    faster than the step's own time base), any task-space limit it then breaks met by a uniform stretch
+    of that timing, or the uniform stretch where that is shorter. The joint limits are measured as every
+    export carries them (:func:`skillbank.robots.rate_ratio`: a bag's ``numpy.gradient`` rates too).
+
+    ``ends``: ``"rest"`` for a step that starts and ends at rest (zero velocity at its ends), so that
+    the law's steps join at rest too; ``"given"`` (``"velocity": "free"``) at the speed of its time base.
+
+    Returns ``(t, note, law)``: the note (None when kept) and ``"as given"``, ``"toppra"`` or ``"uniform"``.
+    """
+    if len(t) < 2 or not limits:
+        return t, None, "as given"
+    demo = Demonstration(t, {k: streams[k] for k in ("position", "orientation", "joints") if k in streams})
+    with numerical_errors(f"{where} (timing)"):
+        scale, key = _scale_needed(demo, limits)
+        for k in _JOINT_KEYS:
+            if k in limits and "joints" in streams:
+                need = rate_ratio(t, streams["joints"], **{k.removeprefix("joint_"): limits[k]}) * _MARGIN
+                if need > scale:
+                    scale, key = need, k
+    # a planned transit is timed to its limits exactly: met, to round-off
+    if scale <= _ROUND_OFF:
+        return t, None, "as given"
+    timed, _, law, note = timed_to_limits(demo, limits, scale, key, model, "toppra", ends=ends)
+    return timed.t, f"{where}: {note}", law
 
 
 def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state=None, progress=None,
@@ -791,7 +811,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     if not plan:  # the goal holds already: the empty plan is the answer, with nothing to reproduce
         return PlanResult(plan=[], steps=[], trajectory=None, collision=False, constraint_error=0.0,
                           join_error={}, notes=[EMPTY_PLAN])
-    pieces_all, steps, notes = [], [], []
+    pieces_all, steps, notes, laws = [], [], [], []
     branch = getattr(scene, "branch", None)
     if model is not None:
         limits, more = robot_limits(model, limits)  # the robot's own joint limits always apply
@@ -888,6 +908,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                     if goal_q is not None and not with_q:
                         step_notes.append(f"{where}: the goal orientation was left free: skill "
                                           f"{skill.label!r} has none")
+                    law = "as given"
                     if model is not None:
                         seed = joints
                         if seed is None:
@@ -901,11 +922,10 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                                                               args)
                         else:
                             streams["joints"] = _joints(model, streams, seed, where, branch)
-                        scale = _joint_scale(streams["joints"], t, limits)
-                        if scale > 1.0:
-                            t = t * scale
-                            step_notes.append(f"{where}: time stretched by {scale:.4g} to meet the joint "
-                                              f"limits: {t[-1] / scale:.6g} s -> {t[-1]:.6g} s")
+                        t, note, law = _timed_step(streams, t, limits, model, where,
+                                                   "rest" if zero is not None else "given")
+                        if note:
+                            step_notes.append(note)
                     G, note = _gripper(_recorded_gripper(traj, segments), b, gripper, n)
                     if G is not None:
                         streams["gripper"] = G[:, None]
@@ -983,7 +1003,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                 raise
             # the skill (and the hand-written transit) cannot keep the robot clear: the motion planner
             # finds the move in joint space (OMPL), and a straight approach brings the tool onto the goal
-            res, streams, segments, G, arm, resting, step_notes = _planned_step(
+            res, streams, segments, G, arm, resting, step_notes, law = _planned_step(
                 exc, model=model, scene=scene, skill=skill, where=where, position=position,
                 orientation=orientation, joints=joints, goal=goal, goal_q=goal_q, gripper=gripper,
                 steps=steps, args=args, margin=clearance_margin, task_limits=task_limits, limits=limits,
@@ -1018,6 +1038,7 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
                         segments=[{"kind": k, "start": first + a, "stop": first + z} for k, a, z in segments],
                         clearance=arm, touches=sorted(resting - set(args)) if not steps else [])
         steps.append(step)
+        laws.append(law if model is not None else "as given")
         notes += step_notes
         position, orientation = streams["position"][-1], streams.get("orientation", [None])[-1]
         joints = streams["joints"][-1] if model is not None else None
@@ -1025,6 +1046,15 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
         if progress is not None:
             progress(i, len(plan))
     trajectory = _join(pieces_all, model, notes)
+    if model is not None:
+        trajectory = _timed_joins(trajectory, limits, notes)
+        # what every export states: the law and the limits the joints were timed for, and each step's law
+        trajectory.metadata["timing"] = {
+            "law": next((k for k in ("toppra", "uniform") if k in laws), "as given"), "steps": laws,
+            "limits": {k: _plain(v) for k, v in limits.items()}}
+        stretched = trajectory.metadata.pop("joins_stretched_by", None)
+        if stretched is not None:  # and the stretch after them, should a join need it
+            trajectory.metadata["timing"]["joins_stretched_by"] = stretched
     everything = _world(scene, list(scene.obstacles))
     collision = any(ob.collides(trajectory["position"]) for _, ob in everything)
     whole = None
@@ -1034,6 +1064,30 @@ def reproduce_plan(scene, plan, skills, *, robot=None, limits=None, random_state
     error = max([s.constraint_error for s in steps] + [errors["position"]])
     return PlanResult(plan=list(plan), steps=steps, trajectory=trajectory, collision=bool(collision),
                       constraint_error=error, join_error=errors, notes=notes, clearance=whole)
+
+
+def _timed_joins(trajectory, limits, notes) -> Demonstration:
+    """The joined trajectory, stretched uniformly where the joins of its steps break the joint limits.
+
+    Each step is timed on its own (:func:`_timed_step`); steps that join at rest meet the limits across
+    their join too (measured: the four-button plan's joins reach the acceleration limit, not beyond).
+    A step bound with ``"velocity": "free"`` keeps its own speed at its ends, which the next step's need
+    not match: then the whole chain is stretched by the factor that meets the limits, with a note.
+    """
+    keys = {k.removeprefix("joint_"): limits[k] for k in _JOINT_KEYS if k in limits}
+    if not keys or trajectory.n_steps < 3:
+        return trajectory
+    with numerical_errors("plan (timing the joins)"):
+        need = rate_ratio(trajectory.t, trajectory["joints"], **keys)
+    if need <= _ROUND_OFF:
+        return trajectory
+    scale = need * _MARGIN
+    t = trajectory.t * scale
+    notes.append(f"time stretched by {scale:.4g} to meet the joint limits across the joins of the steps "
+                 f"(each step is timed on its own): {trajectory.t[-1]:.6g} s -> {t[-1]:.6g} s")
+    out = Demonstration(t, trajectory.streams, dict(trajectory.metadata, joins_stretched_by=scale))
+    out.metadata["peaks"] = peak_rates(out)
+    return out
 
 
 def _join(pieces, model, notes) -> Demonstration:

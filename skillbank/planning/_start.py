@@ -9,72 +9,18 @@ the robot itself and of the scene** (its obstacles, table and workspace) with
 the planning margin, checked by :func:`skillbank.robots.clearance` as every
 step is. The scene's objects are left out, as at the start of the first step
 (the robot may rest on them, and leaves them). With none clear, one line names
-every branch (or seed) tried and why it failed.
+every branch (or seed) tried and why it failed. The choice itself is
+:func:`skillbank.robots._start.clear_configurations`, which a reuse's start
+with a robot takes too; this module says it in a scene's terms.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..robots import KinematicsError, clearance
-from ..robots._base import wrap_angle
+from ..robots._start import SEEDS, clear_configurations
 
 __all__ = ["clear_starts", "SEEDS"]
-
-#: Seeds beyond the recorded joints and home for an arm with one numerical "branch", from a fixed generator
-#: (the same scene always gives the same start): towards uniform draws within the joint limits (±π where a
-#: joint has none) ...
-SEEDS = 6
-#: ... each that fraction of the way from the recorded joints (or home) to a uniform draw: far seeds leave
-#: a damped solver held at a joint limit more often than they find another posture.
-SPREAD = 0.5
-#: How a branch the pose is not solved on is named (:class:`~skillbank.robots.KinematicsError` reasons).
-_REASONS = {"joint limit": "unreachable within the joint limits", "singularity": "at a singularity"}
-
-
-def _candidates(model, position, quaternion, reference):
-    """``[(label, joints or None, why)]`` in order of preference: the branches (or seeds) at the pose."""
-    reference = np.asarray(model.home if reference is None else reference, float)
-    if len(model.branch_names) > 1:  # closed-form branches: every one at once, nearest the reference first
-        sols = model.ik_all(position, quaternion)
-        gap = np.where(np.isnan(sols), np.inf, np.abs(wrap_angle(sols - reference)))
-        order = np.argsort(np.linalg.norm(gap, axis=1), kind="stable")
-        seeds = [(model.branch_names[b], dict(branch=int(b), q_seed=reference)) for b in order]
-    else:  # a numerical solver: the recorded joints (or home), home, and a few fixed others
-        lo, hi = (np.where(np.isfinite(x), x, np.copysign(np.pi, x)) for x in model.limits.T)
-        rng = np.random.default_rng(0)
-        seeds = [("seed " + ("home" if np.allclose(reference, model.home) else "recorded"), reference),
-                 ("seed home", np.asarray(model.home, float))]
-        seeds += [(f"seed {k}", reference + SPREAD * (rng.uniform(lo, hi) - reference))
-                  for k in range(1, SEEDS + 1)]
-        seeds = [(label, dict(q_seed=s)) for k, (label, s) in enumerate(seeds)
-                 if not any(np.array_equal(s, t) for _, t in seeds[:k])]
-    out, found = [], []
-    for label, kwargs in seeds:
-        try:
-            q = np.asarray(model.ik(position, quaternion, **kwargs), float)
-        except KinematicsError as exc:
-            out.append((label, None, _REASONS.get(exc.reason, exc.reason)))
-            continue
-        except ValueError:
-            out.append((label, None, "unreachable"))
-            continue
-        if any(np.abs(wrap_angle(q - p)).max() < 1e-3 for p in found):
-            continue  # a seed that converged to a configuration already tried
-        found.append(q)
-        out.append((label, q, None))
-    return out
-
-
-def _why(res, margin, label) -> str | None:
-    """Why the configuration checked in ``res`` is not clear (None: it is)."""
-    hit = res.first_contact(margin)
-    if hit is None:
-        return None
-    _, body, other = hit
-    d = float(res.min_distance)
-    depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
-    return f"its {body} {depth} {label(other)}"
 
 
 def clear_starts(model, scene, position, quaternion, *, reference=None, names=(), margin, label):
@@ -107,18 +53,12 @@ def clear_starts(model, scene, position, quaternion, *, reference=None, names=()
         One line naming every branch (or seed) tried and why it failed: unreachable (or the solver's
         reason), or the body and what it comes near.
     """
-    obstacles = {n: scene.obstacles[n] for n in names}
-    table, workspace = getattr(scene, "table", None), getattr(scene, "workspace", None)
-    clear, failed = [], []
-    for name, q, why in _candidates(model, position, quaternion, reference):
-        if q is None:
-            failed.append(f"{name}: {why}")
-            continue
-        why = _why(clearance(model, q[None], obstacles, table=table, workspace=workspace), margin, label)
-        if why is None:
-            clear.append(q)
-        else:
-            failed.append(f"{name}: {why}")
+    # the one choice of a start (skillbank.robots.clear_configurations), said in the scene's terms
+    clear, failed = clear_configurations(model, position, quaternion, reference=reference,
+                                         obstacles={n: scene.obstacles[n] for n in names},
+                                         table=getattr(scene, "table", None),
+                                         workspace=getattr(scene, "workspace", None), margin=margin,
+                                         label=label)
     if clear:
         return clear
     kind = "branch" if len(model.branch_names) > 1 else "seed"

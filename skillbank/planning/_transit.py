@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core import quaternion_to_matrix
-from ..robots import MotionPlanningError, plan_motion
+from ..robots import MotionPlanningError, plan_motion, time_law
 from ._start import clear_starts
 
 __all__ = ["PLANNERS", "PLANNED_APPROACH", "planned_end", "planned_transit",
@@ -52,10 +52,12 @@ def planned_end(goal, goal_q, near):
 
 
 def _timed(model, Q, duration, joint_speed):
-    """The waypoints ``Q`` as a sampled joint trajectory: each segment minimum-jerk from rest to rest.
+    """The waypoints ``Q`` sampled along the straight joint segments between them, on a time base each
+    segment minimum-jerk from rest to rest: the samples :func:`planned_transit` gives the time law.
 
     A segment lasts long enough that no joint exceeds ``joint_speed`` (rad/s, per joint) and that the
-    tool point's path meets ``duration(length)`` (the chain's rule for a straight piece of that length).
+    tool point's path meets ``duration(length)`` (the chain's rule for a straight piece of that length);
+    it has a sample per :data:`_DT` of that duration, denser towards the waypoints.
     """
     ts, qs, offset = [np.zeros(1)], [Q[:1]], 0.0
     for a, b in zip(Q[:-1], Q[1:], strict=True):
@@ -142,9 +144,12 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
     names, objects : sequence of str
     margin : float
     duration : callable
-        ``duration(length)``: seconds a straight piece of that length takes (the chain's rule).
+        ``duration(length)``: seconds a straight piece of that length takes (the chain's rule): sets how
+        densely each segment is sampled, and the time base the time law starts from.
     limits : dict
-        The plan's limits (``joint_velocity`` caps the segments' speed).
+        The plan's limits: the transit is timed by :func:`skillbank.robots.time_law` (TOPP-RA, from rest
+        to rest) under ``joint_velocity`` (at most :data:`TRANSIT_JOINT_SPEED`) and
+        ``joint_acceleration``.
     random_state : int, optional
     time_limit : float, optional
         Seconds the search may take per pair of start and end configurations.
@@ -154,7 +159,7 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
     Returns
     -------
     piece : dict
-        ``t``, ``position``, ``orientation`` (forward kinematics) and ``joints``.
+        ``t`` (the time law's), ``position``, ``orientation`` (forward kinematics) and ``joints``.
     plan : MotionPlan
 
     Raises
@@ -189,7 +194,11 @@ def planned_transit(model, scene, *, where, starts, end, end_q, names, objects, 
     speed = np.full(model.n_joints, TRANSIT_JOINT_SPEED)
     if "joint_velocity" in limits:
         speed = np.minimum(speed, np.broadcast_to(limits["joint_velocity"], speed.shape))
-    t, J = _timed(model, plan.joints, duration, speed)
+    given, J = _timed(model, plan.joints, duration, speed)
+    # the samples stay on the straight segments the planner checked; only their times change: the time law
+    # (TOPP-RA) under the joint speed and the arm's joint accelerations, from rest to rest; the
+    # minimum-jerk time base, at rest at every waypoint, is the spline it also tries (the faster is kept)
+    t = time_law(J, velocity=speed, acceleration=limits.get("joint_acceleration"), t=given)
     position, orientation = model.fk(J)
     position[-1] = end  # exactly, not to round-off: the approach starts here
     return {"t": t, "position": position, "orientation": orientation, "joints": J}, plan

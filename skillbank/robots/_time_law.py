@@ -269,7 +269,10 @@ def time_law(joints, *, velocity=None, acceleration=None, t=None, law: str = "to
             if given is not None:
                 # chord length turns a joint's reversal into a kink the spline rounds off (and TOPP-RA
                 # nearly stops for); the given time base, smooth through it, can be faster: the faster wins
-                other = _toppra_piece(q[a:b + 1], velocity, acceleration, speeds, knots=given[a:b + 1])
+                try:
+                    other = _toppra_piece(q[a:b + 1], velocity, acceleration, speeds, knots=given[a:b + 1])
+                except ValueError:  # a time base at rest inside the piece (a planned transit's waypoints,
+                    other = piece   # minimum-jerk) makes that spline stop there: degenerate, so not faster
                 piece = other if other[-1] < piece[-1] else piece
             dt[a:b] = np.diff(piece)
         if given is not None:

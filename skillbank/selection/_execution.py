@@ -45,9 +45,11 @@ from ..core import POSE_OF, Demonstration, check_pose_of, continuous_quaternions
 from ..core._rotations import _exp, _log, quaternion_conjugate, quaternion_multiply
 from ..core._validation import numerical_errors
 from ..editing import edit_orientation
-from ..robots import TIME_LAWS, KinematicsError, RobotModel, robot_model, tool_point
+from ..robots import CLEARANCE, TIME_LAWS, KinematicsError, RobotModel, clearance, robot_model, tool_point
+from ..robots._start import clear_configurations
+from ._clear import _label
 from ._limits import DURATION_RANGE, LIMITS, check_duration, check_limits, robot_limits
-from ._timing import _JOINT_KEYS, _check_stretch, _joint_law, _plain, _scale_needed, _uniform, peak_rates
+from ._timing import _check_stretch, _plain, _scale_needed, peak_rates, timed_to_limits
 
 __all__ = ["Executable", "make_executable", "retime", "peak_rates", "executable_dict", "LIMITS",
            "DISCRETE_STREAMS", "DURATION_RANGE", "check_duration", "robot_limits"]
@@ -195,9 +197,45 @@ def _joints(model: RobotModel, position, orientation, source: Demonstration, ts0
         raise KinematicsError(f"robot {model.name}: {exc}", index=exc.index, reason=exc.reason) from None
 
 
+def _clear_start(model: RobotModel, position, orientation, J, obstacles, margin):
+    """The joints ``J`` (on the recorded branch) from a start the arm can take among ``obstacles``.
+
+    ``J`` is kept when its first configuration keeps ``margin`` from the obstacles, as
+    :func:`~skillbank.selection.keep_clear` checks a reproduction (the base's bodies left out: a table
+    given as an obstacle is where the base stands). Otherwise the start is the configuration at the
+    start pose clear of the obstacles and of the robot itself nearest ``J``'s
+    (:func:`skillbank.robots._start.clear_configurations`, the one choice of a start, which a plan's start
+    takes too), the first whose branch the whole path follows; with none, ``J`` (keep_clear then refuses
+    its start, as before). Returns ``(joints, note or None)``.
+    """
+    fixed = [b.name for b in model.bodies if b.frame == 0]
+    first = clearance(model, J[:1], obstacles, ignore=fixed, self_collision=False)
+    hit = first.first_contact(margin)
+    if hit is None:
+        return J, None
+    clear, _ = clear_configurations(model, position[0], orientation[0], reference=J[0], obstacles=obstacles,
+                                    margin=margin, ignore=fixed)
+    for q0 in clear:
+        try:
+            path = model.ik(position, orientation, q_seed=q0)
+        except KinematicsError:
+            continue  # the path leaves this branch's reach: the next clear start
+        d = float(first.min_distance)
+        depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
+
+        def name(q):
+            return model.branch_names[int(model.branch_of(q)[0])] if len(model.branch_names) > 1 else \
+                f"[{', '.join(f'{v:.3g}' for v in q)}]"
+        return path, (f"start: the recorded joints' branch {name(J[0])} puts the robot's {hit[1]} {depth} "
+                      f"{_label(hit[2], obstacles)} at the start; started on {name(q0)}, the nearest "
+                      f"configuration clear of the obstacles and of itself (clearance margin "
+                      f"{margin * 1000:g} mm)")
+    return J, None
+
+
 def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot=None, limits=None,
                     fixed_time: bool = False, by_index: bool = False, kind: str = "primitive",
-                    branch=None, time_law: str = "toppra") -> Executable:
+                    branch=None, time_law: str = "toppra", clearance_margin=None) -> Executable:
     """Complete a reproduced path with orientation, gripper, other streams, joints and timing.
 
     Parameters
@@ -233,6 +271,13 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
     by_index : bool, default=False
         Map reproduction phase to source samples by index rather than time
         (the sources were resampled by index onto a given time base).
+    clearance_margin : float, optional
+        With a robot, ``constraints`` with obstacles and no ``branch``:
+        metres the robot's start keeps from the obstacles (default
+        :data:`skillbank.robots.CLEARANCE`). A start on the recorded branch
+        that comes nearer is replaced by the clear configuration at the start
+        pose nearest it (``robots._start.clear_configurations``, as a plan's
+        start), with a note.
 
     Returns
     -------
@@ -316,6 +361,12 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         with numerical_errors(f"reuse ({model.name} inverse kinematics)"):
             streams["joints"] = _joints(model, streams["position"], orientation, best, float(times[0][0]),
                                         branch)
+            if branch is None and constraints.obstacles and model.bodies:
+                margin = CLEARANCE if clearance_margin is None else clearance_margin
+                streams["joints"], note = _clear_start(model, streams["position"], orientation,
+                                                       streams["joints"], list(constraints.obstacles), margin)
+                if note:
+                    notes.append(note)
         metadata["joint_names"] = list(model.joint_names)
         metadata["robot"] = model.name
     demo = Demonstration(t, streams, metadata)
@@ -326,24 +377,7 @@ def make_executable(out: Demonstration, sources, constraints, *, ids=None, robot
         law = "as given"  # the time base met every limit
         if scale > 1.0:
             _check_stretch(constraints, fixed_time, scale, t, key, limits[key])
-            joint_limits = "joints" in streams and any(k in limits for k in _JOINT_KEYS)
-            law = "uniform"
-            stretched, note = _uniform(demo, limits, scale, key, model)
-            if time_law == "toppra" and joint_limits:
-                try:
-                    timed, law_scale, law_note = _joint_law(demo, limits, scale, model)
-                except ValueError as exc:  # the uniform stretch meets the limits: kept, with the reason
-                    timed, law_scale, law_note = None, np.inf, str(exc)
-                # task-space limits bound after the joint law can make it slower than a uniform stretch:
-                # both meet every limit, the shorter is kept
-                if law_scale <= scale:
-                    stretched, scale, note, law = timed, law_scale, law_note, "toppra"
-                elif timed is None:
-                    note += f" (the toppra time law failed: {law_note})"
-                else:
-                    note += (f" (shorter than the toppra time law's {float(timed.t[-1] - timed.t[0]):.6g} s, "
-                             "which task-space limits slowed down)")
-            demo = stretched
+            demo, scale, law, note = timed_to_limits(demo, limits, scale, key, model, time_law)
             notes.append(note)
         demo.metadata["timing"] = {"law": law, "limits": {k: _plain(v) for k, v in limits.items()}}
     with numerical_errors("reuse (peak rates)"):

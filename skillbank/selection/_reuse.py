@@ -129,7 +129,7 @@ def _check_k(k, method: str, n_usable: int) -> int:
 
 def reproduce_selection(selection: Selection, constraints, *, method: str = "promp", k=None,
                         random_state=None, t=None, duration=None, robot=None, limits=None,
-                        branch=None, time_law: str = "toppra") -> ReuseResult:
+                        branch=None, time_law: str = "toppra", clearance_margin=None) -> ReuseResult:
     """Learn ``method`` from the ``k`` best candidates of a selection and reproduce the task.
 
     The second half of :func:`reuse`; call it directly to try several
@@ -140,7 +140,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     selection : Selection
         From :func:`select_candidates` with the same ``constraints``.
     constraints : Constraints
-    method, k, random_state, t, duration, robot, limits, branch, time_law
+    method, k, random_state, t, duration, robot, limits, branch, time_law, clearance_margin
         As in :func:`reuse`. ``duration`` stretches the reproduction's time
         base uniformly here; :func:`reuse` stretches the candidates first,
         so that velocity constraints mean the same in the result.
@@ -198,7 +198,7 @@ def reproduce_selection(selection: Selection, constraints, *, method: str = "pro
     done = make_executable(Demonstration(time, {"position": out["position"]}, metadata),
                            [c.recorded() for c in chosen], constraints, ids=used, robot=robot, limits=limits,
                            fixed_time=t is not None, by_index=t is not None, branch=branch,
-                           time_law=time_law)
+                           time_law=time_law, clearance_margin=clearance_margin)
     traj = done.trajectory
     Y = traj["position"]
     with numerical_errors(f"reuse ({method} result check)"):
@@ -337,7 +337,10 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
         obstacle (default :data:`skillbank.robots.CLEARANCE`, 5 mm). A reproduction that comes closer
         is repaired with via points that move that body away (:func:`keep_clear`), up to
         ``MAX_REPAIRS`` of them; if it still does, its candidates are rejected with a reason naming
-        the body, the obstacle and the time, and the next ones are tried.
+        the body, the obstacle and the time, and the next ones are tried. The start, which no repair
+        moves, is the recorded joints' branch when that keeps the margin, else the configuration at
+        the start pose clear of the obstacles and of the robot itself nearest it (as a plan's start:
+        ``robots._start.clear_configurations``), with a note; without a branch given.
     limits : dict, optional
         Velocity and acceleration limits (keys ``velocity``,
         ``acceleration``, ``angular_velocity``, ``angular_acceleration``,
@@ -404,7 +407,8 @@ def reuse(primitives, constraints, *, method: str = "promp", k=None, ids=None, r
                                       rejected={**selection.rejected, **lost}, rank=again.rank)
             result = reproduce_selection(selection, task, method=method, k=k, random_state=random_state, t=t,
                                          duration=duration, robot=model if model is not None else robot,
-                                         limits=limits, branch=branch, time_law=time_law)
+                                         limits=limits, branch=branch, time_law=time_law,
+                                         clearance_margin=margin)
             return result, result.trajectory
 
         if model is None:

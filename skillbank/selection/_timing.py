@@ -3,8 +3,8 @@
 :func:`peak_rates` measures a trajectory; :func:`_scale_needed` finds the
 smallest uniform stretch meeting every limit; :func:`_uniform` applies it,
 :func:`_joint_law` times a joint trajectory with
-:func:`skillbank.robots.time_law` (TOPP-RA) instead. :func:`make_executable`
-chooses between them (see its module docstring).
+:func:`skillbank.robots.time_law` (TOPP-RA) instead. :func:`timed_to_limits`
+chooses between them, for :func:`make_executable` and a plan's steps.
 """
 
 from __future__ import annotations
@@ -120,18 +120,19 @@ def _uniform(demo: Demonstration, limits: dict, scale: float, key: str, model):
                  f"{_whose(model, key, limits[key])}: {before:.6g} s -> {before * scale:.6g} s")
 
 
-def _joint_law(demo: Demonstration, limits: dict, uniform: float, model):
+def _joint_law(demo: Demonstration, limits: dict, uniform: float, model, ends: str = "given"):
     """The joint path timed by TOPP-RA under the joint limits, then the other limits by a uniform stretch.
 
     Never faster than the given time base: a duration asked for is kept when
-    the law would be faster (the law's profile, slowed down to it).
+    the law would be faster (the law's profile, slowed down to it). ``ends``:
+    as :func:`skillbank.robots.time_law`'s.
     """
     t, streams = demo.t, demo.streams
     before = float(t[-1] - t[0])
     velocity, acceleration = limits.get("joint_velocity"), limits.get("joint_acceleration")
     # from and to the given boundary speeds, as slowed by the uniform law: a reproduction that starts at
     # rest starts at rest, one that starts moving keeps the start it would have had before the time law
-    times = joint_time_law(streams["joints"], velocity=velocity, acceleration=acceleration, t=t, ends="given")
+    times = joint_time_law(streams["joints"], velocity=velocity, acceleration=acceleration, t=t, ends=ends)
     _check_range(float(times[-1]), "the joint limits")
     timed = Demonstration(t[0] + times, streams, demo.metadata)
     with numerical_errors("reuse (time scaling)"):
@@ -152,6 +153,60 @@ def _joint_law(demo: Demonstration, limits: dict, uniform: float, model):
     elif slow > 1.0:
         note += f"; slowed to the {before:.6g} s asked for"
     return timed, after / before, note
+
+
+def timed_to_limits(demo: Demonstration, limits: dict, scale: float, key: str, model=None,
+                    time_law: str = "toppra", *, ends: str = "given"):
+    """A trajectory that breaks its limits, re-timed: ``(demo, scale, law, note)``.
+
+    ``scale`` and ``key``: the uniform stretch that meets every limit and the
+    limit that sets it (:func:`_scale_needed`, or larger). A joint trajectory
+    under joint limits with ``time_law="toppra"`` is timed by
+    :func:`_joint_law`; when task-space limits make that slower than the
+    uniform stretch (both meet every limit), or the law fails, the uniform
+    stretch is kept, its note saying why. Otherwise the uniform stretch.
+    ``ends``: where the law starts and ends (:func:`skillbank.robots.time_law`):
+    ``"given"`` for a reproduction, ``"rest"`` for a plan's step that joins
+    the next at rest.
+    The one choice of a law, for ``make_executable`` and a plan's steps
+    (:mod:`skillbank.planning`).
+
+    Returns
+    -------
+    demo : Demonstration
+        Re-timed, the samples unchanged.
+    scale : float
+        Duration after over duration before.
+    law : {"toppra", "uniform"}
+    note : str
+        Which law, under which limits, from what duration to what.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> d = Demonstration(t, {"position": np.c_[t, t]})
+    >>> out, s, law, note = timed_to_limits(d, {"velocity": 0.5}, 2.0 * 2 ** 0.5, "velocity")
+    >>> law, round(float(out.t[-1]), 4)
+    ('uniform', 2.8284)
+    """
+    joint_limits = "joints" in demo.streams and any(k in limits for k in _JOINT_KEYS)
+    law = "uniform"
+    stretched, note = _uniform(demo, limits, scale, key, model)
+    if time_law == "toppra" and joint_limits:
+        try:
+            timed, law_scale, law_note = _joint_law(demo, limits, scale, model, ends)
+        except ValueError as exc:  # the uniform stretch meets the limits: kept, with the reason
+            timed, law_scale, law_note = None, np.inf, str(exc)
+        # task-space limits bound after the joint law can make it slower than a uniform stretch:
+        # both meet every limit, the shorter is kept
+        if law_scale <= scale:
+            stretched, scale, note, law = timed, law_scale, law_note, "toppra"
+        elif timed is None:
+            note += f" (the toppra time law failed: {law_note})"
+        else:
+            note += (f" (shorter than the toppra time law's {float(timed.t[-1] - timed.t[0]):.6g} s, "
+                     "which task-space limits slowed down)")
+    return stretched, scale, law, note
 
 
 def _check_stretch(constraints, fixed_time, scale, t, key, limit) -> None:

@@ -458,7 +458,16 @@ def test_a_reuse_whose_upper_arm_meets_an_obstacle_midway_is_repaired_with_via_p
     ball = _ball_beside(np.array(plain["streams"]["joints"]), "upper_arm", (0, 1, 0))
     robot = UR5e()
     assert clearance(robot, np.array(plain["streams"]["joints"]), [ball]).min_distance < -0.005
+    # the upper arm barely moves on this reuse, so the ball meets it at the start too: the start is then the
+    # nearest clear configuration at the start pose (issue 43, item 3), from which no repair is needed
     code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert [n for n in doc["notes"] if n.startswith("start: ")] and doc["clearance"]["min_distance"] >= 0.005
+    # on the recorded branch (given), the first candidates are refused at their start and the next ones
+    # repaired with via points, as before
+    recorded = ("--branch", "shoulder-left/elbow-up/wrist-up")
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), *recorded, "--json")
     assert code == 0, err
     doc = json.loads(text)
     repairs = [n for n in doc["notes"] if n.startswith("repair: via point")]
@@ -470,8 +479,8 @@ def test_a_reuse_whose_upper_arm_meets_an_obstacle_midway_is_repaired_with_via_p
     P = np.array(doc["streams"]["position"])
     assert np.linalg.norm(P[-1] - buttons["goal"]) < 1e-6
     # a larger margin asks for more: repaired further, or refused naming the body
-    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--clearance",
-                             "0.03", "--json")
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), *recorded,
+                             "--clearance", "0.03", "--json")
     if code == 0:
         J = np.array(json.loads(text)["streams"]["joints"])
         assert clearance(robot, J, [ball], self_collision=False).min_distance >= 0.03 - 1e-9
@@ -503,3 +512,61 @@ def test_an_edit_whose_forearm_meets_an_obstacle_at_its_goal_is_refused(cli, but
     assert code == 2 and len(err.strip().splitlines()) == 1 and not out.exists()
     assert re.search(r"edit: the robot's forearm comes [\d.]+ mm into obstacle 0 .* at its goal, which no "
                      r"repair moves; nothing was written", err), err
+
+
+# --- issue 43, item 3: the start a reuse or an edit takes with a robot ------------------------------------
+
+
+def _ball_at(J0, body, radius=0.03):
+    """A ball round ``body``'s middle at the configuration ``J0``."""
+    robot = UR5e()
+    capsule = next(c for c in robot.bodies if c.name == body)
+    F = robot.link_frames(J0)[0, capsule.frame]
+    return Sphere(F[:3, :3] @ (0.5 * (np.asarray(capsule.a) + np.asarray(capsule.b))) + F[:3, 3], radius)
+
+
+START_NOTE = (r"^start: the recorded joints' branch shoulder-left/elbow-up/wrist-up puts the robot's {body} "
+              r"[\d.]+ mm into obstacle 0 \(sphere:[-\d.,]+\) at the start; started on (?P<branch>[a-z/-]+), "
+              r"the nearest configuration clear of the obstacles and of itself \(clearance margin 5 mm\)$")
+
+
+@pytest.mark.parametrize("body", ["forearm", "upper_arm"])
+def test_an_edit_whose_recorded_start_meets_an_obstacle_starts_on_the_nearest_clear_branch(cli, buttons,
+                                                                                          tmp_path, body):
+    """Before, refused (`... at its start, which no repair moves`); now the start is the clear configuration
+    at the start pose nearest the recorded one, the same choice as a plan's start (clear_configurations)."""
+    path = write_npz(load(buttons["file"]).slice(1385, 2074), tmp_path / "move.npz")
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--json")
+    assert code == 0, err
+    robot = UR5e()
+    J = np.array(json.loads(text)["streams"]["joints"])
+    ball = _ball_at(J[0], body)
+    code, text, err = cli("edit", path, "--robot", "ur5e", "--obstacle", ball.spec(), "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    [note] = [n for n in doc["notes"] if n.startswith("start:")]
+    match = re.match(START_NOTE.format(body=body), note)
+    assert match, note
+    J2 = np.array(doc["streams"]["joints"])
+    recorded = "shoulder-left/elbow-up/wrist-up"
+    assert robot.branch_names[robot.branch_of(J2[0])[0]] == match["branch"] != recorded
+    p, _ = robot.fk(J2)  # the same tool path, from another configuration
+    np.testing.assert_allclose(p, np.array(doc["streams"]["position"]), atol=1e-6)
+    assert doc["clearance"]["min_distance"] >= 0.005 - 1e-9
+    assert clearance(robot, J2, [ball], self_collision=False).min_distance >= 0.005 - 1e-9
+    # a branch given is the user's: still refused there
+    code, _, err = cli("edit", path, "--robot", "ur5e", "--obstacle", ball.spec(), "--branch", recorded)
+    assert code == 2 and "at its start, which no repair moves" in err
+
+
+def test_a_reuse_whose_recorded_start_meets_an_obstacle_starts_on_the_nearest_clear_branch(cli, buttons):
+    code, text, _ = _reuse(cli, buttons, "--robot", "ur5e", "--json")
+    assert code == 0
+    J = np.array(json.loads(text)["streams"]["joints"])
+    ball = _ball_at(J[0], "forearm")
+    code, text, err = _reuse(cli, buttons, "--robot", "ur5e", "--obstacle", ball.spec(), "--json")
+    assert code == 0, err
+    doc = json.loads(text)
+    [note] = [n for n in doc["notes"] if n.startswith("start:")]
+    assert re.match(START_NOTE.format(body="forearm"), note), note
+    assert doc["collision"] is False and doc["clearance"]["min_distance"] >= 0.005 - 1e-9

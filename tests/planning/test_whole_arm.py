@@ -212,7 +212,9 @@ def test_the_panda_planned_for_its_fingertips_presses_gently(button_library):
     assert res.clearance >= _chain.CLEARANCE - 1e-9
     sim = simulate(res.trajectory, scene, robot=model, targets=res.targets())
     assert sim.facts == {"(pressed b2)": True} and sim.contacts == []
-    assert sim.buttons["b2"]["peak_force"] < 2 * PRESS_FORCE and sim.tool_max < 1e-3
+    # timed by the time law at the Panda's own limits (up to 20 rad/s^2): 4.94 s where the uniform stretch
+    # took 9.16 s, and its servos track the tool within 1.07 mm (0.60 mm at the stretch's pace)
+    assert sim.buttons["b2"]["peak_force"] < 2 * PRESS_FORCE and sim.tool_max < 1.5e-3
 
 
 def test_plan_simulate_on_the_panda_for_its_fingertips_from_the_command_line(cli, button_library, tmp_path):
@@ -226,7 +228,8 @@ def test_plan_simulate_on_the_panda_for_its_fingertips_from_the_command_line(cli
     assert code == 0, err
     sim = json.loads(text)["simulation"]
     assert sim["buttons"]["b2"]["pressed"] and not sim["buttons"]["b1"]["pressed"] and sim["contacts"] == []
-    assert sim["buttons"]["b2"]["peak_force"] < 2 * PRESS_FORCE and sim["tracking"]["tool_max"] < 1e-3
+    # within 1.07 mm at the time law's pace (the test above)
+    assert sim["buttons"]["b2"]["peak_force"] < 2 * PRESS_FORCE and sim["tracking"]["tool_max"] < 1.5e-3
     back = read_npz(out)
     model = robot_model("panda", base=np.diag([-1.0, -1.0, 1.0, 1.0]), tool="tcp")
     p, _ = model.fk(back["joints"])
