@@ -36,6 +36,11 @@ LIFT_HEIGHT = 0.01
 #: Goal atoms of one object the simulation judges, and what decides them: ``(holding o)`` or
 #: ``(held o)``, both fingers on it at the end; ``(lifted o)``, it rose LIFT_HEIGHT while held.
 OBJECT_FACTS = {"holding": "held", "held": "held", "lifted": "lifted"}
+#: Facts judged of a scene object that is only a point (a target pose, no shape): the tool came to it.
+POINT_FACTS = ("visited", "reached", "at")
+#: m: how near the simulated tool point must come to a point object for it to be visited (the plan ends
+#: its steps on the point; the servos track the plan within a millimetre or so)
+POINT_REACHED = 0.005
 
 
 @dataclass
@@ -274,7 +279,9 @@ def simulate(trajectory, scene, *, robot="ur5e", targets=None, timestep: float =
                         timestep=timestep)
     M = mujoco.MjModel.from_xml_string(world.xml)
     d = mujoco.MjData(M)
-    run = _Runner(mujoco, M, d, world, model, scene.goal)
+    run = _Runner(mujoco, M, d, world, model, scene.goal,
+                  points={o.name: o.position for o in scene.objects.values()
+                          if o.shape is None and o.position is not None})
     opening = None if g_cmd is None or not world.fingers else _opening(g_cmd, gripper_range, world.stroke)
     run.hold(q_cmd[0], world.stroke if opening is None else opening[0])
     run.check_start()
@@ -302,8 +309,9 @@ def _tool_points(model, q, tool, chunk: int = 16384):
 class _Runner:
     """One simulation: the compiled model, its data and the name tables."""
 
-    def __init__(self, mujoco, M, d, world, model, goal):
+    def __init__(self, mujoco, M, d, world, model, goal, points=None):
         self.goal = list(goal)
+        self.points = dict(points or {})  # name -> position of the scene's objects that are only points
         self.mj, self.M, self.d, self.world, self.model = mujoco, M, d, world, model
         self.qadr = np.array([M.jnt_qposadr[M.joint(j).id] for j in world.joints])
         self.dadr = np.array([M.jnt_dofadr[M.joint(j).id] for j in world.joints])
@@ -442,6 +450,7 @@ class _Runner:
         facts, notes = {}, []
         lower = {b.lower(): b for b in out_buttons}
         things = {o.lower(): o for o in out_objects}
+        points = {o.lower(): np.asarray(p, float) for o, p in self.points.items()}
         for pred, args in self.goal:
             key = "(" + " ".join([pred, *args]) + ")"
             name = args[0].lower() if len(args) == 1 else None
@@ -449,11 +458,15 @@ class _Runner:
                 facts[key] = out_buttons[lower[name]]["pressed"]
             elif pred.lower() in OBJECT_FACTS and name in things:
                 facts[key] = out_objects[things[name]][OBJECT_FACTS[pred.lower()]]
+            elif pred.lower() in POINT_FACTS and name in points:
+                gap = np.linalg.norm(tcp - points[name], axis=1).min(initial=np.inf)
+                facts[key] = bool(gap <= POINT_REACHED)
             else:
                 facts[key] = None
                 notes.append(f"{key}: the simulation cannot judge this fact (it judges (pressed BUTTON) for "
-                             "buttons, and (holding OBJECT), (held OBJECT), (lifted OBJECT) for objects with "
-                             "a shape)")
+                             "buttons, (holding OBJECT), (held OBJECT), (lifted OBJECT) for objects with "
+                             "a shape, and (visited POINT), (reached POINT), (at POINT) for the tool coming "
+                             f"within {POINT_REACHED * 1000:g} mm of an object that is only a point)")
         duration = float(times[-1]) if len(times) else 0.0
         contacts = [{"robot_body": e["robot_body"], "other": e["other"], "t": e["t"],
                      "force": float(e["force"])} for e in events]

@@ -7,7 +7,8 @@ from skillbank.experiments._library_demo import _markdown
 
 def _result(n_primitives):
     return {"library": "demo/library.sqlite", "seconds": 1.0, "source": "LASA", "n_demonstrations": 32,
-            "n_primitives": n_primitives, "features": "position"}
+            "n_primitives": n_primitives, "features": "position",
+            "timing": [{"part": "library", "seconds": 1.0}]}
 
 
 ROWS = [{"cluster": 0, "label": "pick", "count": 3, "majority": 1.0, "composition": {"pick": 3}},

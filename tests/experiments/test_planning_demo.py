@@ -16,8 +16,10 @@ from skillbank.planning import load_scene, scene_from_dict
 
 def _columns(path) -> dict:
     """The trajectory CSV as ``t``, ``position`` (n, 3) and ``joints`` (n, 6) when written."""
-    header = Path(path).read_text().splitlines()[0].split(",")
-    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    # the lines before the header (``#``) state the limits the trajectory was timed for
+    lines = [line for line in Path(path).read_text().splitlines() if not line.startswith("#")]
+    header = lines[0].split(",")
+    rows = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     out = {"t": rows[:, 0], "position": rows[:, [header.index(f"position_{k}") for k in range(3)]]}
     joints = [k for k, name in enumerate(header) if name.startswith("joints_")]
     if joints:

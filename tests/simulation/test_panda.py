@@ -113,7 +113,7 @@ def _empty_scene(tmp_path):
     path = tmp_path / "empty.json"
     # a goal the simulation cannot judge: the replay's own facts (contacts, tracking) decide
     mark = {"type": "place", "position": [2.0, 2.0, 0.0]}  # out of reach: nothing to touch
-    path.write_text(json.dumps({"objects": {"mark": mark}, "goal": ["(reached mark)"]}))
+    path.write_text(json.dumps({"objects": {"mark": mark}, "goal": ["(marked mark)"]}))
     return path
 
 

@@ -221,3 +221,18 @@ def test_a_cube_grasped_and_lifted_is_held_and_lifted_and_its_facts_say_so(ur5e,
     assert result.facts == {"(holding cube)": close, "(lifted cube)": close, "(on cube table)": None}
     assert any(n.startswith("(on cube table): the simulation cannot judge") for n in result.notes)
     assert result.contacts == []  # the cube is a target, the table untouched
+
+
+def test_a_point_is_visited_when_the_simulated_tool_comes_to_it(ur5e):
+    """A scene object that is only a point (a target pose, no shape): ``(visited t)`` is whether the
+    simulated tool point came within 5 mm of it; a point the tool passed 3 cm from is not visited."""
+    down = np.array([0.0, 1.0, 0.0, 0.0])
+    q0 = ur5e.ik([-0.45, -0.25, 0.2], down, q_seed=ur5e.home)
+    demo = sweep(q0, 0, 0.5, 1.0, n=101)
+    path = (ur5e.link_frames(demo["joints"])[:, -1] @ ur5e.gripper_.tool())[:, :3, 3]
+    on = SceneObject("t1", "target", position=path[70], orientation=down)
+    off = SceneObject("t2", "target", position=path[30] + [0.0, 0.0, 0.03], orientation=down)
+    goal = [("visited", ("t1",)), ("reached", ("t2",))]
+    result = simulate(demo, scene([on, off], table=TABLE, goal=goal))
+    assert result.facts == {"(visited t1)": True, "(reached t2)": False}
+    assert not any("cannot judge" in n for n in result.notes)
