@@ -67,8 +67,9 @@ from ._evaluate import (
     running_arm,
 )
 from ._reach import Reach
-from ._robosuite import CONTROL_FREQ, _box, _min_jerk_at, import_robosuite, robosuite_robot
+from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite, robosuite_robot
 from ._stack3 import CUBES, stack3_class
+from ._support import object_top
 from ._transit import check_planner, free_move, transit_timing
 
 __all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
@@ -173,7 +174,7 @@ class _World:
 
     def top(self, obj) -> float:
         """The height (m) of the object's highest point as it lies now, from its collision geoms' boxes."""
-        return float(_box(self.env.sim, self.models[obj].contact_geoms)[1][2])
+        return object_top(self.env, obj)
 
     def pose(self, obs, obj) -> dict:
         return {"position": [round(float(v), 4) for v in obs[f"{obj}_pos"]],

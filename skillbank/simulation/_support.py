@@ -163,13 +163,11 @@ def object_extents(env, name):
 
 
 def object_top(env, name):
-    """The height (m, world) of the highest point of the scene object ``name``'s collision geometry as it
-    lies now; None for an object the scene does not model."""
+    """The height (m, world) of the top of the scene object ``name``'s collision geometry as it lies now
+    (its geoms' world-aligned box, as every top in the simulation is read); None for an object the scene
+    does not model."""
     found = _object(env, name)
-    if found is None:
-        return None
-    points, radii = _points(env.sim, found[0])
-    return float((points[:, 2] + radii).max())
+    return None if found is None else float(_box(env.sim, found[0])[1][2])
 
 
 def pad_half_width(env, closing) -> float:
