@@ -109,7 +109,8 @@ def add_parser(sub):
     e.add_argument("--order", type=lambda text: [o.strip() for o in text.split(",")], default=None,
                    metavar="OBJ,OBJ,...",
                    help="when the library's demonstrations each move other objects (one per object), the "
-                        "order in which their parts run, by object name (default: by name)")
+                        "order in which their parts run, by object name (default: the order the "
+                        "demonstrations show them in)")
     e.add_argument("--json", action="store_true",
                    help="print env, robot, recorded_on, notes, episodes, successes, success_rate, interval "
                         "and per_episode as JSON (with --workers or --scheduler, scheduler too)")

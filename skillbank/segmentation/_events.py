@@ -38,7 +38,8 @@ DEFAULT_KINDS = {"force": "contact", "torque": "contact", "wrench": "contact", "
 #: PickPlace demonstration whose milk and cereal grasps set the range), and that grasp is a switch too.
 SWITCH = 0.25
 #: Within one move, the switch is placed half-way between the last sample in its first quarter and the
-#: first in its last quarter (the middle of a gripper's closing).
+#: first in its last quarter (the middle of a gripper's closing), the quarters of the way from where it
+#: rested before to the level it rests at after.
 SWITCH_LOW, SWITCH_HIGH = 0.25, 0.75
 
 #: A discrete stream whose range is below this fraction of its magnitude
@@ -120,7 +121,9 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
     Each dimension is scaled to [0, 1] over its own range; it switches at every move between two rests
     of at least :data:`SWITCH` of that range, whatever level it starts and ends at (one grasp closes the
     fingers fully on a small object, another half-way on a large one). The switch is placed half-way
-    through the move's crossing (from its first quarter to its last: the middle of a gripper's closing).
+    through the move's crossing (from its first quarter to its last: the middle of a gripper's closing),
+    the quarters of the way to the level it rests at after it (not the end of a slow squeeze that may
+    follow, as fingers shut on a soft carton go on closing while it gives).
     A switch is a definite event, hence confidence 1.
 
     Examples
@@ -143,10 +146,15 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
         pivots = _pivots(u, SWITCH)
         for a, b in zip(pivots[:-1], pivots[1:], strict=True):
             leg = u[a:b + 1] if u[b] > u[a] else 1.0 - u[a:b + 1]
-            first, last = float(leg[0]), float(leg[-1])
+            first = float(leg[0])
+            # the level it comes to rest at: the median after it passes half-way, not its extreme (fingers
+            # shut on something soft, a carton, go on closing slowly for seconds as it gives; the closing
+            # is the switch, not the squeeze)
+            half = int(np.flatnonzero(leg >= (first + leg[-1]) / 2)[0])
+            last = float(np.median(leg[half:]))
             low, high = first + SWITCH_LOW * (last - first), first + SWITCH_HIGH * (last - first)
             # the crossing runs from the last sample in the move's first quarter to the first in its last
-            start = int(np.flatnonzero(leg <= low)[-1]) if np.any(leg <= low) else 0
+            start = int(np.flatnonzero(leg[:half + 1] <= low)[-1]) if np.any(leg[:half + 1] <= low) else 0
             above = np.flatnonzero(leg[start:] >= high)
             end = start + (int(above[0]) if above.size else leg.size - 1)
             events.append(a + (start + end) // 2)

@@ -70,7 +70,7 @@ from ._reach import Reach
 from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite, robosuite_robot
 from ._stack3 import CUBES, stack3_class
 from ._support import object_top
-from ._transit import check_planner, free_move, transit_timing
+from ._transit import check_planner, move_to, transit_timing
 
 __all__ = ["execute_plan", "COMPOSED", "STEP_REASONS", "observe"]
 
@@ -844,24 +844,40 @@ def _beyond(episode, segments) -> int:
 
 
 def _transit(episode, position, quat, *, planner="none", random_state=None, timings=None) -> float:
-    """Move the tool to ``position``, ``quat`` if it is farther than :data:`TRANSIT_FROM`: up by
-    :data:`TRANSIT_RISE` above the higher of the two ends, across, and down, each a straight minimum-jerk
-    line at most :data:`TRANSIT_SPEED` (the wrist turning on the way across); returns the distance moved.
+    """Move the tool to ``position``, ``quat`` if it is farther than :data:`TRANSIT_FROM`; returns the
+    distance moved.
 
-    Rising first takes the arm out of what it has just reached into (a bin's far corner: its forearm
-    lies over the bin's wall) before it swings back; the path keeps the arm's reach margin
-    (:class:`~skillbank.simulation._reach.Reach`), so the rise does not straighten the elbow. With
-    ``planner="ompl"`` the whole move is a free span (:func:`~skillbank.simulation._transit.free_move`):
-    where the arm would come near the scene on it, it is planned in joint space instead (its planning
-    seconds appended to ``timings["transits"]``).
+    With ``planner="ompl"`` the move is planned for the whole arm in joint space
+    (:func:`~skillbank.simulation._transit.move_to`: every link and the gripper clear of the scene's
+    MuJoCo geoms; its planning seconds appended to ``timings["transits"]``). With ``planner="none"`` it is
+    the rule kept for comparison: up by :data:`TRANSIT_RISE` above the higher of the two ends, across,
+    and down, each a straight minimum-jerk line at most :data:`TRANSIT_SPEED`, within the arm's reach
+    margin (:class:`~skillbank.simulation._reach.Reach`).
     """
     here_p = np.array(episode.obs["robot0_eef_pos"], float)
     here_q = np.array(episode.obs["robot0_eef_quat"], float)
     distance = float(np.linalg.norm(position - here_p))
     if distance <= TRANSIT_FROM:
         return 0.0
+    if planner == "ompl":
+        P, Q, seconds = move_to(episode.env, episode.obs, position, quat, random_state=random_state)
+        if timings is not None:
+            timings.setdefault("transits", []).append(round(seconds, 4))
+    else:
+        P, Q = _up_across_down(episode, here_p, here_q, np.asarray(position, float), quat)
+    for p, q in zip(P, Q, strict=True):
+        if episode.over:
+            return round(distance, 4)
+        episode.step(p, q)
+    episode.settle(P[-1], quat)
+    return round(distance, 4)
+
+
+def _up_across_down(episode, here_p, here_q, position, quat):
+    """The rule a transit follows without a planner: rising first takes the arm out of what it has just
+    reached into (a bin's far corner: its forearm lies over the bin's wall) before it swings back."""
     z = max(here_p[2], position[2]) + TRANSIT_RISE
-    corners = [here_p, np.r_[here_p[:2], z], np.r_[position[:2], z], np.asarray(position, float)]
+    corners = [here_p, np.r_[here_p[:2], z], np.r_[position[:2], z], position]
     turns = [here_q, here_q, quat, quat]
     P, Q = [], []
     for a, b, qa, qb in zip(corners[:-1], corners[1:], turns[:-1], turns[1:], strict=True):
@@ -871,23 +887,11 @@ def _transit(episode, position, quat, *, planner="none", random_state=None, timi
         u = _min_jerk_at(np.linspace(0.0, 1.0, n + 1)[1:])
         P.append(a + u[:, None] * (b - a))
         Q.append(slerp([0.0, 1.0], np.stack([qa, qb]), u))
+    P, Q = np.concatenate(P), np.concatenate(Q)
     # rising straight up from a bin's far side stretches the arm: the path keeps its reach margin
-    Q = np.concatenate(Q)
-    P = np.concatenate(P)
     if episode.reach is not None:
         P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"])
-    if planner == "ompl":
-        G = np.full(len(P), episode.driver.grip)
-        P, Q, _, report = free_move(episode.env, episode.obs, P, Q, G, (0, len(P) - 1),
-                                    random_state=random_state)
-        if report["planned"] and timings is not None:
-            timings.setdefault("transits", []).append(round(report["seconds"], 4))
-    for p, q in zip(P, Q, strict=True):
-        if episode.over:
-            return round(distance, 4)
-        episode.step(p, q)
-    episode.settle(P[-1], quat)
-    return round(distance, 4)
+    return P, Q
 
 
 def _let_fingers_settle(episode, *, most=CONTROL_FREQ, still=1e-4) -> None:

@@ -136,6 +136,7 @@ class _Segment:
     #: the scene's object for each of the source's (a skill bound to other objects); absent: the same name
     names: dict = field(default_factory=dict)
     released: bool = False  # whether it closed the gripper and opened it again by its end (a place)
+    told: bool = False  # whether the members' ends told the goal's frame apart (else the relation's own)
 
     def scene(self, name):
         """The object of the scene that stands for the source's object ``name``."""
@@ -311,7 +312,7 @@ def _choose_frames(sources):
                         choice, score = (turn, k), concentration
         turns_with = choice[1] > 1 and choice[0] == best and _turns_with(members, best, choice[1])
         for m in members:
-            m.frame, (m.turn, m.symmetry), m.turns_with = best, choice, turns_with
+            m.frame, (m.turn, m.symmetry), m.turns_with, m.told = best, choice, turns_with, bool(told)
 
 
 def _carries(relation) -> bool:
@@ -871,9 +872,14 @@ def _in_scene(seg, env):
     the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
     other side, the place on the handle kept).
     """
+    relation = seg.relation
+    if seg.released and not seg.told and seg.frame == (getattr(relation, "object", None), "target") \
+            and not _rests_on(seg, env):
+        # let go beside the object it ended nearest, not on it: it was put on what the scene holds fixed
+        # there (a bin's compartment), which the world keeps, as a place near no object is
+        seg = replace(seg, frame=("world",), turn=("world",))
     if seg.symmetry != 1 or seg.turn == "held":
         return seg
-    relation = seg.relation
     if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
         demo = seg.primitive.demo
         held = support(env, _pose(demo, relation.object, _held_until(demo, relation.object))[0])
@@ -883,6 +889,21 @@ def _in_scene(seg, env):
         return replace(seg, symmetry=k, turns_with=True) if k > 1 else \
             replace(seg, symmetry=2, turns_with=False)
     return seg
+
+
+def _rests_on(seg, env) -> bool:
+    """Whether the object ``seg`` carries was let go, in its source, on top of the relation's target:
+    its centre over the target's footprint and above its top (the target's collision geometry in the
+    scene, along its own axes, :func:`object_extents`). True where the scene does not model the target
+    (the relation's own frame is kept)."""
+    relation, demo = seg.relation, seg.primitive.demo
+    extents = object_extents(env, seg.scene(relation.target))
+    if extents is None:
+        return True
+    p, _ = _pose(demo, relation.object, _held_until(demo, relation.object))
+    pt, qt = _pose(demo, relation.target, -1)
+    local = quaternion_to_matrix(qt).T @ (p - pt)
+    return bool(np.all(np.abs(local[:2]) <= extents[:2]) and local[2] > extents[2])
 
 
 def _last_try(demo) -> int:
@@ -1039,7 +1060,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"],
                                        need=episode.reach.needed(G, let_go=let_go))
             if planner == "ompl" and method != "rigid":
-                span = free_span(len(P), G, let_go=let_go, leave=LEAVE[-1], close_in=CLOSE_IN[0])
+                span = free_span(len(P), G, let_go=let_go, leave=0.0, close_in=CLOSE_IN[0])
                 try:
                     P, Q, G, report = (P, Q, G, None) if span is None else free_move(
                         episode.env, episode.obs, P, Q, G, span, random_state=random_state,
@@ -1092,9 +1113,12 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
 
 
 def _order(groups, order):
-    """The parts of the task (keys of ``groups``) in the order ``order`` names their objects."""
+    """The parts of the task (keys of ``groups``) in the order ``order`` names their objects; without it,
+    in the order the library's demonstrations show them (``groups`` in the order its parts first appear:
+    one demonstration of several objects, as its demonstrator took them (which clears the way for the
+    next); separate demonstrations, as the library holds them)."""
     if order is None:
-        return sorted(groups)
+        return list(groups)
     if isinstance(order, str) or not all(isinstance(o, str) for o in order):
         raise ValueError(f"order: expected a list of object names, got {order!r}")
     part_of = {o: part for part in groups for o in part}
@@ -1266,7 +1290,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         When the library's demonstrations each act on other objects (one per object, say), the task is
         done part after part: each part is the demonstrations of one set of objects, run from the
         nearest of them in the state the last part left. ``order`` names the objects in the order
-        their parts run (default: sorted by name). With one part, it is not needed.
+        their parts run (default: the order the demonstrations show them in: a demonstration of several
+        objects, its own; separate ones, the library's). With one part, it is not needed.
     random_state : int or None
         Seeds the representation where it samples (ProMP).
     paths : bool, default=False

@@ -37,8 +37,8 @@ from ..robots._motion import MotionPlanningError, _ompl, _ompl_path
 from ._arm_scene import JOINT_STEP, MARGIN, ArmScene, _where
 from ._robosuite import CONTROL_FREQ
 
-__all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "check_planner", "transit_timing",
-           "PLANNER_CHOICES", "MARGIN"]
+__all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "move_to", "check_planner",
+           "transit_timing", "PLANNER_CHOICES", "MARGIN"]
 
 #: ``planner`` values: OMPL in the scene's MuJoCo geometry, or the tool paths as adapted.
 PLANNER_CHOICES = ("ompl", "none")
@@ -191,6 +191,48 @@ def _timed(scene, Q):
     return np.array([p for p, _ in poses]), np.array([q for _, q in poses])
 
 
+def move_to(env, obs, position, quat, *, held=None, random_state=None, margin=MARGIN):
+    """The tool poses of a whole-arm move, planned in joint space, from where the arm is to ``position``,
+    ``quat`` (x, y, z, w): what a composed task's transit between two skills drives.
+
+    The goal's joints are those inverse kinematics reaches following the straight tool line there from the
+    arm's joints (the branch the arm is on; directly from its joints where the line leaves its reach);
+    :func:`plan_transit` joins them, every link, the gripper and ``held`` kept ``margin`` clear of the
+    scene (what the hand stands at now, what it has just let go of, excepted), and :func:`_timed` gives the
+    tool poses at the control rate.
+
+    Returns
+    -------
+    P : ndarray of shape (n, 3)
+    Q : ndarray of shape (n, 4)
+    seconds : float
+        The goal's inverse kinematics, the search's and the simplification's time.
+
+    Raises
+    ------
+    MotionPlanningError
+        One line: the goal out of the arm's reach, or :func:`plan_transit`'s.
+
+    Examples
+    --------
+    >>> P, Q, seconds = move_to(env, obs, [0.1, 0.0, 1.0], [1, 0, 0, 0])  # doctest: +SKIP
+    >>> bool(np.linalg.norm(P[-1] - [0.1, 0.0, 1.0]) < 1e-3)  # doctest: +SKIP
+    True
+    """
+    tic = _time.perf_counter()
+    scene = ArmScene(env, held=held, margin=margin)
+    q0 = np.asarray(obs["robot0_joint_pos"], float)
+    scene.allow(q0)
+    there = np.asarray(position, float)
+    q = _reached(scene, obs["robot0_eef_pos"], there, quat, q0)
+    if q is None:
+        raise MotionPlanningError(f"transit planning: the tool pose {np.round(there, 3).tolist()} m is out "
+                                  f"of the arm's reach from {_where(q0)}")
+    joints, _ = plan_transit(scene, q0, q, random_state=_int_seed(random_state))
+    P, Q = _timed(scene, joints)
+    return P, Q, _time.perf_counter() - tic
+
+
 def _int_seed(random_state):
     """An integer seed for OMPL from an episode's ``random_state`` (None: 0, the same plan every time)."""
     if random_state is None:
@@ -226,30 +268,32 @@ def free_span(n, grip, *, let_go=False, leave=0.25, close_in=0.5):
 
 def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN):
     """The tool path ``P (n, 3)``, ``Q (n, 4)`` (gripper commands ``G (n,)``) with its free ``span``
-    planned for the whole arm where the path as it is would bring a body within ``margin`` of the scene.
+    replaced by a move planned for the whole arm.
 
-    The arm's joints are followed along the path from where they are now (inverse kinematics, each pose
-    from the last, as far as the arm reaches). The span is narrowed to its first and last clear followed
-    states (a path that starts or ends at the scene is the skill's own there; one that leaves the arm's
-    reach is driven as adapted beyond it); if every state between them, densified, is clear, the path
-    is returned as it is. Otherwise the narrowed span is replaced by a joint path from
-    :func:`plan_transit` between the followed joints at its ends, driven as tool poses, and the path
-    goes on from there as before.
+    The free span is where the demonstration's motion relates to no object (:func:`free_span`): what
+    the adapted path does there is the demonstration's way of getting across, not the skill, and a
+    person's halting, wandering way across, moved onto a new scene, may leave the arm's reach or sweep a
+    link through a bin's wall. The span's start is where the arm is after the part before it (inverse
+    kinematics followed along the path from the arm's joints), moved on along the path to its first
+    clear state; its end is the first pose of the skill's own part after it (inverse kinematics along a
+    straight line from the start), moved back along the path to its last clear state (a close-in that
+    begins at a bin's wall is the skill's own). :func:`plan_transit` joins the two and the planned joint
+    path is driven as tool poses (:func:`_timed`); the path goes on from its end as adapted.
 
     Returns
     -------
     P, Q, G : ndarray
-        The path (``n`` changes when the span is replaced: the planned move keeps the span's first
-        gripper command); the samples before the span are unchanged.
+        The path (``n`` changes: the planned move keeps the span's first gripper command); the samples
+        before the span are unchanged.
     report : dict
         ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int, "why": str}``
-        (``samples``: the planned move's samples that replace the span's; ``why``: ``"blocked"`` (planned),
-        or why not: ``"short"``, ``"clear"``, ``"no clear state"``, ``"out of reach at sample K"``).
+        (``samples``: the planned move's samples that replace the span's; ``why``: ``"planned"``, or why
+        the span is driven as adapted: ``"short"``, ``"out of reach at sample K"``, ``"no clear state"``).
 
     Raises
     ------
     MotionPlanningError
-        The span is blocked and no planned path is found (one line, :func:`plan_transit`).
+        No planned path is found (one line, :func:`plan_transit`).
 
     Examples
     --------
@@ -261,42 +305,52 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     random_state = _int_seed(random_state)
     a, b = span
     report = {"planned": False, "seconds": 0.0, "span": (int(a), int(b)), "samples": 0, "why": "short"}
-    if np.linalg.norm(np.diff(P[a:b + 1], axis=0), axis=1).sum() < SHORTEST:
+    if np.linalg.norm(P[b] - P[a]) < SHORTEST:
         return P, Q, G, report
     scene = ArmScene(env, held=held, margin=margin)
     q = np.asarray(obs["robot0_joint_pos"], float)
-    scene.allow(q)  # what the hand stands at now (what it just let go of) is not what a transit avoids
-    followed = []
-    for k in range(b + 1):
-        nxt = scene.ik(P[k], Q[k], q)
+    for k in range(a + 1):
+        q = scene.ik(P[k], Q[k], q)
+        if q is None:
+            # the part before the span leaves the arm's reach: no joints to plan from; it is driven as
+            # adapted, and where the tool stops short is the episode's to judge
+            report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {k}")
+            return P, Q, G, report
+    # from the first clear state along the path: a hand at what it has just let go of, or a lift still
+    # beside what it left, leaves as the skill's own path does, until nothing is within the margin
+    while scene.blocking(q) is not None and a < b - 2:
+        nxt = scene.ik(P[a + 1], Q[a + 1], q)
         if nxt is None:
-            break  # unreachable on this branch: the planner's goal is looked for below
-        q = nxt
-        followed.append(q)
-    if len(followed) <= a:
-        # the path leaves the arm's reach before the span starts: no joints to plan from; it is driven as
-        # adapted, and where the tool stops short is the episode's to judge
-        report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {len(followed)}")
+            break
+        a, q = a + 1, nxt
+    start = q
+    goal = _reached(scene, P[a], P[b], Q[b], start)
+    while goal is not None and scene.blocking(goal) is not None and b > a + 2:
+        b -= 1  # to the last clear state before the skill's own part (a close-in beginning at a wall)
+        goal = scene.ik(P[b], Q[b], goal)
+    report["span"] = (int(a), int(b))
+    if goal is None:
+        report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {b}")
         return P, Q, G, report
-    # the span runs between clear states: where the path as adapted starts or ends at the scene (a lift
-    # still beside what it left, a demonstration's close-in that begins at a bin's wall) it is the
-    # skill's own, not free space, and is driven as it is
-    clear = [k for k in range(a, len(followed)) if scene.blocking(followed[k]) is None]
-    if not clear:
+    if scene.blocking(start) is not None or scene.blocking(goal) is not None:
         report.update(seconds=_time.perf_counter() - tic, why="no clear state")
         return P, Q, G, report
-    # a path that leaves the arm's reach inside the span (an adaptation that runs beyond it) is planned up
-    # to where the arm still follows it, and driven as adapted from there
-    a, b = clear[0], clear[-1]
-    report["span"] = (int(a), int(b))
-    if b - a < 2 or all(scene.motion_clear(followed[k], followed[k + 1]) for k in range(a, b)):
-        report.update(seconds=_time.perf_counter() - tic,
-                      why="clear" if len(followed) == span[1] + 1 else f"clear to sample {len(followed)}")
-        return P, Q, G, report
-    start, goal = followed[a], followed[b]
     joints, _ = plan_transit(scene, start, goal, random_state=random_state)
     Pm, Qm = _timed(scene, joints)
-    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="blocked")
+    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="planned")
     G = np.asarray(G)
     return (np.vstack([P[:a + 1], Pm, P[b + 1:]]), np.vstack([Q[:a + 1], Qm, Q[b + 1:]]),
             np.concatenate([G[:a + 1], np.full(len(Pm), G[a]), G[b + 1:]]), report)
+
+
+def _reached(scene, here, there, quat, q):
+    """Joints that put the tool at ``there``, ``quat`` on the arm's branch at ``q`` (the tool at ``here``):
+    inverse kinematics a centimetre at a time along the straight line (damped least squares from a pose
+    it is near stays on the branch), else directly from ``q``; None out of reach."""
+    here, there = np.asarray(here, float), np.asarray(there, float)
+    q0 = q
+    for s in np.linspace(0.0, 1.0, max(2, int(np.ceil(np.linalg.norm(there - here) / 0.01)) + 1))[1:]:
+        q = scene.ik(here + s * (there - here), quat, q)
+        if q is None:
+            return scene.ik(there, quat, q0, iters=1000)
+    return q

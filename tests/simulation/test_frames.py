@@ -78,7 +78,8 @@ def test_the_parts_of_a_task_run_in_the_order_named():
     from skillbank.simulation._evaluate import _order
 
     groups = {("Can",): [], ("Milk",): [], ("Bread",): []}
-    assert _order(groups, None) == [("Bread",), ("Can",), ("Milk",)]  # by name when none is given
+    # none given: as the demonstrations show them (the parts in the order they first appear)
+    assert _order(groups, None) == [("Can",), ("Milk",), ("Bread",)]
     assert _order(groups, ["Milk", "Can", "Bread"]) == [("Milk",), ("Can",), ("Bread",)]
     with pytest.raises(ValueError, match=r"order: the library's demonstrations move no object \['Cereal'\]"):
         _order(groups, ["Milk", "Cereal"])

@@ -125,3 +125,39 @@ def test_a_cubes_extents_and_the_grippers_pads(scenes):
             assert abs(pad_half_width(lift, closing / np.linalg.norm(closing)) - pad) < 1.5e-3
         finally:
             lift.close()
+
+
+def test_a_place_beside_the_object_it_ended_nearest_is_kept_in_the_world_one_on_it_on_it(scenes):
+    """One demonstration's can let go in the bin beside the cereal already put there is placed in the
+    bin's compartment (the world), not beside wherever the cereal stands now (still in the first bin);
+    the same can let go on top of the cereal box keeps the box's frame."""
+    from types import SimpleNamespace
+
+    from skillbank.selection import Relation
+    from skillbank.simulation._evaluate import _in_scene, _Segment
+
+    env, _ = scenes["PickPlace"]
+    n = 20
+    tool = np.linspace([0.0, -0.25, 1.0], [0.1, 0.2, 0.95], n)
+    down = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+    upright = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    cereal = np.tile([0.18, 0.2, 0.9], (n, 1))
+
+    def place(can_at_release):
+        can = tool + (can_at_release - tool[-1])  # held rigidly, let go where it is at the end
+        demo = {"position": tool, "orientation": down, "Can_pos": can, "Can_quat": upright,
+                "Cereal_pos": cereal, "Cereal_quat": upright, "actions": np.zeros((n, 7))}
+        relation = Relation("Can", True, 0.05, np.zeros(3), None, target="Cereal")
+        seg = _Segment(SimpleNamespace(id=1, demo=demo), relation, ("Can", "target"), "held", released=True)
+        return _in_scene(seg, env)
+
+    beside = place(cereal[-1] + [0.0, -0.08, -0.03])  # on the bin's floor, 8 cm from the box
+    assert beside.frame == ("world",) and beside.turn == ("world",)
+    assert beside.symmetry == 2  # a rectangular bin's compartment takes it either way round
+    on = place(cereal[-1] + [0.0, 0.0, 0.13])  # over the box's footprint, above its top
+    assert on.frame == ("Can", "target") and on.turn == "held"
+    # where several members' ends told the frames apart, the data's choice stands
+    relation = Relation("Can", True, 0.05, np.zeros(3), None, target="Cereal")
+    seg = _Segment(SimpleNamespace(id=1, demo=None), relation, ("Can", "target"), "held", released=True,
+                   told=True)
+    assert _in_scene(seg, env) is seg

@@ -11,7 +11,7 @@ pytest.importorskip("ompl")
 from skillbank.robots import MotionPlanningError  # noqa: E402
 from skillbank.simulation._evaluate import _Episode, _make  # noqa: E402
 from skillbank.simulation._robosuite import import_robosuite  # noqa: E402
-from skillbank.simulation._transit import ArmScene, free_move, free_span, plan_transit  # noqa: E402
+from skillbank.simulation._transit import ArmScene, free_move, free_span, move_to, plan_transit  # noqa: E402
 
 # two corners of PickPlace's second bin, low enough that a straight move between them takes the fingers
 # through the bin's dividers (their tops at z = 0.9 m)
@@ -133,14 +133,49 @@ def test_a_planner_not_known_is_refused_before_the_library_is_read(tmp_path, run
         getattr(simulation, run)(tmp_path / "absent.db", scene, planner="rrt")
 
 
-def test_a_clear_span_and_one_beyond_reach_are_driven_as_adapted(env):
+def test_a_free_span_is_planned_and_one_beyond_reach_is_driven_as_adapted(env):
     obs = env.reset()
     quat = np.array(obs["robot0_eef_quat"], float)
     here = np.array(obs["robot0_eef_pos"], float)
-    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)  # high over the bins: nothing near
-    P2, Q2, G2, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
-    assert report["why"] == "clear" and not report["planned"]
-    assert P2 is P and Q2 is Q and G2 is G
-    P, Q, G = _line(here, here + [2.0, 0.0, 0.0], quat)  # two metres out: the arm follows it part way
-    P2, _, _, report = free_move(env, obs, P, Q, G, (0, len(P) - 1))
-    assert report["why"].startswith("clear to sample") and P2 is P
+    # a wandering way across, high over the bins: the span is replaced by the planned move, which ends
+    # where the skill's own part after it begins
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)
+    P[10:30] += np.sin(np.linspace(0, np.pi, 20))[:, None] * [0.0, 0.0, 0.08]
+    P2, Q2, G2, report = free_move(env, obs, P, Q, G, (5, 34))
+    assert report["planned"] and report["why"] == "planned" and report["span"] == (5, 34)
+    np.testing.assert_array_equal(P2[:6], P[:6])
+    np.testing.assert_array_equal(P2[-5:], P[-5:])
+    assert len(P2) == 6 + report["samples"] + 5
+    np.testing.assert_allclose(P2[5 + report["samples"]], P[34], atol=1e-3)  # it ends where the skill goes on
+    assert (P2[6:6 + report["samples"], 2] < P[10:30, 2].max() - 0.03).all()  # not the wandering hump
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat, n=8)  # 11 cm in all: shorter than 5 cm apart
+    assert free_move(env, obs, P, Q, G, (3, 4))[3]["why"] == "short"
+    P, Q, G = _line(here, here + [2.0, 0.0, 0.0], quat)  # two metres out: beyond the arm's reach
+    P2, _, _, report = free_move(env, obs, P, Q, G, (30, 39))
+    assert report["why"].startswith("out of reach at sample") and P2 is P
+
+
+def test_a_transit_between_skills_is_planned_for_the_whole_arm(env):
+    """From low in one compartment of bin2 to the far corner of another: the planned move arrives, and no
+    robot geom touches the bin on the way; the same seed, the same move."""
+    obs = env.reset()
+    episode = _Episode(env, obs, 10 ** 6)
+    quat = np.array(obs["robot0_eef_quat"], float)
+    P, Q, _ = move_to(env, episode.obs, A + [0, 0, 0.03], quat, random_state=0)
+    _drive(episode, P, Q)
+    P, Q, _ = _line(A + [0, 0, 0.03], A, quat, n=20)[:2] + (None,)
+    _drive(episode, P, Q)
+    P1, Q1, seconds = move_to(env, episode.obs, B, quat, random_state=0)
+    P2, _, _ = move_to(env, episode.obs, B, quat, random_state=0)
+    np.testing.assert_array_equal(P1, P2)
+    assert seconds > 0 and np.linalg.norm(P1[-1] - B) < 1e-3
+    assert _drive(episode, P1, Q1) == []
+    assert np.linalg.norm(np.array(episode.obs["robot0_eef_pos"], float) - B) < 0.01
+
+
+def test_a_transit_out_of_reach_is_one_line(env):
+    obs = env.reset()
+    quat = np.array(obs["robot0_eef_quat"], float)
+    with pytest.raises(MotionPlanningError, match=r"^transit planning: the tool pose \[2\.0, 0\.0, 1\.0\] m "
+                                                  r"is out of the arm's reach from \[.*\]$"):
+        move_to(env, obs, [2.0, 0.0, 1.0], quat)
