@@ -69,7 +69,7 @@ from ._robosuite import (
     robosuite_robot,
 )
 from ._support import fixtures, object_extents, object_symmetry, pad_half_width, support
-from ._transit import check_planner, free_move, free_span, transit_timing
+from ._transit import check_planner, free_move, free_span, reachable, transit_timing
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
 
@@ -738,15 +738,18 @@ def _about_vertical(v, angle) -> np.ndarray:
     return quaternion_to_matrix(_turn([0.0, 0.0, 0.0, 1.0], angle)) @ np.asarray(v, float)
 
 
-def _goal(seg, obs, fingers=None):
+def _goal(seg, obs, fingers=None, reachable=None):
     """The tool's goal pose in the scene ``obs`` shows.
 
-    Of the symmetric orientations, the nearest turn whose fingers (``fingers``: the closing axis in the
-    tool's frame and half the opening, m) stay :data:`NEIGHBOUR` metres from every object the segment
-    does not act on; else the one that keeps them farthest.
+    Of the symmetric orientations, those the arm can take (``reachable(p, q)``, where given: a wrist
+    turned past its last joint's limit cannot), the nearest turn whose fingers (``fingers``: the closing
+    axis in the tool's frame and half the opening, m) stay :data:`NEIGHBOUR` metres from every object
+    the segment does not act on; else the one that keeps them farthest.
     """
     options = [(q, _on_pads(seg, obs, _goal_position(seg, obs, q, angle), q, fingers))
                for q, angle in _goal_orientations(seg, obs)]
+    if reachable is not None and len(options) > 1:
+        options = [o for o in options if reachable(o[1], o[0])] or options
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
     others = _others(seg, obs)
@@ -788,7 +791,7 @@ def _path_rigid(seg, obs):
             np.concatenate([np.full(RIGID_BLEND, grip[0]), grip]))
 
 
-def _path_adapted(seg, obs, method, random_state, fingers=None):
+def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate.
 
     A reach is adapted from its last try (:func:`_last_try`): a grasp the person closed on nothing and
@@ -798,7 +801,7 @@ def _path_adapted(seg, obs, method, random_state, fingers=None):
     demo = seg.primitive.demo
     if seg.relation is not None and not seg.relation.moves_with:
         demo = demo.slice(_last_try(demo), demo.n_steps)
-    goal_p, goal_q = _goal(seg, obs, fingers)
+    goal_p, goal_q = _goal(seg, obs, fingers, reachable)
     # the second half closes in as the source did: its path moved rigidly so that its end is the goal,
     # pinned by via points; the first half is the representation's to adapt from where the robot is
     P_src = np.asarray(demo["position"], float)
@@ -867,7 +870,8 @@ def _in_scene(seg, env):
     the same way at a quarter turn, whatever its demonstrations happened to show).
 
     A place on what the scene holds fixed may take any turn the fixture there accepts
-    (:func:`support`: a square peg, a quarter turn). A grasp kept on the object may take the object's
+    (:func:`support`: a square peg, a quarter turn) or the placed object's own geometry does (a square
+    carton in a bin, a quarter turn). A grasp kept on the object may take the object's
     turns (:func:`object_symmetry`: a cube's quarter turns, the tool's place on it turning with it), else
     the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
     other side, the place on the handle kept).
@@ -883,7 +887,9 @@ def _in_scene(seg, env):
     if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
         demo = seg.primitive.demo
         held = support(env, _pose(demo, relation.object, _held_until(demo, relation.object))[0])
-        return seg if held is None else replace(seg, symmetry=held[1])
+        # the object's own turns leave its place unchanged too (a square carton in a bin: quarter turns)
+        return seg if held is None else replace(
+            seg, symmetry=math.lcm(held[1], object_symmetry(env, seg.scene(relation.object))))
     if relation is not None and not relation.moves_with and seg.turn == seg.frame == (relation.object, "end"):
         k = object_symmetry(env, seg.scene(relation.object))
         return replace(seg, symmetry=k, turns_with=True) if k > 1 else \
@@ -1051,7 +1057,8 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     P, Q, G = _path_rigid(seg, episode.obs)
                 else:
                     seg = _in_scene(seg, episode.env)
-                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers)
+                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
+                                            reachable(episode.env, episode.obs))
                     carried = seg.scene(seg.relation.object) if _carries(seg.relation) else None
                     P = _over_tops(P, G, episode.env, episode.obs, carried)
             except ValueError as error:

@@ -37,7 +37,7 @@ from ..robots._motion import MotionPlanningError, _ompl, _ompl_path
 from ._arm_scene import JOINT_STEP, MARGIN, ArmScene, _where
 from ._robosuite import CONTROL_FREQ
 
-__all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "move_to", "check_planner",
+__all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "move_to", "reachable", "check_planner",
            "transit_timing", "PLANNER_CHOICES", "MARGIN"]
 
 #: ``planner`` values: OMPL in the scene's MuJoCo geometry, or the tool paths as adapted.
@@ -341,6 +341,29 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     G = np.asarray(G)
     return (np.vstack([P[:a + 1], Pm, P[b + 1:]]), np.vstack([Q[:a + 1], Qm, Q[b + 1:]]),
             np.concatenate([G[:a + 1], np.full(len(Pm), G[a]), G[b + 1:]]), report)
+
+
+def reachable(env, obs):
+    """``reachable(p, q)``: whether the arm, from its joints now, can put the tool at position ``p``,
+    orientation ``q`` (x, y, z, w), within its joint limits (:func:`_reached` on the scene's own model; a
+    wrist turned past the last joint's limit cannot). The model is copied at the first call.
+
+    Examples
+    --------
+    >>> can = reachable(env, obs)  # doctest: +SKIP
+    >>> can(obs["robot0_eef_pos"], obs["robot0_eef_quat"])  # doctest: +SKIP
+    True
+    """
+    scene = []
+    q0 = np.asarray(obs["robot0_joint_pos"], float)
+    here = np.asarray(obs["robot0_eef_pos"], float)
+
+    def can(p, q) -> bool:
+        if not scene:
+            scene.append(ArmScene(env))
+        return _reached(scene[0], here, p, q, q0) is not None
+
+    return can
 
 
 def _reached(scene, here, there, quat, q):

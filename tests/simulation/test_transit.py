@@ -11,7 +11,14 @@ pytest.importorskip("ompl")
 from skillbank.robots import MotionPlanningError  # noqa: E402
 from skillbank.simulation._evaluate import _Episode, _make  # noqa: E402
 from skillbank.simulation._robosuite import import_robosuite  # noqa: E402
-from skillbank.simulation._transit import ArmScene, free_move, free_span, move_to, plan_transit  # noqa: E402
+from skillbank.simulation._transit import (  # noqa: E402
+    ArmScene,
+    free_move,
+    free_span,
+    move_to,
+    plan_transit,
+    reachable,
+)
 
 # two corners of PickPlace's second bin, low enough that a straight move between them takes the fingers
 # through the bin's dividers (their tops at z = 0.9 m)
@@ -179,3 +186,11 @@ def test_a_transit_out_of_reach_is_one_line(env):
     with pytest.raises(MotionPlanningError, match=r"^transit planning: the tool pose \[2\.0, 0\.0, 1\.0\] m "
                                                   r"is out of the arm's reach from \[.*\]$"):
         move_to(env, obs, [2.0, 0.0, 1.0], quat)
+
+
+def test_which_goal_poses_the_arm_can_take(env):
+    obs = env.reset()
+    here, quat = np.array(obs["robot0_eef_pos"], float), np.array(obs["robot0_eef_quat"], float)
+    can = reachable(env, obs)
+    assert can(here + [0.1, 0.3, -0.1], quat)  # over the second bin
+    assert not can(here + [2.0, 0.0, 0.0], quat)  # two metres out
