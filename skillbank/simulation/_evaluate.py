@@ -870,8 +870,8 @@ def _in_scene(seg, env):
     the same way at a quarter turn, whatever its demonstrations happened to show).
 
     A place on what the scene holds fixed may take any turn the fixture there accepts
-    (:func:`support`: a square peg, a quarter turn) or the placed object's own geometry does (a square
-    carton in a bin, a quarter turn). A grasp kept on the object may take the object's
+    (:func:`support`: a square peg, a quarter turn) or the placed object's own geometry does (a carton
+    in a bin, a half turn). A grasp kept on the object may take the object's
     turns (:func:`object_symmetry`: a cube's quarter turns, the tool's place on it turning with it), else
     the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
     other side, the place on the handle kept).
@@ -887,7 +887,7 @@ def _in_scene(seg, env):
     if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
         demo = seg.primitive.demo
         held = support(env, _pose(demo, relation.object, _held_until(demo, relation.object))[0])
-        # the object's own turns leave its place unchanged too (a square carton in a bin: quarter turns)
+        # the object's own turns leave its place unchanged too (a carton in a bin: its half turns)
         return seg if held is None else replace(
             seg, symmetry=math.lcm(held[1], object_symmetry(env, seg.scene(relation.object))))
     if relation is not None and not relation.moves_with and seg.turn == seg.frame == (relation.object, "end"):
@@ -1122,8 +1122,8 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
 def _order(groups, order):
     """The parts of the task (keys of ``groups``) in the order ``order`` names their objects; without it,
     in the order the library's demonstrations show them (``groups`` in the order its parts first appear:
-    one demonstration of several objects, as its demonstrator took them (which clears the way for the
-    next); separate demonstrations, as the library holds them)."""
+    one demonstration of several objects, as its demonstrator took them; separate demonstrations, as the
+    library holds them)."""
     if order is None:
         return list(groups)
     if isinstance(order, str) or not all(isinstance(o, str) for o in order):
