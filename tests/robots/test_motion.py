@@ -139,7 +139,7 @@ def test_without_ompl_one_line_names_the_extra(robot, monkeypatch):
         plan_motion(robot, a, b, obstacles=WALL, table=TABLE)
 
 
-@pytest.mark.parametrize("planner", ["lbkpiece", "prm"])
+@pytest.mark.parametrize("planner", ["lbkpiece", "kpiece"])
 def test_other_ompl_planners_find_the_way_over_the_wall(robot, planner):
     a, b = ends(robot)
     path = plan_motion(robot, a, b, obstacles=WALL, table=TABLE, planner=planner, random_state=0)
@@ -187,7 +187,7 @@ def test_the_one_ompl_set_up_goes_round_what_the_callers_checks_refuse():
     again, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", random_state=0)
     np.testing.assert_array_equal(again, Q)  # the same seed, the same path
     raw, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", simplify_time=0.0,
-                           planner="PRM", random_state=0)
+                           planner="KPIECE1", random_state=0)
     assert all(_free_motion(p, q) for p, q in zip(raw[:-1], raw[1:], strict=True))
 
 
