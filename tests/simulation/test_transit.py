@@ -194,3 +194,21 @@ def test_which_goal_poses_the_arm_can_take(env):
     can = reachable(env, obs)
     assert can(here + [0.1, 0.3, -0.1], quat)  # over the second bin
     assert not can(here + [2.0, 0.0, 0.0], quat)  # two metres out
+
+
+def test_the_arm_against_itself_is_a_collision(env):
+    """A UR5e folded onto itself (its upper arm through its second wrist link) is not clear, and a goal
+    there is refused in one line naming both; the fingers' own touching parts are not collisions."""
+    obs = env.reset()
+    scene = ArmScene(env)
+    q0 = np.array(obs["robot0_joint_pos"], float)
+    assert scene.blocking(q0) is None
+    assert all(scene.moving[a] and scene.moving[b] and "gripper0" in scene.names[a]
+               for a, b in scene.touching)
+    folded = np.array([-2.52, -0.97, -2.96, -4.72, 2.14, 1.85])
+    hit = scene.blocking(folded)
+    assert hit is not None and {scene.names[hit[1]], scene.names[hit[2]]} == {"robot0_upperarm_col",
+                                                                             "robot0_wrist2_col"}
+    with pytest.raises(MotionPlanningError, match=r"^transit planning: the goal \[.*\] is not clear: "
+                                                  r"robot0_\w+ comes [\d.]+ mm into robot0_\w+"):
+        plan_transit(scene, q0, folded, random_state=0)
