@@ -5,7 +5,9 @@ held in the hand is moved rigidly with it (as it sits in it when the copy is mad
 collision detection (``mj_collision`` on the geoms as they lie) says which of the moving geoms (every link
 below the arm's first joint, the gripper, the held object) comes within :data:`MARGIN` of anything that
 does not move with the hand (the arm's own fixed base and mount left out): the moving geoms' margin is
-raised to it in the copy, so MuJoCo reports near misses as contacts with their distance. Inverse
+raised to it in the copy, so MuJoCo reports near misses as contacts with their distance. The robot
+against itself (two of its links, a link and its base or mount, the held object and a link) is a
+collision where they overlap, except the pairs that touch as it stands (fingers on what they hold). Inverse
 kinematics is damped least squares on the same model, to the pose robosuite reports as
 ``robot0_eef_pos`` (the gripper's grip site) and ``robot0_eef_quat`` (the end-effector body). The
 environment itself is never changed. :mod:`skillbank.simulation._transit` plans with it.
@@ -115,6 +117,12 @@ class ArmScene:
         self.names = [m.geom(i).name or f"{m.body(m.geom_bodyid[i]).name} (geom {i})" for i in range(m.ngeom)]
         self.allowed = set()
         self.checks = 0
+        # the robot against itself: pairs that touch as it stands (fingers on what they hold, a pad on a
+        # pad) always do; any other pair of its own geoms that overlaps is a collision
+        mujoco.mj_kinematics(m, self.data)
+        mujoco.mj_collision(m, self.data)
+        self.touching = set()
+        self.touching = {(a, b) for _, a, b in self._self_contacts()}
 
     def _subtree(self, root):
         m = self.model
@@ -157,7 +165,20 @@ class ArmScene:
         out = [(float(dist[k]), int(g1[k]), int(g2[k])) if mv1[k] else
                (float(dist[k]), int(g2[k]), int(g1[k])) for k in np.flatnonzero(hit)]
         out = [c for c in out if (c[1], c[2]) not in self.allowed]
-        return sorted(out)
+        return sorted(out + self._self_contacts())
+
+    def _self_contacts(self):
+        """``(distance, geom, geom)`` of the robot's own pairs that overlap in the contacts MuJoCo found
+        (a moving geom and another moving one, or the arm's base or mount), less those that touch as it
+        stands (:attr:`touching`)."""
+        d = self.data
+        n = d.ncon
+        g1, g2, dist = d.contact.geom1[:n], d.contact.geom2[:n], d.contact.dist[:n]
+        mv1, mv2 = self.moving[g1], self.moving[g2]
+        mine = (mv1 & mv2) | (mv1 & self.own[g2]) | (mv2 & self.own[g1])
+        pairs = ((float(dist[k]), int(min(g1[k], g2[k])), int(max(g1[k], g2[k])))
+                 for k in np.flatnonzero(mine & (dist < 0)))
+        return [c for c in pairs if (c[1], c[2]) not in self.touching]
 
     def blocking(self, q):
         """The nearest ``(distance, moving geom, other geom)`` within the margin at ``q``, or None."""

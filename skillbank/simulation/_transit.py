@@ -34,6 +34,7 @@ import time as _time
 import numpy as np
 
 from ..robots._motion import MotionPlanningError, _ompl, _ompl_path
+from ..robots._time_law import time_law
 from ._arm_scene import JOINT_STEP, MARGIN, ArmScene, _where
 from ._robosuite import CONTROL_FREQ
 
@@ -46,8 +47,11 @@ PLANNER_CHOICES = ("ompl", "none")
 TIME_LIMIT = 3.0
 #: Seconds OMPL's simplifier may take.
 SIMPLIFY_TIME = 0.5
-#: rad/s: the fastest any joint turns in a driven planned move (peak of its minimum-jerk profile).
+#: rad/s: the fastest any joint turns in a driven planned move.
 JOINT_SPEED = 0.8
+#: rad/s^2: the fastest any joint speeds up or slows down in it (the peak of the minimum-jerk law it
+#: replaced, over a radian at 0.8 rad/s).
+JOINT_ACCELERATION = 1.0
 #: m/s: the fastest the tool moves in it.
 TOOL_SPEED = 0.25
 #: Free spans shorter than this (m, tool) are driven as they are.
@@ -170,23 +174,27 @@ def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time
 
 
 def _timed(scene, Q):
-    """The tool poses (positions, quaternions) along joint waypoints ``Q`` at the control rate: minimum
-    jerk over the path's joint length, no joint faster than :data:`JOINT_SPEED`, the tool than
-    :data:`TOOL_SPEED` (peak speeds; a minimum-jerk profile peaks at 1.875 times its mean)."""
+    """The tool poses (positions, quaternions) along joint waypoints ``Q`` at the control rate: the path,
+    densified, timed by TOPP-RA from rest to rest (:func:`skillbank.robots.time_law`, the law ``plan``
+    and ``library reuse`` use) at most :data:`JOINT_SPEED` and :data:`JOINT_ACCELERATION` per joint,
+    stretched where the tool would pass :data:`TOOL_SPEED`."""
     fine = [Q[0]]
     for a, b in zip(Q[:-1], Q[1:], strict=True):
-        k = max(1, int(np.ceil(np.abs(b - a).max() / (JOINT_STEP / 2))))
-        fine.extend(a + s * (b - a) for s in np.linspace(0.0, 1.0, k + 1)[1:])
+        k = int(np.ceil(np.abs(b - a).max() / (JOINT_STEP / 2)))
+        fine.extend(a + s * (b - a) for s in np.linspace(0.0, 1.0, k + 1)[1:])  # k = 0: a repeated waypoint
     fine = np.array(fine)
-    along = np.r_[0.0, np.cumsum(np.abs(np.diff(fine, axis=0)).max(axis=1))]
+    if len(fine) < 2:
+        fine = np.vstack([fine, fine])
+        times = np.array([0.0, 1.0 / CONTROL_FREQ])
+    else:
+        times = time_law(fine, velocity=JOINT_SPEED, acceleration=JOINT_ACCELERATION)
     tools = np.array([scene.tool(q)[0] for q in fine])
-    length = float(np.linalg.norm(np.diff(tools, axis=0), axis=1).sum())
-    seconds = 1.875 * max(along[-1] / JOINT_SPEED, length / TOOL_SPEED)
-    n = max(CONTROL_FREQ // 2, int(np.ceil(seconds * CONTROL_FREQ)))
-    s = np.linspace(0.0, 1.0, n + 1)[1:]
-    u = s ** 3 * (10 - 15 * s + 6 * s ** 2)  # minimum jerk
-    at = u * along[-1]
-    Qs = np.column_stack([np.interp(at, along, fine[:, j]) for j in range(fine.shape[1])])
+    steps = np.linalg.norm(np.diff(tools, axis=0), axis=1)
+    fastest = float((steps / np.maximum(np.diff(times), 1e-12)).max())
+    times = times * max(1.0, fastest / TOOL_SPEED)
+    n = max(CONTROL_FREQ // 2, int(np.ceil(times[-1] * CONTROL_FREQ)))
+    at = np.linspace(0.0, times[-1], n + 1)[1:]
+    Qs = np.column_stack([np.interp(at, times, fine[:, j]) for j in range(fine.shape[1])])
     poses = [scene.tool(q) for q in Qs]
     return np.array([p for p, _ in poses]), np.array([q for _, q in poses])
 

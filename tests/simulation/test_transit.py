@@ -194,3 +194,41 @@ def test_which_goal_poses_the_arm_can_take(env):
     can = reachable(env, obs)
     assert can(here + [0.1, 0.3, -0.1], quat)  # over the second bin
     assert not can(here + [2.0, 0.0, 0.0], quat)  # two metres out
+
+
+def test_the_arm_against_itself_is_a_collision(env):
+    """A UR5e folded onto itself (its upper arm through its second wrist link) is not clear, and a goal
+    there is refused in one line naming both; the fingers' own touching parts are not collisions."""
+    obs = env.reset()
+    scene = ArmScene(env)
+    q0 = np.array(obs["robot0_joint_pos"], float)
+    assert scene.blocking(q0) is None
+    assert all(scene.moving[a] and scene.moving[b] and "gripper0" in scene.names[a]
+               for a, b in scene.touching)
+    folded = np.array([-2.52, -0.97, -2.96, -4.72, 2.14, 1.85])
+    hit = scene.blocking(folded)
+    assert hit is not None and {scene.names[hit[1]], scene.names[hit[2]]} == {"robot0_upperarm_col",
+                                                                             "robot0_wrist2_col"}
+    with pytest.raises(MotionPlanningError, match=r"^transit planning: the goal \[.*\] is not clear: "
+                                                  r"robot0_\w+ comes [\d.]+ mm into robot0_\w+"):
+        plan_transit(scene, q0, folded, random_state=0)
+
+
+def test_a_planned_move_is_timed_by_the_time_law_to_its_limits(env):
+    """A radian of the wrist's last joint alone (the tool point barely moves): TOPP-RA from rest to rest
+    at 0.8 rad/s and 1 rad/s^2 takes 1 / 0.8 + 0.8 = 2.05 s, 41 control steps at 20 Hz; a sweep of the
+    first joint is stretched until the tool keeps to 0.25 m/s."""
+    from skillbank.simulation._transit import JOINT_ACCELERATION, JOINT_SPEED, TOOL_SPEED, _timed
+
+    obs = env.reset()
+    scene = ArmScene(env)
+    q0 = np.array(obs["robot0_joint_pos"], float)
+    wrist = q0 + np.r_[np.zeros(len(q0) - 1), 1.0]
+    P, Q = _timed(scene, np.stack([q0, wrist]))
+    # its duration to a control step (the law's exact fit leaves a few ulps over 2.05 s)
+    assert abs(len(P) - (1.0 / JOINT_SPEED + JOINT_SPEED / JOINT_ACCELERATION) * 20) <= 1
+    np.testing.assert_allclose(Q[-1], scene.tool(wrist)[1], atol=1e-9)
+    sweep = q0 + np.r_[1.0, np.zeros(len(q0) - 1)]
+    P, _ = _timed(scene, np.stack([q0, sweep]))
+    speed = np.linalg.norm(np.diff(np.vstack([scene.tool(q0)[0], P]), axis=0), axis=1) * 20
+    assert speed.max() <= TOOL_SPEED * 1.05 and speed.max() > TOOL_SPEED * 0.8
