@@ -121,8 +121,7 @@ class ArmScene:
         # pad) always do; any other pair of its own geoms that overlaps is a collision
         mujoco.mj_kinematics(m, self.data)
         mujoco.mj_collision(m, self.data)
-        self.touching = set()
-        self.touching = {(a, b) for _, a, b in self._self_contacts()}
+        self.touching = {(a, b) for _, a, b in self._self_overlaps()}
 
     def _subtree(self, root):
         m = self.model
@@ -165,20 +164,19 @@ class ArmScene:
         out = [(float(dist[k]), int(g1[k]), int(g2[k])) if mv1[k] else
                (float(dist[k]), int(g2[k]), int(g1[k])) for k in np.flatnonzero(hit)]
         out = [c for c in out if (c[1], c[2]) not in self.allowed]
-        return sorted(out + self._self_contacts())
+        out += [c for c in self._self_overlaps() if (c[1], c[2]) not in self.touching]
+        return sorted(out)
 
-    def _self_contacts(self):
+    def _self_overlaps(self):
         """``(distance, geom, geom)`` of the robot's own pairs that overlap in the contacts MuJoCo found
-        (a moving geom and another moving one, or the arm's base or mount), less those that touch as it
-        stands (:attr:`touching`)."""
+        (a moving geom and another moving one, or the arm's base or mount), the lower geom id first."""
         d = self.data
         n = d.ncon
         g1, g2, dist = d.contact.geom1[:n], d.contact.geom2[:n], d.contact.dist[:n]
         mv1, mv2 = self.moving[g1], self.moving[g2]
         mine = (mv1 & mv2) | (mv1 & self.own[g2]) | (mv2 & self.own[g1])
-        pairs = ((float(dist[k]), int(min(g1[k], g2[k])), int(max(g1[k], g2[k])))
-                 for k in np.flatnonzero(mine & (dist < 0)))
-        return [c for c in pairs if (c[1], c[2]) not in self.touching]
+        return [(float(dist[k]), int(min(g1[k], g2[k])), int(max(g1[k], g2[k])))
+                for k in np.flatnonzero(mine & (dist < 0))]
 
     def blocking(self, q):
         """The nearest ``(distance, moving geom, other geom)`` within the margin at ``q``, or None."""
