@@ -733,6 +733,13 @@ def _aimed(obs, obj, held, p, q) -> np.ndarray:
     return np.asarray(p, float) + quaternion_to_matrix(np.asarray(q, float)) @ held - there
 
 
+def _in_hand(obs, obj, held) -> bool:
+    """Whether ``obj``, which sat at ``held`` in the tool's frame when its carry began, is still in the
+    hand: its distance to the tool changed by no more than a carry's own check allows (:func:`_check`)."""
+    gap = np.linalg.norm(np.asarray(obs[f"{obj}_pos"], float) - np.asarray(obs["robot0_eef_pos"], float))
+    return abs(gap - float(np.linalg.norm(held))) <= CARRIED + ARRIVED
+
+
 def _about_vertical(v, angle) -> np.ndarray:
     """The vector ``v`` turned by ``angle`` about the vertical, as :func:`_turn` turns an orientation."""
     return quaternion_to_matrix(_turn([0.0, 0.0, 0.0, 1.0], angle)) @ np.asarray(v, float)
@@ -1088,8 +1095,11 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
             for p, q, g in zip(P, Q, G, strict=True):
                 if episode.over:
                     break
-                if g != episode.driver.grip and g <= 0 and held is not None:
+                if g != episode.driver.grip and g <= 0 and held is not None and _in_hand(episode.obs, carried,
+                                                                                       held):
                     # about to let go of what it carries: aimed again from where it sits in the hand now
+                    # (not from where a dropped object lies: the arm would swing across the scene after it;
+                    # where it fell is the task's check to judge)
                     shift = _aimed(episode.obs, carried, held, p, q)
                 p = p + shift
                 if g != episode.driver.grip:

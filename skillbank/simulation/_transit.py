@@ -56,6 +56,9 @@ JOINT_ACCELERATION = 1.0
 TOOL_SPEED = 0.25
 #: Free spans shorter than this (m, tool) are driven as they are.
 SHORTEST = 0.05
+#: Poses of the close-in tried, evenly along it, for a planned move's end when the free span's end is
+#: out of the arm's reach (each an inverse kinematics).
+FORWARD = 10
 
 
 def check_planner(planner) -> str:
@@ -318,12 +321,14 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     scene = ArmScene(env, held=held, margin=margin)
     q = np.asarray(obs["robot0_joint_pos"], float)
     for k in range(a + 1):
-        q = scene.ik(P[k], Q[k], q)
-        if q is None:
-            # the part before the span leaves the arm's reach: no joints to plan from; it is driven as
-            # adapted, and where the tool stops short is the episode's to judge
-            report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {k}")
-            return P, Q, G, report
+        nxt = scene.ik(P[k], Q[k], q)
+        if nxt is None:
+            # the part before the span leaves the arm's reach (a lift from a far place, moved onto this
+            # scene): the planned move takes over from the last pose the arm takes (from where it
+            # stands, at the first sample)
+            a = max(k - 1, 0)
+            break
+        q = nxt
     # from the first clear state along the path: a hand at what it has just let go of, or a lift still
     # beside what it left, leaves as the skill's own path does, until nothing is within the margin
     while scene.blocking(q) is not None and a < b - 2:
@@ -333,16 +338,30 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
         a, q = a + 1, nxt
     start = q
     goal = _reached(scene, P[a], P[b], Q[b], start)
+    if goal is None:
+        # the demonstration's way across, moved onto this scene, leaves the arm's reach there (a
+        # person's reach swings wide): it is free space, so the planned move goes on to the first pose
+        # of the close-in the arm takes
+        for k in np.unique(np.linspace(b + 1, len(P) - 1, min(FORWARD, len(P) - 1 - b)).astype(int)):
+            goal = _reached(scene, P[a], P[k], Q[k], start)
+            if goal is not None:
+                b = int(k)
+                break
     while goal is not None and scene.blocking(goal) is not None and b > a + 2:
-        b -= 1  # to the last clear state before the skill's own part (a close-in beginning at a wall)
-        goal = scene.ik(P[b], Q[b], goal)
+        back = scene.ik(P[b - 1], Q[b - 1], goal)
+        if back is None:
+            break  # the state before it is out of reach: no clear one on this side
+        b, goal = b - 1, back  # to the last clear state before the skill's own part (a close-in at a wall)
     report["span"] = (int(a), int(b))
     if goal is None:
         report.update(seconds=_time.perf_counter() - tic, why=f"out of reach at sample {b}")
         return P, Q, G, report
-    if scene.blocking(start) is not None or scene.blocking(goal) is not None:
-        report.update(seconds=_time.perf_counter() - tic, why="no clear state")
-        return P, Q, G, report
+    for end, q_end in (("start", start), ("end", goal)):
+        hit = scene.blocking(q_end)
+        if hit is not None:
+            report.update(seconds=_time.perf_counter() - tic,
+                          why=f"no clear state: at its {end} {scene.describe(hit)}")
+            return P, Q, G, report
     joints, _ = plan_transit(scene, start, goal, random_state=random_state)
     Pm, Qm = _timed(scene, joints)
     report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="planned")

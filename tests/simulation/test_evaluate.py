@@ -235,3 +235,15 @@ def test_the_horizon_follows_the_longest_demonstration_of_each_part(lift):
     db, _ = lift
     report = evaluate(db, "robosuite:Lift", episodes=1, seed=3, horizon=40)
     assert report["horizon"] == 40  # as asked
+
+
+def test_an_object_is_in_the_hand_while_its_distance_to_the_tool_holds():
+    """The let-go is aimed again only from an object still in the hand: one that slid a centimetre is,
+    one that fell 20 cm is not (the arm would swing after it)."""
+    from skillbank.simulation._evaluate import _in_hand
+
+    held = np.array([0.0, 0.0, 0.05])  # 5 cm out along the tool's z when the carry began
+    obs = {"robot0_eef_pos": np.array([0.1, 0.2, 1.0]), "Can_pos": np.array([0.1, 0.2, 0.94])}
+    assert _in_hand(obs, "Can", held)
+    obs["Can_pos"] = np.array([0.1, 0.2, 0.8])
+    assert not _in_hand(obs, "Can", held)

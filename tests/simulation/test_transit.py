@@ -232,3 +232,21 @@ def test_a_planned_move_is_timed_by_the_time_law_to_its_limits(env):
     P, _ = _timed(scene, np.stack([q0, sweep]))
     speed = np.linalg.norm(np.diff(np.vstack([scene.tool(q0)[0], P]), axis=0), axis=1) * 20
     assert speed.max() <= TOOL_SPEED * 1.05 and speed.max() > TOOL_SPEED * 0.8
+
+
+def test_a_way_across_beyond_reach_is_planned_to_the_first_close_in_pose_the_arm_takes(env):
+    """A person's way across swings a metre and a half out (moved onto a new scene): the free span's end
+    is out of the arm's reach, so the planned move goes on to the first pose of the close-in it takes,
+    and the path goes on from there as adapted."""
+    obs = env.reset()
+    quat = np.array(obs["robot0_eef_quat"], float)
+    here = np.array(obs["robot0_eef_pos"], float)
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)
+    P[10:30] += np.sin(np.linspace(0, np.pi, 20))[:, None] * [1.5, 0.0, 0.0]
+    P2, Q2, G2, report = free_move(env, obs, P, Q, G, (5, 20))
+    assert report["planned"] and report["span"][0] == 5
+    b = report["span"][1]
+    assert b > 20 and np.linalg.norm(P[b] - P[b - 1]) > 0  # on along the close-in, past the span's end
+    assert len(P2) == 6 + report["samples"] + len(P) - b - 1
+    np.testing.assert_allclose(P2[5 + report["samples"]], P[b], atol=1e-3)
+    np.testing.assert_array_equal(P2[6 + report["samples"]:], P[b + 1:])
