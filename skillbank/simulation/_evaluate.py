@@ -733,11 +733,21 @@ def _aimed(obs, obj, held, p, q) -> np.ndarray:
     return np.asarray(p, float) + quaternion_to_matrix(np.asarray(q, float)) @ held - there
 
 
+def _gap(obs, obj) -> float:
+    """The distance (m) from the tool to ``obj``'s centre."""
+    return float(np.linalg.norm(np.asarray(obs[f"{obj}_pos"], float)
+                                - np.asarray(obs["robot0_eef_pos"], float)))
+
+
+def _lost(gap0, gap1) -> bool:
+    """Whether an object whose distance to the tool went from ``gap0`` to ``gap1`` has left the hand."""
+    return abs(gap1 - gap0) > CARRIED + ARRIVED
+
+
 def _in_hand(obs, obj, held) -> bool:
     """Whether ``obj``, which sat at ``held`` in the tool's frame when its carry began, is still in the
-    hand: its distance to the tool changed by no more than a carry's own check allows (:func:`_check`)."""
-    gap = np.linalg.norm(np.asarray(obs[f"{obj}_pos"], float) - np.asarray(obs["robot0_eef_pos"], float))
-    return abs(gap - float(np.linalg.norm(held))) <= CARRIED + ARRIVED
+    hand, by the test a carry's end has (:func:`_check`)."""
+    return not _lost(float(np.linalg.norm(held)), _gap(obs, obj))
 
 
 def _about_vertical(v, angle) -> np.ndarray:
@@ -1020,10 +1030,9 @@ def _check(seg, before, episode):
     relation = seg.relation
     if relation is not None and relation.moves_with:
         obj = seg.scene(relation.object)
-        gap0 = np.linalg.norm(before[f"{obj}_pos"] - before["robot0_eef_pos"])
-        gap1 = np.linalg.norm(obs[f"{obj}_pos"] - obs["robot0_eef_pos"])
+        gap0, gap1 = _gap(before, obj), _gap(obs, obj)
         travel = np.linalg.norm(obs[f"{obj}_pos"] - before[f"{obj}_pos"])
-        if abs(gap1 - gap0) > CARRIED + ARRIVED:
+        if _lost(gap0, gap1):
             if travel < 0.01:
                 if seg.primitive.demo["actions"][0, 6] <= 0:
                     # an open gripper leaves what it let go of: a retreat whose demonstration dragged the

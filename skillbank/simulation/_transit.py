@@ -285,11 +285,13 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     the adapted path does there is the demonstration's way of getting across, not the skill, and a
     person's halting, wandering way across, moved onto a new scene, may leave the arm's reach or sweep a
     link through a bin's wall. The span's start is where the arm is after the part before it (inverse
-    kinematics followed along the path from the arm's joints), moved on along the path to its first
-    clear state; its end is the first pose of the skill's own part after it (inverse kinematics along a
-    straight line from the start), moved back along the path to its last clear state (a close-in that
-    begins at a bin's wall is the skill's own). :func:`plan_transit` joins the two and the planned joint
-    path is driven as tool poses (:func:`_timed`); the path goes on from its end as adapted.
+    kinematics followed along the path from the arm's joints; where that part leaves the arm's reach,
+    the last pose it takes), moved on along the path to its first clear state; its end is the first pose
+    of the skill's own part after it (inverse kinematics along a straight line from the start; out of
+    reach, the first of :data:`FORWARD` poses along the close-in the arm takes), moved back along the
+    path to its last clear state (a close-in that begins at a bin's wall is the skill's own).
+    :func:`plan_transit` joins the two and the planned joint path is driven as tool poses
+    (:func:`_timed`); the path goes on from its end as adapted.
 
     Returns
     -------
@@ -299,7 +301,8 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     report : dict
         ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int, "why": str}``
         (``samples``: the planned move's samples that replace the span's; ``why``: ``"planned"``, or why
-        the span is driven as adapted: ``"short"``, ``"out of reach at sample K"``, ``"no clear state"``).
+        the span is driven as adapted: ``"short"``, ``"out of reach at sample K"``, ``"no clear state:
+        ..."`` naming what is within the margin at the span's start or end).
 
     Raises
     ------

@@ -37,6 +37,13 @@ def _line(a, b, quat, n=40):
     return P, np.tile(quat, (n, 1)), np.full(n, -1.0)
 
 
+def _way_across(here, quat, swing):
+    """A 11 cm move whose middle (samples 10-30 of 40) swings out by ``swing`` (m) and back."""
+    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)
+    P[10:30] += np.sin(np.linspace(0, np.pi, 20))[:, None] * np.asarray(swing, float)
+    return P, Q, G
+
+
 def _touches(env) -> list:
     """The robot's (arm's or gripper's) geoms touching anything else now, by name."""
     m, d = env.sim.model, env.sim.data._data
@@ -146,8 +153,7 @@ def test_a_free_span_is_planned_and_one_beyond_reach_is_driven_as_adapted(env):
     here = np.array(obs["robot0_eef_pos"], float)
     # a wandering way across, high over the bins: the span is replaced by the planned move, which ends
     # where the skill's own part after it begins
-    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)
-    P[10:30] += np.sin(np.linspace(0, np.pi, 20))[:, None] * [0.0, 0.0, 0.08]
+    P, Q, G = _way_across(here, quat, [0.0, 0.0, 0.08])
     P2, Q2, G2, report = free_move(env, obs, P, Q, G, (5, 34))
     assert report["planned"] and report["why"] == "planned" and report["span"] == (5, 34)
     np.testing.assert_array_equal(P2[:6], P[:6])
@@ -241,8 +247,7 @@ def test_a_way_across_beyond_reach_is_planned_to_the_first_close_in_pose_the_arm
     obs = env.reset()
     quat = np.array(obs["robot0_eef_quat"], float)
     here = np.array(obs["robot0_eef_pos"], float)
-    P, Q, G = _line(here, here + [0.05, 0.1, 0.0], quat)
-    P[10:30] += np.sin(np.linspace(0, np.pi, 20))[:, None] * [1.5, 0.0, 0.0]
+    P, Q, G = _way_across(here, quat, [1.5, 0.0, 0.0])
     P2, Q2, G2, report = free_move(env, obs, P, Q, G, (5, 20))
     assert report["planned"] and report["span"][0] == 5
     b = report["span"][1]
