@@ -271,28 +271,39 @@ def _phases(source) -> list:
         else:
             phases.append(_Phase(source, [seg], "reach", obj, None))
     for phase in phases:
-        # the segments that do what the phase does name it (for a carry, those that carry): a retreat
-        # after the release, which clustering may group with the reaches, does not vote
-        doing = [seg for seg in phase.segments if phase.kind != "carry"
-                 or (seg.relation is not None and seg.relation.moves_with)]
-        labels = {seg.primitive.label for seg in doing} - {None}
+        labels = {seg.primitive.label for seg in _doing(phase)} - {None}
         # one label names the phase; none, or several (an ambiguity), name nothing
         phase.label = labels.pop() if len(labels) == 1 else None
     return phases
 
 
-def _agreeing(phases) -> list:
-    """The labelled phases that do what most phases of their label do (reach, or carry).
+def _doing(phase) -> list:
+    """The segments that do what the phase does (for a carry, those that carry): a retreat after the
+    release, which clustering may group with the reaches, does not speak for the phase."""
+    return [seg for seg in phase.segments if phase.kind != "carry"
+            or (seg.relation is not None and seg.relation.moves_with)]
 
-    A label inferred over a cluster reaches a few members that do the other thing (a slow start of a
-    reach clustered with carries): the skill is what most of its phases are.
+
+def _agreeing(phases) -> list:
+    """The phases, each keeping its label only if it does what its label's skill does (reach, or carry).
+
+    A label is given to one primitive and inferred over its cluster, and a cluster can hold both kinds
+    (the short reaches down to a low bread and a can grouped with the carries of a tall milk): the
+    inferred members that do the other thing are not that skill. What the skill does is what the phases
+    its label was *given* to do (the person's word), else, with the label given to a whole cluster,
+    what most of its phases do. The phases that lose their label are left for :func:`_described`.
     """
-    kinds = {}
+    given, every = {}, {}
     for ph in phases:
-        if ph.label is not None:
-            kinds.setdefault(ph.label, []).append(ph.kind)
-    major = {label: max(set(ks), key=lambda k: (ks.count(k), k == "carry")) for label, ks in kinds.items()}
-    return [ph for ph in phases if ph.label is not None and ph.kind == major[ph.label]]
+        if ph.label is None:
+            continue
+        every.setdefault(ph.label, []).append(ph.kind)
+        if any(seg.primitive.label_source == "given" for seg in _doing(ph)):
+            given.setdefault(ph.label, []).append(ph.kind)
+    major = {label: max(set(ks), key=lambda k: (ks.count(k), k == "carry"))
+             for label, ks in {**every, **given}.items()}
+    return [ph if ph.label is None or ph.kind == major[ph.label] else replace(ph, label=None)
+            for ph in phases]
 
 
 def _described(every, labelled, domain) -> list:
@@ -565,8 +576,8 @@ def execute_plan(library, scene: str, *, episodes: int = 1, seed: int = 0, goal=
     bindings = {a: check_binding(bindings.get(a), domain.actions[a].parameters, name=f"binding of {a!r}")
                 for a in domain.actions}
     arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
-    every = [ph for src in sources for ph in _phases(src)]
-    phases = _agreeing(every)
+    every = _agreeing([ph for src in sources for ph in _phases(src)])
+    phases = [ph for ph in every if ph.label is not None]
     phases += _described(every, phases, domain)
     named = sorted({ph.label for ph in phases if ph.label})
     missing = [a for a in domain.actions if not any(ph.label and ph.label.lower() == a for ph in phases)]

@@ -20,7 +20,13 @@ from skillbank.planning import parse_domain
 pytest.importorskip("robosuite", reason="needs the sim extra (pip install 'skillbank[sim]')")
 
 from skillbank.simulation import COMPOSED, STEP_REASONS, execute_plan, record  # noqa: E402
-from skillbank.simulation._compose import _described, _highest_first, _Phase, _phases  # noqa: E402
+from skillbank.simulation._compose import (  # noqa: E402
+    _agreeing,
+    _described,
+    _highest_first,
+    _Phase,
+    _phases,
+)
 from skillbank.simulation._evaluate import _sources  # noqa: E402
 
 AWAY = [-0.15, -0.15, 0.83]  # m: on the table, outside where robosuite's sampler puts the cubes
@@ -240,6 +246,39 @@ def _phase(kind, obj, label, grip):
     source = SimpleNamespace(actions=actions)
     segment = SimpleNamespace(primitive=SimpleNamespace(start=0, stop=2))
     return _Phase(source, [segment], kind, obj, None, label)
+
+
+def _given(kind, obj, label, grip, source):
+    """A phase like :func:`_phase` whose one segment's label is ``source`` (``"given"``, ``"inferred"``)."""
+    from types import SimpleNamespace
+
+    phase = _phase(kind, obj, label, grip)
+    primitive = SimpleNamespace(start=0, stop=2, label=label, label_source=source)
+    relation = SimpleNamespace(moves_with=kind == "carry")
+    phase.segments = [SimpleNamespace(primitive=primitive, relation=relation)]
+    return phase
+
+
+def test_a_label_given_to_a_carry_names_carries_though_its_cluster_is_mostly_reaches():
+    """The first milk carry is labelled place, and clustering put it with the short reaches down to the
+    bread and the can, which inherit the label: the skill is what the person labelled (a carry), the
+    reaches lose the label and are named by what they do (pick), the unlabelled cereal carry is a place."""
+    phases = [_given("reach", "Milk", "pick", (-1, 1), "given"),
+              _given("carry", "Milk", "place", (1, -1), "given"),
+              _given("reach", "Bread", "place", (-1, 1), "inferred"),
+              _given("reach", "Can", "place", (-1, 1), "inferred"),
+              _given("carry", "Cereal", None, (1, -1), None)]
+    every = _agreeing(phases)
+    assert [ph.label for ph in every] == ["pick", "place", None, None, None]
+    labelled = [ph for ph in every if ph.label is not None]
+    named = _described(every, labelled, DOMAIN)
+    assert [(ph.kind, ph.object, ph.label) for ph in named] == [("reach", "Bread", "pick"),
+                                                                ("reach", "Can", "pick"),
+                                                                ("carry", "Cereal", "place")]
+    # a label given to a whole cluster (no primitive's own): the skill is what most of its phases do
+    cluster = [_given("reach", o, "pick", (-1, 1), "cluster") for o in ("Milk", "Bread")]
+    cluster.append(_given("carry", "Can", "pick", (1, -1), "cluster"))
+    assert [ph.label for ph in _agreeing(cluster)] == ["pick", "pick", None]
 
 
 def test_a_phase_no_label_names_is_named_by_the_one_described_skill_it_does():
