@@ -42,7 +42,7 @@ from ._clearance import clearance
 from ._description import enclosing_capsule
 
 __all__ = ["MotionPlan", "MotionPlanningError", "plan_motion", "PLANNERS", "MOTION_TIME_LIMIT",
-           "PLANNER_MAX_MOVE", "INSTALL_OMPL", "SIMPLIFY_TIME"]
+           "PLANNER_MAX_MOVE", "INSTALL_OMPL"]
 
 #: OMPL planners :func:`plan_motion` can run, by name (OMPL's ``geometric`` class names). Not PRM: it grows
 #: its roadmap on a second thread that calls the validity checks (Python callables); a PRM solve hung in
@@ -63,8 +63,6 @@ _COARSE = 4
 _END_TRIES = 8
 #: The longest motion (rad, joint space) a search tree grows by (OMPL's range).
 STEP = 1.0
-#: Seconds the simplifier may take by default (it makes at least one pass).
-SIMPLIFY_TIME = 1.0
 #: Half-width (rad) of the box around the start and goal that the search samples in, within the limits:
 #: no joint turns more than half a turn beyond the span of the two.
 SPAN = np.pi
@@ -180,7 +178,7 @@ def _seed(random_state) -> int:
 
 
 def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN, planner="RRTConnect",
-               step=STEP, time_limit=MOTION_TIME_LIMIT, simplify_time=SIMPLIFY_TIME, random_state=None):
+               step=STEP, time_limit=MOTION_TIME_LIMIT, simplify=True, random_state=None):
     """A joint path from one of ``starts`` to one of ``goals`` found by OMPL and shortened by its simplifier:
     the one OMPL set-up of :func:`plan_motion` and of the simulation's transits, whatever checks them.
 
@@ -208,8 +206,9 @@ def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN
         The longest motion (rad) the search grows by, for planners that take one (OMPL's range).
     time_limit : float, default=MOTION_TIME_LIMIT
         Seconds the search may take.
-    simplify_time : float, default=SIMPLIFY_TIME
-        Seconds OMPL's simplifier may take; 0: the path as the search found it.
+    simplify : bool, default=True
+        Shorten the path with OMPL's simplifier, to its end (:func:`_simplified`); False: the path as the
+        search found it.
     random_state : int, optional
         Seeds OMPL's random numbers (:func:`_seed`): the same seed and checks, the same path.
 
@@ -294,11 +293,11 @@ def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN
         return motion_ok(pair[0], pair[1])
 
     Q = _nearer_ends(Q, starts, goals, pair_ok)
-    if simplify_time > 0:
+    if simplify:
         path = og.PathGeometric(si)
         for q in Q:
             path.append(state(q))
-        og.PathSimplifier(si).simplify(path, float(simplify_time))
+        _simplified(og.PathSimplifier(si), path)
         kept = Q[[0, -1]]
         Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
         Q[0], Q[-1] = kept  # the simplifier keeps the ends: exactly, not to round-off
@@ -306,10 +305,22 @@ def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN
     return Q, planning_time, _time.perf_counter() - t1
 
 
+def _simplified(simplifier, path):
+    """``path`` shortened in place by OMPL's simplifier, every pass it makes (vertex reduction, shortcuts,
+    a B-spline smoothing; each pass bounded by OMPL's own counts).
+
+    Not cut by a clock: a simplifier stopped after so many seconds returns another path on a busy
+    machine than on an idle one, and an episode's result would depend on what else runs beside it (two
+    workers against one, a loaded CI). With OMPL's random numbers seeded, the same seed and checks give
+    the same path, wherever it runs.
+    """
+    simplifier.simplifyMax(path)
+
+
 def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace=None, held=None,
                 margin=0.005, ignore=(), self_collision=True, planner="rrtconnect",
                 time_limit=MOTION_TIME_LIMIT, max_move=PLANNER_MAX_MOVE, span=SPAN,
-                simplify_time=SIMPLIFY_TIME, step=STEP, random_state=None, label=None) -> MotionPlan:
+                simplify=True, step=STEP, random_state=None, label=None) -> MotionPlan:
     """A joint path from ``q_start`` to ``q_goal`` that keeps every body of the robot clear.
 
     Parameters
@@ -339,9 +350,10 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
         Densification bound (m) of the planner's checks (module docstring).
     span : float, default=SPAN
         Radians beyond the start's and goal's range that a joint may take in the search.
-    simplify_time : float, default=SIMPLIFY_TIME
-        Seconds OMPL's simplifier may shorten the path (shortcuts, vertex reduction, at least one
-        pass); 0: the path as the search found it.
+    simplify : bool, default=True
+        Shorten the path by OMPL's simplifier (vertex reduction, shortcuts, smoothing: every pass, not
+        cut by a clock, so that a seed gives the same path on any machine); False: the path as the
+        search found it.
     step : float, default=STEP
         The longest motion (rad, in joint space) the search grows its trees by (OMPL's range).
     random_state : int, optional
@@ -379,7 +391,8 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     time_limit = check_positive(time_limit, name="time_limit")
     span = check_positive(span, name="span", allow_zero=True)
     step = check_positive(step, name="step")
-    simplify_time = check_positive(simplify_time, name="simplify_time", allow_zero=True)
+    if not isinstance(simplify, (bool, np.bool_)):
+        raise ValueError(f"simplify: expected True or False, got {simplify!r}")
     if planner not in PLANNERS:
         raise ValueError(f"planner: expected one of {list(PLANNERS)}, got {planner!r}")
     Q0 = model.check_joints(q_start, name="q_start")
@@ -455,7 +468,7 @@ def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace
     Q, planning_time, spent = _ompl_path(
         model.limits, Q0, Q1, lambda q: measure(q[None]), lambda a, b: measure(np.stack([a, b])),
         failure=failure, span=span, planner=_OMPL_NAMES[planner], step=step, time_limit=time_limit,
-        simplify_time=simplify_time, random_state=random_state)
+        simplify=bool(simplify), random_state=random_state)
     q0, q1 = Q[0], Q[-1]
     final = clearance(robot, Q, **world)
     if final.min_distance < margin:  # never a silent success: the bound says this cannot happen

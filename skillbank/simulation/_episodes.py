@@ -59,8 +59,19 @@ def _verbose_robosuite():
 
 
 def _quietly(episode, verbose, job, seed):
-    """``episode(job, seed)`` with robosuite's log off (on, to stderr, with ``verbose``)."""
-    with _verbose_robosuite() if verbose else quiet_robosuite():
+    """``episode(job, seed)`` with robosuite's log off (on, to stderr, with ``verbose``), and the linear
+    algebra libraries on one thread, as Dask's workers run them.
+
+    A Dask worker's process starts with one BLAS and OpenMP thread (its nanny sets ``OMP_NUM_THREADS``,
+    ``OPENBLAS_NUM_THREADS`` and ``MKL_NUM_THREADS`` to 1); a product split over threads adds in another
+    order, the last bits differ, and a contact-rich episode amplifies them into another outcome (a
+    human-like PickPlace on the Panda, seed 920: the tool 3 cm short at its seventh segment on a worker,
+    a link on the bin's wall at its fifth here). On one thread here too, an episode is the same function
+    of its seed in this process and on any worker.
+    """
+    from threadpoolctl import threadpool_limits  # scikit-learn's own dependency
+
+    with threadpool_limits(limits=1), (_verbose_robosuite() if verbose else quiet_robosuite()):
         return episode(job, seed)
 
 

@@ -14,8 +14,9 @@ whole arm, and where any body would come near the scene it is replaced by a plan
 - :func:`plan_transit` searches with OMPL's RRTConnect (BSD-3-Clause, the planners MoveIt uses; extra
   ``plan``, set up by ``skillbank.robots._motion._ompl_path`` as for :func:`skillbank.robots.plan_motion`),
   every motion densified so that no joint turns more than :data:`JOINT_STEP` between checked states, then
-  shortened by OMPL's simplifier, within a time bound; a failure is one line naming the start, the goal
-  and the geom that blocks.
+  shortened by OMPL's simplifier (every pass, never cut by a clock: the same seed, the same path on any
+  machine); the search has a time bound, and a failure is one line naming the start, the goal and the
+  geom that blocks.
 - :func:`free_move` takes a tool path and the span of it that is free space, follows it with inverse
   kinematics from the arm's joints and, only where that would bring a body within the margin, replaces
   the span by the planned path's tool poses (forward kinematics at the control rate, minimum-jerk in
@@ -45,8 +46,6 @@ __all__ = ["ArmScene", "plan_transit", "free_move", "free_span", "move_to", "rea
 PLANNER_CHOICES = ("ompl", "none")
 #: Seconds a search may take.
 TIME_LIMIT = 3.0
-#: Seconds OMPL's simplifier may take.
-SIMPLIFY_TIME = 0.5
 #: rad/s: the fastest any joint turns in a driven planned move.
 JOINT_SPEED = 0.8
 #: rad/s^2: the fastest any joint speeds up or slows down in it (the peak of the minimum-jerk law it
@@ -95,7 +94,7 @@ def transit_timing(per_episode_transits) -> dict:
             "planning_seconds_max": round(float(np.max(every)), 4) if every else 0.0}
 
 
-def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time=SIMPLIFY_TIME,
+def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify=True,
                  random_state=None):
     """A joint path from ``q_start`` to ``q_goal`` on which the arm, gripper and held object stay clear.
 
@@ -105,8 +104,9 @@ def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time
     q_start, q_goal : array of shape (n_joints,)
     time_limit : float
         Seconds the search may take.
-    simplify_time : float
-        Seconds OMPL's simplifier may shorten the path.
+    simplify : bool
+        Shorten the path with OMPL's simplifier (every pass: the same seed, the same path on any
+        machine, however busy).
     random_state : int, optional
         OMPL's seed: the same seed, the same path.
 
@@ -165,7 +165,7 @@ def plan_transit(scene, q_start, q_goal, *, time_limit=TIME_LIMIT, simplify_time
     # grows by at most half a radian (short motions are cheap to check and rarely blocked)
     Q, _, _ = _ompl_path(scene.limits, q0[None], q1[None], lambda q: noted(scene.blocking(q)),
                          lambda a, b: noted(scene.motion_blocking(a, b)), failure=failure, span=np.pi / 2,
-                         step=0.5, time_limit=time_limit, simplify_time=simplify_time,
+                         step=0.5, time_limit=time_limit, simplify=simplify,
                          random_state=random_state)
     for a, b in zip(Q[:-1], Q[1:], strict=True):  # never a silent success
         hit = scene.motion_blocking(a, b)

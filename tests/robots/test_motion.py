@@ -186,7 +186,7 @@ def test_the_one_ompl_set_up_goes_round_what_the_callers_checks_refuse():
     assert np.all(Q >= -1.0) and np.all(Q <= 1.0) and planning >= 0.0 and simplifying >= 0.0
     again, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", random_state=0)
     np.testing.assert_array_equal(again, Q)  # the same seed, the same path
-    raw, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", simplify_time=0.0,
+    raw, _, _ = _ompl_path(SQUARE, a, b, _free, _free_motion, failure=lambda: "unused", simplify=False,
                            planner="KPIECE1", random_state=0)
     assert all(_free_motion(p, q) for p, q in zip(raw[:-1], raw[1:], strict=True))
 

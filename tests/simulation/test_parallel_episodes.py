@@ -81,6 +81,32 @@ def test_an_episode_is_the_same_alone_as_after_others(lift, serial):
     assert serial["successes"] >= 1  # the runs compared below do something
 
 
+def _threads(job, seed):
+    from threadpoolctl import threadpool_info
+
+    return {"seed": seed, "success": True,
+            "threads": [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]}, None
+
+
+def test_an_episode_here_runs_its_linear_algebra_on_one_thread_as_a_dask_worker_does():
+    """Dask's nanny starts a worker with one BLAS thread; a product split over two adds in another order,
+    and a contact-rich episode turns the last bits into another outcome: here, too, an episode runs on
+    one thread, and the caller's threads are as they were after it."""
+    import numpy as np
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from skillbank.simulation._episodes import run_episodes
+
+    assert np.ones(2) @ np.ones(2) == 2.0  # numpy's BLAS loaded
+    with threadpool_limits(limits=2):
+        before = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+        rows, where = run_episodes(_threads, None, [1, 2])
+        after = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert where is None and [r["seed"] for r, _ in rows] == [1, 2]
+    assert all(r["threads"] and set(r["threads"]) == {1} for r, _ in rows)
+    assert 2 in before and after == before
+
+
 def test_two_local_workers_give_the_serial_report(lift, serial):
     code, out, err = run("sim", "evaluate", lift, *RUN, "--workers", "2")
     assert code == 0
