@@ -1083,7 +1083,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"],
                                        need=episode.reach.needed(G, let_go=let_go))
             if planner == "ompl" and method != "rigid":
-                span = free_span(len(P), G, let_go=let_go, leave=0.0, close_in=CLOSE_IN[0])
+                span = free_span(len(P), G, let_go=let_go, close_in=CLOSE_IN[0])
                 try:
                     P, Q, G, report = (P, Q, G, None) if span is None else free_move(
                         episode.env, episode.obs, P, Q, G, span, random_state=random_state,

@@ -19,13 +19,14 @@ whole arm, and where any body would come near the scene it is replaced by a plan
   geom that blocks.
 - :func:`free_move` takes a tool path and the span of it that is free space, follows it with inverse
   kinematics from the arm's joints and, only where that would bring a body within the margin, replaces
-  the span by the planned path's tool poses (forward kinematics at the control rate, minimum-jerk in
-  time, no joint faster than :data:`JOINT_SPEED`): what follows the span is driven as before, from where
+  the span by the planned path's tool poses (forward kinematics at the control rate, timed by the time
+  law, no joint faster than :data:`JOINT_SPEED`): what follows the span is driven as before, from where
   the planned move ends.
-- :func:`free_span` says which part of an adapted segment is free space, from the data alone: after the
-  part that leaves as the demonstration did (:data:`~skillbank.simulation._evaluate.LEAVE`), up to where
-  the demonstration's own close-in is pinned (``CLOSE_IN``), or to the end for a segment that only
-  leaves what the last one let go of.
+- :func:`free_span` says which part of an adapted segment is free space, from the data alone: up to
+  where the demonstration's own close-in is pinned (``CLOSE_IN``), or to the end for a segment that only
+  leaves what the last one let go of; :func:`free_move` starts it where the path, followed from the
+  arm's joints, first leaves everything within the margin (a lift off the table, a hand leaving what it
+  let go of, leaves as the demonstration did).
 """
 
 from __future__ import annotations
@@ -258,23 +259,23 @@ def _int_seed(random_state):
                      f"{random_state!r}")
 
 
-def free_span(n, grip, *, let_go=False, leave=0.25, close_in=0.5):
-    """The samples ``(start, stop)`` of an adapted path of ``n`` samples that are free space, or None.
+def free_span(n, grip, *, let_go=False, close_in=0.5):
+    """The samples ``(start, stop)`` of an adapted path of ``n`` samples that may be free space, or None.
 
-    The first ``leave`` of a segment leaves as its demonstration did (a lift off the table); from
-    ``close_in`` on the demonstration's own close-in is pinned. Between them the path relates to no
-    object and is free. A segment that keeps the gripper open right after one that let go (``let_go``)
+    From ``close_in`` on, the demonstration's own close-in is pinned; before it the path relates to no
+    object, once it has left what it starts at (:func:`free_move` moves the span's start on to where the
+    path, followed from the arm's joints, is first clear: a lift off the table leaves as its
+    demonstration did). A segment that keeps the gripper open right after one that let go (``let_go``)
     only leaves: free to its end.
 
     Examples
     --------
     >>> free_span(41, [-1] * 41), free_span(41, [-1] * 41, let_go=True), free_span(3, [-1] * 3)
-    ((10, 20), (10, 40), None)
+    ((0, 20), (0, 40), None)
     """
     grip = np.asarray(grip, float)
-    start = int(np.ceil(leave * (n - 1)))
     stop = n - 1 if let_go and (grip <= 0).all() else int(np.floor(close_in * (n - 1)))
-    return (start, stop) if stop - start >= 2 else None
+    return (0, stop) if stop >= 2 else None
 
 
 def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN):

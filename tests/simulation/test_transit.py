@@ -133,9 +133,9 @@ def test_a_held_object_moves_with_the_hand_and_is_checked(env):
 
 
 def test_free_span_is_decided_by_the_gripper_and_the_phases():
-    assert free_span(41, [-1] * 20 + [1] * 21) == (10, 20)  # a reach: up to its close-in
-    assert free_span(41, [-1] * 41, let_go=True) == (10, 40)  # a retreat after a release: to its end
-    assert free_span(5, [-1] * 5) is None
+    assert free_span(41, [-1] * 20 + [1] * 21) == (0, 20)  # a reach: up to its close-in
+    assert free_span(41, [-1] * 41, let_go=True) == (0, 40)  # a retreat after a release: to its end
+    assert free_span(5, [-1] * 5) == (0, 2) and free_span(4, [-1] * 4) is None  # too short to plan
 
 
 @pytest.mark.parametrize("run", ["evaluate", "execute_plan"])
