@@ -207,8 +207,8 @@ def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN
     time_limit : float, default=MOTION_TIME_LIMIT
         Seconds the search may take.
     simplify : bool, default=True
-        Shorten the path with OMPL's simplifier, to its end (:func:`_simplified`); False: the path as the
-        search found it.
+        Shorten the path with OMPL's simplifier, every pass it makes (not cut by a clock); False: the
+        path as the search found it.
     random_state : int, optional
         Seeds OMPL's random numbers (:func:`_seed`): the same seed and checks, the same path.
 
@@ -297,24 +297,15 @@ def _ompl_path(limits, starts, goals, state_ok, motion_ok, *, failure, span=SPAN
         path = og.PathGeometric(si)
         for q in Q:
             path.append(state(q))
-        _simplified(og.PathSimplifier(si), path)
+        # every pass OMPL's simplifier makes (each bounded by its own counts), never cut by a clock: a
+        # simplifier stopped after so many seconds returns another path on a busy machine than on an
+        # idle one (two workers against one, a loaded CI); seeded, the same path wherever it runs
+        og.PathSimplifier(si).simplifyMax(path)
         kept = Q[[0, -1]]
         Q = np.array([array(path.getState(k)) for k in range(path.getStateCount())])
         Q[0], Q[-1] = kept  # the simplifier keeps the ends: exactly, not to round-off
         Q = _nearer_ends(Q, starts, goals, pair_ok)
     return Q, planning_time, _time.perf_counter() - t1
-
-
-def _simplified(simplifier, path):
-    """``path`` shortened in place by OMPL's simplifier, every pass it makes (vertex reduction, shortcuts,
-    a B-spline smoothing; each pass bounded by OMPL's own counts).
-
-    Not cut by a clock: a simplifier stopped after so many seconds returns another path on a busy
-    machine than on an idle one, and an episode's result would depend on what else runs beside it (two
-    workers against one, a loaded CI). With OMPL's random numbers seeded, the same seed and checks give
-    the same path, wherever it runs.
-    """
-    simplifier.simplifyMax(path)
 
 
 def plan_motion(model, q_start, q_goal, *, obstacles=None, table=None, workspace=None, held=None,

@@ -130,6 +130,8 @@ def test_bad_arguments_are_refused(robot):
         plan_motion(robot, a, b, held="ball")
     with pytest.raises(ValueError, match=r"^random_state: expected an integer seed or None"):
         plan_motion(robot, a, b, table=TABLE, random_state=1.5)
+    with pytest.raises(ValueError, match=r"^simplify: expected True or False, got 0.5$"):
+        plan_motion(robot, a, b, simplify=0.5)
 
 
 def test_without_ompl_one_line_names_the_extra(robot, monkeypatch):
