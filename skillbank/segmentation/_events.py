@@ -118,9 +118,13 @@ def _pivots(u: np.ndarray, height: float) -> list[int]:
 def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
     """Where a discrete stream switches between its levels, each with confidence 1.
 
-    Each dimension is scaled to [0, 1] over its own range; it switches at every move between two rests
-    of at least :data:`SWITCH` of that range, whatever level it starts and ends at (one grasp closes the
-    fingers fully on a small object, another half-way on a large one). The switch is placed half-way
+    The stream is one device (a gripper's finger joints move together), so its state is one coordinate:
+    the position along the line its samples spread along most (:func:`_main_axis`); a joint that only
+    gives when something presses on the fingers (a linkage's passive knuckle, jolted as a carried box
+    touches down) moves off that line and does not switch it. That coordinate is scaled to [0, 1] over
+    its range; it switches at every move between two rests of at least :data:`SWITCH` of that range,
+    whatever level it starts and ends at (one grasp closes the fingers fully on a small object, another
+    half-way on a large one). The switch is placed half-way
     through the move's crossing (from its first quarter to its last: the middle of a gripper's closing),
     the quarters of the way to the level it rests at after it (not the end of a slow squeeze that may
     follow, as fingers shut on a soft carton go on closing while it gives).
@@ -138,9 +142,9 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
     Y = np.asarray(Y, dtype=float)
     Y = Y.reshape(Y.shape[0], -1)
     events = []
-    for y in Y.T:
+    for y in _main_axis(Y).T:
         lo, hi = float(y.min()), float(y.max())
-        if hi - lo <= HELD_RANGE * (1.0 + max(abs(lo), abs(hi))):
+        if hi - lo <= HELD_RANGE * (1.0 + float(np.max(np.abs(Y), initial=0.0))):
             continue
         u = (y - lo) / (hi - lo)
         pivots = _pivots(u, SWITCH)
@@ -160,6 +164,27 @@ def discrete_events(Y) -> tuple[np.ndarray, np.ndarray]:
             events.append(a + (start + end) // 2)
     events = np.unique(np.asarray(events, dtype=int))
     return events, np.full(events.size, MAX_CONFIDENCE)
+
+
+def _main_axis(Y: np.ndarray) -> np.ndarray:
+    """``Y`` as one column: each sample's coordinate along the direction its samples spread along most.
+
+    A gripper reports each finger joint (robosuite's Robotiq 85: six, two of them passive knuckles with
+    a third of the others' travel); they open and close together, so the opening is the first principal
+    direction of the samples. One column is returned as it is.
+
+    Examples
+    --------
+    >>> t = np.r_[np.zeros(3), np.ones(3)]
+    >>> np.abs(_main_axis(np.c_[t, -t])).ravel().round(3).tolist()  # two mirrored fingers: one coordinate
+    [0.707, 0.707, 0.707, 0.707, 0.707, 0.707]
+    """
+    if Y.shape[1] == 1:
+        return Y
+    centred = Y - Y.mean(axis=0)
+    # the right singular vector of the largest singular value: the line of greatest spread
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    return centred @ vt[:1].T
 
 
 def _noise_sigma(Y: np.ndarray) -> np.ndarray:

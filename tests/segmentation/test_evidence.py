@@ -310,3 +310,24 @@ def test_every_grasp_of_several_objects_is_a_switch_whatever_the_fingers_close_t
     assert len(at) == 2 * len(levels)
     starts = np.cumsum([0] + [len(p) for p in parts])[1:-1:4]  # each grasp's closing begins here
     np.testing.assert_array_less(np.abs(at[::2] - (starts + 4)), 3)  # half-way through each closing
+
+
+def test_a_passive_knuckle_jolted_as_a_box_touches_down_is_not_the_gripper_opening():
+    """A Robotiq 85 reports six joints; its two passive knuckles travel a third as far as the driven ones
+    and jump most of their range when a carried box touches the bin's floor, 25 samples before the
+    fingers open (an unloading demonstration of the cereal). Judged joint by joint, that jolt was a
+    release, the carry ended at the touch-down and the let-go fell in the retreat; the gripper is one
+    device whose opening is its joints' common motion."""
+    n, close, touch, open_ = 300, 50, 200, 225
+    i = np.arange(n)
+
+    def step(at, before, after):  # a move over 5 samples centred on ``at``
+        return before + (after - before) * np.clip((i - at + 2.5) / 5.0, 0.0, 1.0)
+
+    driven = step(close, -0.03, 0.46) + step(open_, 0.0, -0.49)
+    knuckle = step(close, -0.26, -0.35) + step(touch, 0.0, 0.09)
+    rng = np.random.default_rng(0)
+    Y = np.c_[driven, knuckle, driven * 0.6, driven, knuckle, driven * 0.6] + rng.normal(0, 1e-3, (n, 6))
+    at = discrete_events(Y)[0]
+    assert discrete_events(Y[:, [1]])[0].tolist() == [close, touch]  # the knuckle alone: a jolt, a "switch"
+    assert np.abs(at - np.array([close, open_])).max() <= 2, at
