@@ -50,7 +50,7 @@ from ..core import (
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..robots import MotionPlanningError
-from ..selection import METHODS, acted_on, compose, object_streams, reuse
+from ..selection import METHODS, acted_on, object_streams, reuse
 from ..store import open_store
 from ._arms import check_pads, pose_points
 from ._episodes import check_episode_cluster, fresh, run_episodes
@@ -180,12 +180,13 @@ def _in_frame(demo, relation, frame):
 
 
 def _frame_at(demo, relation, frame):
-    """The pose ``(p, q)`` of an object ``frame`` in the primitive's own samples, or None without it."""
+    """The pose ``(p, q)`` of an object ``frame`` in the primitive's own samples (:func:`_source_frame`),
+    or None without it."""
     obj, at = frame
     name = relation.target if at == "target" else obj
     if name is None or f"{name}_pos" not in demo.streams:
         return None
-    return _pose(demo, name, 0 if at == "start" else -1)
+    return _source_frame(demo, relation, frame)
 
 
 def _told_apart(members, frames, spread) -> bool:
@@ -658,11 +659,28 @@ def _frame_pose(obs, seg, frame):
 
 
 def _source_frame(demo, relation, frame):
-    """The frame's pose in the source primitive: the target at its end, the carried object at its start."""
+    """The frame's pose in the source primitive: the target at its end, the carried object at its start,
+    the object a reach ends at where it stood as the hand came (:func:`_stood`)."""
     obj, at = frame
     if at == "target":
         return _pose(demo, relation.target, -1)
-    return _pose(demo, obj, 0 if at == "start" else -1)
+    if at == "start":
+        return _pose(demo, obj, 0)
+    reached = relation is not None and not relation.moves_with and obj == relation.object
+    return _pose(demo, obj, _stood(demo, obj) if reached else -1)
+
+
+def _stood(demo, obj) -> int:
+    """The sample of the reach ``demo`` at which ``obj`` stood as it did while the hand came: the one
+    nearest its median position over the reach.
+
+    Not the reach's last sample: the closing fingers push what they grasp (a milk carton centred between
+    the pads by a centimetre), and the way in, kept relative to the carton where it ended, comes down a
+    centimetre off where the carton stands in a new scene, onto its top edge. Not its first either: an
+    object dropped into place at reset settles for the first few samples.
+    """
+    where = np.asarray(demo[f"{obj}_pos"], float)
+    return int(np.argmin(np.linalg.norm(where - np.median(where, axis=0), axis=1)))
 
 
 def _goal_orientations(seg, obs):
@@ -709,7 +727,9 @@ def _goal_position(seg, obs, q, angle=0.0):
     if seg.frame == ("world",):
         return np.asarray(demo["position"][-1], float)
     p_obj, q_obj = _frame_pose(obs, seg, seg.frame)
-    p = compose(relation, p_obj, q_obj, at=seg.frame[1])[0]
+    # the source's end moved with the frame: its relation's pose on the frame, as the frame stood
+    p = _moved(demo["position"][-1], demo["orientation"][-1], _source_frame(demo, relation, seg.frame),
+               (p_obj, q_obj))[0]
     if angle and seg.turns_with:
         # the tool turned with the object's symmetry grasps the object from the other side: where it is
         # relative to the object turns with it (else a grasp a centimetre off the centre on one side
@@ -903,7 +923,8 @@ def _in_scene(seg, env):
     in a bin, a half turn). A grasp kept on the object may take the object's
     turns (:func:`object_symmetry`: a cube's quarter turns, the tool's place on it turning with it), else
     the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
-    other side, the place on the handle kept).
+    other side, the place on the handle kept). Turns of a grasp its data teach are kept only where the
+    object's geometry or the gripper's pads repeat them: a box's grasps are never taken a quarter round.
     """
     relation = seg.relation
     if seg.released and not seg.told and seg.frame == (getattr(relation, "object", None), "target") \
@@ -911,6 +932,14 @@ def _in_scene(seg, env):
         # let go beside the object it ended nearest, not on it: it was put on what the scene holds fixed
         # there (a bin's compartment), which the world keeps, as a place near no object is
         seg = replace(seg, frame=("world",), turn=("world",))
+    grasp = relation is not None and not relation.moves_with \
+        and seg.turn == seg.frame == (relation.object, "end")
+    if grasp and seg.symmetry > 1:
+        # the members' headings may agree at quarter turns where the object has only half turns (one of a
+        # cereal box's ten grasps taken a quarter round): a turn the object's geometry and the gripper's
+        # two pads do not repeat closes the fingers across the box's wide side, which they cannot span
+        repeats = math.lcm(object_symmetry(env, seg.scene(relation.object)), 2)
+        return replace(seg, symmetry=math.gcd(seg.symmetry, repeats))
     if seg.symmetry != 1 or seg.turn == "held":
         return seg
     if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
@@ -919,7 +948,7 @@ def _in_scene(seg, env):
         # the object's own turns leave its place unchanged too (a carton in a bin: its half turns)
         return seg if held is None else replace(
             seg, symmetry=math.lcm(held[1], object_symmetry(env, seg.scene(relation.object))))
-    if relation is not None and not relation.moves_with and seg.turn == seg.frame == (relation.object, "end"):
+    if grasp:
         k = object_symmetry(env, seg.scene(relation.object))
         return replace(seg, symmetry=k, turns_with=True) if k > 1 else \
             replace(seg, symmetry=2, turns_with=False)

@@ -321,3 +321,48 @@ def test_a_can_that_sags_in_the_fingers_as_it_is_lifted_is_still_placed_in_the_w
     carries = [src.segments[1] for src in sources]
     assert all(c.relation.moves_with and c.released for c in carries)
     assert {c.frame for c in carries} == {("world",)}
+
+
+def test_a_reach_is_kept_relative_to_where_the_object_stood_not_where_the_fingers_pushed_it():
+    """A reach for a milk carton: it settles 4 mm at reset, stands while the hand comes down over its
+    centre, and the closing fingers push it 1 cm. Kept relative to where the carton ended, the way down
+    lands a centimetre off where a carton stands in a new scene (on its top edge: it topples); kept
+    relative to where it stood, the hand comes down over its centre as the demonstration's did."""
+    from skillbank.simulation._evaluate import _goal_position, _source_frame
+
+    n = 60
+    t = np.linspace(0.0, 3.0, n)
+    stood = np.array([0.05, -0.36, 0.88])
+    carton = np.tile(stood, (n, 1))
+    carton[:5, 2] += np.linspace(0.004, 0.0, 5)  # settling at reset
+    carton[50:] += np.linspace(0.0, 1.0, 10)[:, None] * [0.01, 0.0, 0.0]  # pushed as the fingers close
+    tool = stood + np.c_[np.zeros(n), np.zeros(n), np.linspace(0.2, 0.02, n)]
+    tool[50:] += np.linspace(0.0, 1.0, 10)[:, None] * [0.005, 0.0, 0.0]
+    demo = Demonstration(t, {"position": tool, "orientation": np.tile(DOWN, (n, 1)), "Milk_pos": carton,
+                             "Milk_quat": np.tile([0, 0, 0, 1.0], (n, 1)), "actions": np.zeros((n, 7))})
+    relation = acted_on(demo)
+    assert relation.object == "Milk" and not relation.moves_with
+    np.testing.assert_allclose(_source_frame(demo, relation, ("Milk", "end"))[0], stood, atol=1e-9)
+    seg = _Segment(SimpleNamespace(demo=demo, cluster=0, id=0), relation, ("Milk", "end"))
+    there = np.array([0.2, -0.1, 0.88])
+    obs = {"Milk_pos": there, "Milk_quat": np.array([0, 0, 0, 1.0]), "robot0_eef_pos": there + [0, 0, 0.3],
+           "robot0_eef_quat": DOWN}
+    # the tool ends where the demonstration's did relative to the carton as it stood: 5 mm past its centre
+    np.testing.assert_allclose(_goal_position(seg, obs, DOWN), there + [0.005, 0.0, 0.02], atol=1e-9)
+
+
+@pytest.mark.parametrize("object_turns, shown, kept", [(2, 4, 2), (4, 4, 4), (1, 4, 2), (2, 1, 2), (4, 2, 2)])
+def test_a_grasp_takes_only_the_turns_the_object_or_the_pads_repeat(monkeypatch, object_turns, shown, kept):
+    """Nine of a cereal box's ten grasps close across its 3 cm side, one a quarter round: the headings
+    agree best at quarter turns, and a quarter-turned goal closes the fingers across the 10 cm side,
+    which they cannot span. A box (half turns) keeps half turns; a cube, quarter turns; a handle the
+    pads' half turn. One demonstration (whole turns) takes the scene's turns, as before."""
+    import skillbank.simulation._evaluate as ev
+
+    monkeypatch.setattr(ev, "object_symmetry", lambda env, name: object_turns)
+    t = np.linspace(0.0, 1.0, 5)
+    demo = Demonstration(t, {"position": np.zeros((5, 3)), "orientation": np.tile(DOWN, (5, 1)),
+                             "box_pos": np.zeros((5, 3)), "box_quat": np.tile([0, 0, 0, 1.0], (5, 1))})
+    seg = _Segment(SimpleNamespace(demo=demo), acted_on(demo), ("box", "end"), turn=("box", "end"),
+                   symmetry=shown)
+    assert ev._in_scene(seg, env=None).symmetry == kept
