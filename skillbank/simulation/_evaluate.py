@@ -508,6 +508,29 @@ def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
     return p + (off - np.clip(off, -room, room)) * across
 
 
+def _spans(seg, obs, q, fingers) -> bool:
+    """Whether the executing gripper's open fingers, at orientation ``q``, span the object a reach that
+    closes the gripper closes on (its extent along the closing axis, from its collision geoms, within
+    the opening); True for any other segment, or where the scene does not say.
+
+    A heading the members teach may repeat where the object does not: ten grasps of a cereal box, nine
+    across its 3 cm side and one a quarter round, agree best at quarter turns, and a quarter-turned goal
+    closes the fingers across the box's 10 cm side, which the 2F-85's 9.5 cm between its pads cannot
+    span: the fingers land on the box's top.
+    """
+    relation = seg.relation
+    if (fingers is None or relation is None or relation.moves_with
+            or seg.primitive.demo["actions"][-1, 6] <= 0):
+        return True
+    obj = seg.scene(relation.object)
+    half = fingers.extents.get(obj)
+    if half is None:
+        return True
+    closing = quaternion_to_matrix(q) @ fingers.axis
+    width = float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ closing) @ half)
+    return width < fingers.half
+
+
 def _cost(segments, obs, fingers=None) -> float:
     """How far the segments' goals move in the scene ``obs`` shows: the size of the adaptation.
 
@@ -799,6 +822,8 @@ def _goal(seg, obs, fingers=None, reachable=None):
                for q, angle in _goal_orientations(seg, obs)]
     if reachable is not None and len(options) > 1:
         options = [o for o in options if reachable(o[1], o[0])] or options
+    if len(options) > 1:
+        options = [o for o in options if _spans(seg, obs, o[0], fingers)] or options
     if fingers is None or len(options) == 1:
         return options[0][1], options[0][0]
     others = _others(seg, obs)
@@ -923,8 +948,7 @@ def _in_scene(seg, env):
     in a bin, a half turn). A grasp kept on the object may take the object's
     turns (:func:`object_symmetry`: a cube's quarter turns, the tool's place on it turning with it), else
     the gripper's: two opposed pads close the same way half a turn round (a nut's handle taken from its
-    other side, the place on the handle kept). Turns of a grasp its data teach are kept only where the
-    object's geometry or the gripper's pads repeat them: a box's grasps are never taken a quarter round.
+    other side, the place on the handle kept).
     """
     relation = seg.relation
     if seg.released and not seg.told and seg.frame == (getattr(relation, "object", None), "target") \
@@ -932,14 +956,6 @@ def _in_scene(seg, env):
         # let go beside the object it ended nearest, not on it: it was put on what the scene holds fixed
         # there (a bin's compartment), which the world keeps, as a place near no object is
         seg = replace(seg, frame=("world",), turn=("world",))
-    grasp = relation is not None and not relation.moves_with \
-        and seg.turn == seg.frame == (relation.object, "end")
-    if grasp and seg.symmetry > 1:
-        # the members' headings may agree at quarter turns where the object has only half turns (one of a
-        # cereal box's ten grasps taken a quarter round): a turn the object's geometry and the gripper's
-        # two pads do not repeat closes the fingers across the box's wide side, which they cannot span
-        repeats = math.lcm(object_symmetry(env, seg.scene(relation.object)), 2)
-        return replace(seg, symmetry=math.gcd(seg.symmetry, repeats))
     if seg.symmetry != 1 or seg.turn == "held":
         return seg
     if seg.released and seg.frame == ("world",) and seg.turn == ("world",) and _carries(relation):
@@ -948,7 +964,7 @@ def _in_scene(seg, env):
         # the object's own turns leave its place unchanged too (a carton in a bin: its half turns)
         return seg if held is None else replace(
             seg, symmetry=math.lcm(held[1], object_symmetry(env, seg.scene(relation.object))))
-    if grasp:
+    if relation is not None and not relation.moves_with and seg.turn == seg.frame == (relation.object, "end"):
         k = object_symmetry(env, seg.scene(relation.object))
         return replace(seg, symmetry=k, turns_with=True) if k > 1 else \
             replace(seg, symmetry=2, turns_with=False)

@@ -351,18 +351,22 @@ def test_a_reach_is_kept_relative_to_where_the_object_stood_not_where_the_finger
     np.testing.assert_allclose(_goal_position(seg, obs, DOWN), there + [0.005, 0.0, 0.02], atol=1e-9)
 
 
-@pytest.mark.parametrize("object_turns, shown, kept", [(2, 4, 2), (4, 4, 4), (1, 4, 2), (2, 1, 2), (4, 2, 2)])
-def test_a_grasp_takes_only_the_turns_the_object_or_the_pads_repeat(monkeypatch, object_turns, shown, kept):
-    """Nine of a cereal box's ten grasps close across its 3 cm side, one a quarter round: the headings
-    agree best at quarter turns, and a quarter-turned goal closes the fingers across the 10 cm side,
-    which they cannot span. A box (half turns) keeps half turns; a cube, quarter turns; a handle the
-    pads' half turn. One demonstration (whole turns) takes the scene's turns, as before."""
-    import skillbank.simulation._evaluate as ev
+@pytest.mark.parametrize("heading, spans", [(0.0, True), (math.pi / 2, False), (math.pi, True)])
+def test_a_grasp_closes_only_across_a_side_the_open_fingers_span(heading, spans):
+    """A cereal box 10 cm by 3 cm: the fingers (9.5 cm apart when open) close across its 3 cm side; a
+    goal turned a quarter round, which headings agreeing at quarter turns offer, closes them across the
+    10 cm side, and is not a grasp."""
+    from skillbank.simulation._evaluate import _Fingers, _spans
 
-    monkeypatch.setattr(ev, "object_symmetry", lambda env, name: object_turns)
     t = np.linspace(0.0, 1.0, 5)
+    actions = np.zeros((5, 7))
+    actions[:, 6] = 1.0  # the reach ends closing the gripper
     demo = Demonstration(t, {"position": np.zeros((5, 3)), "orientation": np.tile(DOWN, (5, 1)),
-                             "box_pos": np.zeros((5, 3)), "box_quat": np.tile([0, 0, 0, 1.0], (5, 1))})
-    seg = _Segment(SimpleNamespace(demo=demo), acted_on(demo), ("box", "end"), turn=("box", "end"),
-                   symmetry=shown)
-    assert ev._in_scene(seg, env=None).symmetry == kept
+                             "box_pos": np.zeros((5, 3)), "box_quat": np.tile([0, 0, 0, 1.0], (5, 1)),
+                             "actions": actions})
+    seg = _Segment(SimpleNamespace(demo=demo), acted_on(demo), ("box", "end"))
+    fingers = _Fingers(axis=np.array([0.0, 1.0, 0.0]), half=0.0475, pad=0.01,
+                       extents={"box": np.array([0.05, 0.015, 0.075])})
+    obs = {"box_quat": np.array([0.0, 0.0, 0.0, 1.0])}
+    # the tool pointing down with its closing axis along the box's y (its 3 cm side), turned by heading
+    assert _spans(seg, obs, _yawed(DOWN, heading), fingers) is spans
