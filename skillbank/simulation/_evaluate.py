@@ -478,6 +478,18 @@ def _fingers(env, obs):
                     {o: object_extents(env, o) for o in _objects(obs)})
 
 
+def _grasped(seg, fingers):
+    """``(object, its half extents)`` of the scene object a reach that closes the gripper closes on, or
+    None: another segment, no gripper said, or an object the scene does not model."""
+    relation = seg.relation
+    if (fingers is None or relation is None or relation.moves_with
+            or seg.primitive.demo["actions"][-1, 6] <= 0):
+        return None
+    obj = seg.scene(relation.object)
+    half = fingers.extents.get(obj)
+    return None if half is None else (obj, half)
+
+
 def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
     """The goal ``p`` of a reach that closes the gripper on its object, moved across the closing axis
     just enough that the executing gripper's pads overlap the object's face by their width.
@@ -488,14 +500,10 @@ def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
     moves (closing centres the object between the fingers); across it the offset is kept as far as the
     pads still cover the face (centred, if the face is narrower than a pad).
     """
-    relation = seg.relation
-    if (fingers is None or relation is None or relation.moves_with
-            or seg.primitive.demo["actions"][-1, 6] <= 0):
+    grasped = _grasped(seg, fingers)
+    if grasped is None:
         return p
-    obj = seg.scene(relation.object)
-    half = fingers.extents.get(obj)
-    if half is None:
-        return p
+    obj, half = grasped
     R = quaternion_to_matrix(q)
     up = R[:, 2]
     across = np.cross(up, R @ fingers.axis)  # along a pad's width, in the world
@@ -518,14 +526,10 @@ def _spans(seg, obs, q, fingers) -> bool:
     closes the fingers across the box's 10 cm side, which the 2F-85's 9.5 cm between its pads cannot
     span: the fingers land on the box's top.
     """
-    relation = seg.relation
-    if (fingers is None or relation is None or relation.moves_with
-            or seg.primitive.demo["actions"][-1, 6] <= 0):
+    grasped = _grasped(seg, fingers)
+    if grasped is None:
         return True
-    obj = seg.scene(relation.object)
-    half = fingers.extents.get(obj)
-    if half is None:
-        return True
+    obj, half = grasped
     closing = quaternion_to_matrix(q) @ fingers.axis
     width = float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ closing) @ half)
     return width < fingers.half
