@@ -224,8 +224,8 @@ def _held_until(demo, obj) -> int:
     sample ended the hold early in the lift, and the place was kept relative to where the can was picked
     up. A demonstration without recorded commands falls back to the drift (:data:`HELD`).
     """
-    n = demo.n_steps
-    if "actions" in demo.streams and demo["actions"].shape[1] > 6:  # robosuite's arm action: 6 is the grip
+    n = len(demo["position"])
+    if "actions" in demo and np.shape(demo["actions"])[1] > 6:  # robosuite's arm action: 6 is the grip
         closed = np.flatnonzero(np.asarray(demo["actions"][:, 6], float) > 0)
         return int(closed[-1]) if closed.size else n - 1
     # where it sits in the tool's frame: constant while held, whatever the wrist does
