@@ -214,25 +214,13 @@ def _told_apart(members, frames, spread) -> bool:
 
 
 def _held_until(demo, obj) -> int:
-    """The last sample at which the hand still holds the carried ``obj``: the last one with the gripper
-    commanded shut, when the segment ends with it open (a release lets the object fall after that); the
-    segment's last sample when it keeps holding.
-
-    Read from the command, not from the object's drift in the tool's frame: the fingers close on a can
-    for a few samples after the carry begins (its switch is the middle of the closing), centring it by
-    7 mm, and it sags another centimetre as it is lifted, so a drift of a centimetre from the carry's first
-    sample ended the hold early in the lift, and the place was kept relative to where the can was picked
-    up. A demonstration without recorded commands falls back to the drift (:data:`HELD`).
-    """
-    n = len(demo["position"])
-    if "actions" in demo and np.shape(demo["actions"])[1] > 6:  # robosuite's arm action: 6 is the grip
-        closed = np.flatnonzero(np.asarray(demo["actions"][:, 6], float) > 0)
-        return int(closed[-1]) if closed.size else n - 1
+    """The last sample at which the carried ``obj`` is still where the tool holds it (a segment that ends
+    with a release lets it fall after that)."""
     # where it sits in the tool's frame: constant while held, whatever the wrist does
     R = quaternion_to_matrix(np.asarray(demo["orientation"], float))
     offset = np.einsum("nji,nj->ni", R, np.asarray(demo[f"{obj}_pos"], float) - demo["position"])
     held = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) <= HELD)
-    return int(held[-1]) if len(held) else n - 1
+    return int(held[-1]) if len(held) else len(offset) - 1
 
 
 def _turn_reference(demo, relation, turn):
