@@ -478,6 +478,12 @@ def _grasped(seg, fingers):
     return None if half is None else (obj, half)
 
 
+def _half_extent(obs, obj, half, direction) -> float:
+    """The scene object ``obj``'s half extent (m) along the world ``direction`` (unit), from its half
+    sizes ``half`` along its own axes as it lies in ``obs``."""
+    return float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ direction) @ half)
+
+
 def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
     """The goal ``p`` of a reach that closes the gripper on its object, moved across the closing axis
     just enough that the executing gripper's pads overlap the object's face by their width.
@@ -497,8 +503,7 @@ def _on_pads(seg, obs, p, q, fingers) -> np.ndarray:
     across = np.cross(up, R @ fingers.axis)  # along a pad's width, in the world
     across /= max(float(np.linalg.norm(across)), 1e-12)
     centre = np.asarray(obs[f"{obj}_pos"], float)
-    # the object's half extent along that direction, from its own frame
-    reach = float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ across) @ half)
+    reach = _half_extent(obs, obj, half, across)
     room = max(0.0, reach - fingers.pad)
     off = float((centre - p) @ across)
     return p + (off - np.clip(off, -room, room)) * across
@@ -519,8 +524,7 @@ def _spans(seg, obs, q, fingers) -> bool:
         return True
     obj, half = grasped
     closing = quaternion_to_matrix(q) @ fingers.axis
-    width = float(np.abs(quaternion_to_matrix(np.asarray(obs[f"{obj}_quat"], float)).T @ closing) @ half)
-    return width < fingers.half
+    return _half_extent(obs, obj, half, closing) < fingers.half
 
 
 def _cost(segments, obs, fingers=None) -> float:
