@@ -61,6 +61,9 @@ class ArmScene:
         with the hand, as it sits in it now, and is checked like a body of the arm.
     margin : float, default=MARGIN
         Metres the arm, gripper and held object keep from everything else.
+    slack : float, default=0.0
+        Metres the held object may move in the hand while it is carried (a can creeping down between the
+        fingers): it keeps ``margin + slack`` from everything else, as it sits in the hand now.
 
     Examples
     --------
@@ -69,11 +72,14 @@ class ArmScene:
     True
     """
 
-    def __init__(self, env, *, held=None, margin=MARGIN):
+    def __init__(self, env, *, held=None, margin=MARGIN, slack=0.0):
         import mujoco  # extra 'sim': imported when a robosuite scene is planned in
 
         self._mj = mujoco
         self.margin = float(margin)
+        slack = float(slack)
+        if not np.isfinite(slack) or slack < 0:
+            raise ValueError(f"slack: expected a non-negative number of metres, got {slack!r}")
         self.model = copy.deepcopy(env.sim.model._model)
         m = self.model
         src = env.sim.data._data
@@ -104,7 +110,12 @@ class ArmScene:
             Ro, po = self.data.xmat[root].reshape(3, 3), self.data.xpos[root]
             self.held = (m.jnt_qposadr[m.body_jntadr[root]], Rh.T @ Ro, Rh.T @ (po - ph))
             moving |= self._subtree(root)
+            held_geoms = self._subtree(root)[m.geom_bodyid]
         self.moving = moving[m.geom_bodyid]
+        # what each moving geom keeps from the scene: the held object also what it may move in the hand
+        self.margins = np.where(self.moving, self.margin, 0.0)
+        if self.held is not None:
+            self.margins[held_geoms] += slack
         # the arm's own fixed base and mount are its self-collision, which its joint limits keep
         top = m.jnt_bodyid[ids[0]]
         while m.body_parentid[top] != 0:
@@ -112,7 +123,7 @@ class ArmScene:
         self.own = self._subtree(top)[m.geom_bodyid] & ~self.moving
         # collidable moving geoms report what comes within the margin as a contact (MuJoCo takes the
         # larger margin of a pair); the scene's own geoms keep theirs
-        m.geom_margin[self.moving] = np.maximum(m.geom_margin[self.moving], self.margin)
+        m.geom_margin[self.moving] = np.maximum(m.geom_margin[self.moving], self.margins[self.moving])
         # a geom without a name (robosuite's bins' walls) goes by its body's and its number
         self.names = [m.geom(i).name or f"{m.body(m.geom_bodyid[i]).name} (geom {i})" for i in range(m.ngeom)]
         self.allowed = set()
@@ -160,7 +171,8 @@ class ArmScene:
             return []
         g1, g2, dist = d.contact.geom1[:n], d.contact.geom2[:n], d.contact.dist[:n]
         mv1, mv2 = self.moving[g1], self.moving[g2]
-        hit = (mv1 != mv2) & (dist < self.margin) & ~self.own[g1] & ~self.own[g2]
+        hit = (mv1 != mv2) & (dist < np.where(mv1, self.margins[g1], self.margins[g2])) & ~self.own[g1] & \
+            ~self.own[g2]
         out = [(float(dist[k]), int(g1[k]), int(g2[k])) if mv1[k] else
                (float(dist[k]), int(g2[k]), int(g1[k])) for k in np.flatnonzero(hit)]
         out = [c for c in out if (c[1], c[2]) not in self.allowed]

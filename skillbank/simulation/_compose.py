@@ -871,15 +871,16 @@ def _transit(episode, position, quat, *, planner="none", random_state=None, timi
     if distance <= TRANSIT_FROM:
         return 0.0
     if planner == "ompl":
-        P, Q, seconds = move_to(episode.env, episode.obs, position, quat, random_state=random_state)
+        P, Q, seconds, J = move_to(episode.env, episode.obs, position, quat, random_state=random_state)
         if timings is not None:
             timings.setdefault("transits", []).append(round(seconds, 4))
     else:
         P, Q = _up_across_down(episode, here_p, here_q, np.asarray(position, float), quat)
-    for p, q in zip(P, Q, strict=True):
+        J = [None] * len(P)
+    for p, q, joints in zip(P, Q, J, strict=True):
         if episode.over:
             return round(distance, 4)
-        episode.step(p, q)
+        episode.step(p, q, posture=joints)
     episode.settle(P[-1], quat)
     return round(distance, 4)
 

@@ -168,11 +168,12 @@ def _moved(p, q, frame_from, frame_to):
 def _in_frame(demo, relation, frame):
     """Where the primitive ends in ``frame`` (of its own samples), or None if it lacks the frame's object.
 
-    For a carried object, where the *object* ends: the tool's place on it depends on how it was grasped.
+    For a carried object, where the *object* ends, as the tool let it go (:func:`_let_go`): the tool's
+    place on it depends on how it was grasped.
     """
     carried = relation is not None and relation.moves_with
-    end = np.asarray(demo[f"{relation.object}_pos"][_held_until(demo, relation.object)] if carried else
-                     demo["position"][-1], float)
+    end = np.asarray(demo[f"{relation.object}_pos"][_let_go(demo)] if carried else demo["position"][-1],
+                     float)
     if frame == ("world",):
         return end
     pose = _frame_at(demo, relation, frame)
@@ -213,14 +214,47 @@ def _told_apart(members, frames, spread) -> bool:
     return False
 
 
+def _sits(demo, obj) -> np.ndarray:
+    """Where ``obj`` sits in the tool's frame at each sample of ``demo``: constant while it is held as
+    grasped, whatever the wrist does."""
+    R = quaternion_to_matrix(np.asarray(demo["orientation"], float))
+    return np.einsum("nji,nj->ni", R, np.asarray(demo[f"{obj}_pos"], float) - demo["position"])
+
+
 def _held_until(demo, obj) -> int:
     """The last sample at which the carried ``obj`` is still where the tool holds it (a segment that ends
     with a release lets it fall after that)."""
-    # where it sits in the tool's frame: constant while held, whatever the wrist does
-    R = quaternion_to_matrix(np.asarray(demo["orientation"], float))
-    offset = np.einsum("nji,nj->ni", R, np.asarray(demo[f"{obj}_pos"], float) - demo["position"])
+    offset = _sits(demo, obj)
     held = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) <= HELD)
     return int(held[-1]) if len(held) else len(offset) - 1
+
+
+def _let_go(demo) -> int:
+    """The sample at which a carrying segment puts its object where it goes: the first of its last opening
+    command (a place), else its last sample (a lift keeps holding).
+
+    Where the object went, which the frames of a skill's members are judged by, is where the tool let it
+    go, not where it last sat exactly as grasped (:func:`_held_until`): a can creeps by two centimetres in
+    the fingers over a carry, which ends that hold a few samples after the lift, near where it was picked
+    up; judged there, ten places in the same quarter of a bin agreed best relative to the pick-up.
+    """
+    commands = np.asarray(demo["actions"][:, 6], float)
+    if not _released(demo):
+        return len(commands) - 1
+    return int(np.flatnonzero(commands > 0)[-1]) + 1
+
+
+def _slack(demo, obj) -> float:
+    """How far the carried ``obj`` moved in the hand over the source's carry, until it was let go (m).
+
+    A planned move keeps what the hand holds this much clearer of the scene (:class:`ArmScene`'s
+    ``slack``): it is planned with the object as it sits in the hand when the move begins, and a can that
+    creeps down between the fingers by two centimetres, as its demonstrations show, is carried over a
+    bin's wall a centimetre lower than planned, where its bottom catches the wall and it is pulled out
+    of the fingers.
+    """
+    offset = _sits(demo, obj)[:_let_go(demo) + 1]
+    return float(np.linalg.norm(offset - offset[0], axis=1).max())
 
 
 def _turn_reference(demo, relation, turn):
@@ -619,11 +653,15 @@ class _Episode:
     def obs(self):
         return self.driver.obs
 
-    def step(self, target, quat=None, grip=None):
+    def step(self, target, quat=None, grip=None, posture=None):
+        """One control step towards the tool pose ``target``, ``quat``; ``posture``: the joints a planned
+        move passes through there (:meth:`_Driver.posture`)."""
         if quat is not None:
             self.driver.quat = np.asarray(quat, float)
         if grip is not None:
             self.driver.grip = grip
+        if posture is not None:
+            self.driver.posture(posture)
         self.driver.step(target)
         self._after()
 
@@ -1121,6 +1159,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
         else:
             tic = time.perf_counter()
             carried = None  # the scene's name of what the segment carries (None: nothing, or a rigid path)
+            postures = None  # the joints of a planned move at each of its samples
             try:
                 if method == "rigid":
                     P, Q, G = _path_rigid(seg, episode.obs)
@@ -1140,11 +1179,15 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 try:
                     P, Q, G, report = (P, Q, G, None) if span is None else free_move(
                         episode.env, episode.obs, P, Q, G, span, random_state=random_state,
-                        held=carried if G[span[0]] > 0 else None)
+                        held=carried if G[span[0]] > 0 else None,
+                        slack=_slack(seg.primitive.demo, seg.relation.object) if carried else 0.0)
                 except MotionPlanningError as error:
                     return i, "no transit", str(error).splitlines()[0]
                 if report is not None and report["planned"]:
                     timings.setdefault("transits", []).append(round(report["seconds"], 4))
+                    postures = [None] * len(P)
+                    first = report["span"][0] + 1
+                    postures[first:first + len(report["joints"])] = list(report["joints"])
             let_go = bool(G[-1] <= 0 < G.max())
             timings["adapt"] += time.perf_counter() - tic
             steps0 = episode.steps
@@ -1154,7 +1197,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 here = episode.obs
                 held = quaternion_to_matrix(np.asarray(here["robot0_eef_quat"], float)).T @ (
                     np.asarray(here[f"{carried}_pos"], float) - np.asarray(here["robot0_eef_pos"], float))
-            for p, q, g in zip(P, Q, G, strict=True):
+            for k, (p, q, g) in enumerate(zip(P, Q, G, strict=True)):
                 if episode.over:
                     break
                 if g != episode.driver.grip and g <= 0 and held is not None and _in_hand(episode.obs, carried,
@@ -1169,7 +1212,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     # its commands by centimetres on a fast descent, and fingers closed on time but short
                     # of the can push it away instead of holding it
                     episode.settle(p, q)
-                episode.step(p, q, g)
+                episode.step(p, q, g, posture=None if postures is None else postures[k])
             episode.settle(P[-1] + shift, Q[-1])
             goal = P[-1] + shift
         timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ

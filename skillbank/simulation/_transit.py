@@ -181,7 +181,8 @@ def _timed(scene, Q):
     """The tool poses (positions, quaternions) along joint waypoints ``Q`` at the control rate: the path,
     densified, timed by TOPP-RA from rest to rest (:func:`skillbank.robots.time_law`, the law ``plan``
     and ``library reuse`` use) at most :data:`JOINT_SPEED` and :data:`JOINT_ACCELERATION` per joint,
-    stretched where the tool would pass :data:`TOOL_SPEED`."""
+    stretched where the tool would pass :data:`TOOL_SPEED`; and the joints at each (the posture the
+    controller keeps the arm's redundancy at while it drives the poses, :meth:`_Driver.posture`)."""
     fine = [Q[0]]
     for a, b in zip(Q[:-1], Q[1:], strict=True):
         k = int(np.ceil(np.abs(b - a).max() / (JOINT_STEP / 2)))
@@ -200,7 +201,7 @@ def _timed(scene, Q):
     at = np.linspace(0.0, times[-1], n + 1)[1:]
     Qs = np.column_stack([np.interp(at, times, fine[:, j]) for j in range(fine.shape[1])])
     poses = [scene.tool(q) for q in Qs]
-    return np.array([p for p, _ in poses]), np.array([q for _, q in poses])
+    return np.array([p for p, _ in poses]), np.array([q for _, q in poses]), Qs
 
 
 def move_to(env, obs, position, quat, *, held=None, random_state=None, margin=MARGIN):
@@ -219,6 +220,9 @@ def move_to(env, obs, position, quat, *, held=None, random_state=None, margin=MA
     Q : ndarray of shape (n, 4)
     seconds : float
         The goal's inverse kinematics, the search's and the simplification's time.
+    J : ndarray of shape (n, dof)
+        The planned joints at each pose: an arm with joints to spare (the Panda's seven) is kept at them
+        while its tool is driven along the poses (:meth:`~skillbank.simulation._robosuite._Driver.posture`).
 
     Raises
     ------
@@ -227,7 +231,7 @@ def move_to(env, obs, position, quat, *, held=None, random_state=None, margin=MA
 
     Examples
     --------
-    >>> P, Q, seconds = move_to(env, obs, [0.1, 0.0, 1.0], [1, 0, 0, 0])  # doctest: +SKIP
+    >>> P, Q, seconds, J = move_to(env, obs, [0.1, 0.0, 1.0], [1, 0, 0, 0])  # doctest: +SKIP
     >>> bool(np.linalg.norm(P[-1] - [0.1, 0.0, 1.0]) < 1e-3)  # doctest: +SKIP
     True
     """
@@ -241,8 +245,8 @@ def move_to(env, obs, position, quat, *, held=None, random_state=None, margin=MA
         raise MotionPlanningError(f"transit planning: the tool pose {np.round(there, 3).tolist()} m is out "
                                   f"of the arm's reach from {_where(q0)}")
     joints, _ = plan_transit(scene, q0, q, random_state=_int_seed(random_state))
-    P, Q = _timed(scene, joints)
-    return P, Q, _time.perf_counter() - tic
+    P, Q, J = _timed(scene, joints)
+    return P, Q, _time.perf_counter() - tic, J
 
 
 def _int_seed(random_state):
@@ -278,7 +282,7 @@ def free_span(n, grip, *, let_go=False, close_in=0.5):
     return (0, stop) if stop >= 2 else None
 
 
-def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN):
+def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN, slack=0.0):
     """The tool path ``P (n, 3)``, ``Q (n, 4)`` (gripper commands ``G (n,)``) with its free ``span``
     replaced by a move planned for the whole arm.
 
@@ -292,7 +296,8 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     reach, the first of :data:`FORWARD` poses along the close-in the arm takes), moved back along the
     path to its last clear state (a close-in that begins at a bin's wall is the skill's own).
     :func:`plan_transit` joins the two and the planned joint path is driven as tool poses
-    (:func:`_timed`); the path goes on from its end as adapted.
+    (:func:`_timed`); the path goes on from its end as adapted. A ``held`` object keeps ``margin`` and
+    ``slack`` more (:class:`ArmScene`): what it may move in the hand on the way.
 
     Returns
     -------
@@ -303,7 +308,9 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
         ``{"planned": bool, "seconds": float, "span": (start, stop), "samples": int, "why": str}``
         (``samples``: the planned move's samples that replace the span's; ``why``: ``"planned"``, or why
         the span is driven as adapted: ``"short"``, ``"out of reach at sample K"``, ``"no clear state:
-        ..."`` naming what is within the margin at the span's start or end).
+        ..."`` naming what is within the margin at the span's start or end); a planned move adds
+        ``"joints"``: its joints at each of its samples, which follow sample ``start`` of the path
+        returned (the posture :func:`move_to`'s ``J`` is).
 
     Raises
     ------
@@ -322,7 +329,7 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     report = {"planned": False, "seconds": 0.0, "span": (int(a), int(b)), "samples": 0, "why": "short"}
     if np.linalg.norm(P[b] - P[a]) < SHORTEST:
         return P, Q, G, report
-    scene = ArmScene(env, held=held, margin=margin)
+    scene = ArmScene(env, held=held, margin=margin, slack=slack)
     q = np.asarray(obs["robot0_joint_pos"], float)
     for k in range(a + 1):
         nxt = scene.ik(P[k], Q[k], q)
@@ -367,8 +374,8 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
                           why=f"no clear state: at its {end} {scene.describe(hit)}")
             return P, Q, G, report
     joints, _ = plan_transit(scene, start, goal, random_state=random_state)
-    Pm, Qm = _timed(scene, joints)
-    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="planned")
+    Pm, Qm, Jm = _timed(scene, joints)
+    report.update(planned=True, seconds=_time.perf_counter() - tic, samples=len(Pm), why="planned", joints=Jm)
     G = np.asarray(G)
     return (np.vstack([P[:a + 1], Pm, P[b + 1:]]), np.vstack([Q[:a + 1], Qm, Q[b + 1:]]),
             np.concatenate([G[:a + 1], np.full(len(Pm), G[a]), G[b + 1:]]), report)

@@ -132,6 +132,23 @@ def test_a_held_object_moves_with_the_hand_and_is_checked(env):
         ArmScene(env, held="Mug")
 
 
+def test_a_held_object_keeps_the_slack_it_has_in_the_hand_clear_too(env):
+    obs = env.reset()
+    q0 = np.array(obs["robot0_joint_pos"], float)
+    tight, slack = ArmScene(env, held="Can"), ArmScene(env, held="Can", slack=0.02)
+    p, quat = tight.tool(q0)
+    q = tight.ik(p + [0.0, 0.0, 0.015], quat, q0)  # the can 1.5 cm above the bin's floor it stood on
+
+    def can_near(scene):
+        return [d for d, a, _ in scene.near(q) if scene.names[a].startswith("Can")]
+
+    assert can_near(tight) == []  # clear by the margin, 1 cm
+    assert can_near(slack) and 0.01 < min(can_near(slack)) < 0.03  # not by the margin and the slack
+    assert tight.blocking(q0) is not None and slack.blocking(q0) is not None
+    with pytest.raises(ValueError, match=r"slack: expected a non-negative number of metres, got -0\.01"):
+        ArmScene(env, held="Can", slack=-0.01)
+
+
 def test_free_span_is_decided_by_the_gripper_and_the_phases():
     assert free_span(41, [-1] * 20 + [1] * 21) == (0, 20)  # a reach: up to its close-in
     assert free_span(41, [-1] * 41, let_go=True) == (0, 40)  # a retreat after a release: to its end
@@ -174,12 +191,12 @@ def test_a_transit_between_skills_is_planned_for_the_whole_arm(env):
     obs = env.reset()
     episode = _Episode(env, obs, 10 ** 6)
     quat = np.array(obs["robot0_eef_quat"], float)
-    P, Q, _ = move_to(env, episode.obs, A + [0, 0, 0.03], quat, random_state=0)
+    P, Q, _, _ = move_to(env, episode.obs, A + [0, 0, 0.03], quat, random_state=0)
     _drive(episode, P, Q)
     P, Q, _ = _line(A + [0, 0, 0.03], A, quat, n=20)[:2] + (None,)
     _drive(episode, P, Q)
-    P1, Q1, seconds = move_to(env, episode.obs, B, quat, random_state=0)
-    P2, _, _ = move_to(env, episode.obs, B, quat, random_state=0)
+    P1, Q1, seconds, _ = move_to(env, episode.obs, B, quat, random_state=0)
+    P2, _, _, _ = move_to(env, episode.obs, B, quat, random_state=0)
     np.testing.assert_array_equal(P1, P2)
     assert seconds > 0 and np.linalg.norm(P1[-1] - B) < 1e-3
     assert _drive(episode, P1, Q1) == []
@@ -230,12 +247,12 @@ def test_a_planned_move_is_timed_by_the_time_law_to_its_limits(env):
     scene = ArmScene(env)
     q0 = np.array(obs["robot0_joint_pos"], float)
     wrist = q0 + np.r_[np.zeros(len(q0) - 1), 1.0]
-    P, Q = _timed(scene, np.stack([q0, wrist]))
+    P, Q, _ = _timed(scene, np.stack([q0, wrist]))
     # its duration to a control step (the law's exact fit leaves a few ulps over 2.05 s)
     assert abs(len(P) - (1.0 / JOINT_SPEED + JOINT_SPEED / JOINT_ACCELERATION) * 20) <= 1
     np.testing.assert_allclose(Q[-1], scene.tool(wrist)[1], atol=1e-9)
     sweep = q0 + np.r_[1.0, np.zeros(len(q0) - 1)]
-    P, _ = _timed(scene, np.stack([q0, sweep]))
+    P, _, _ = _timed(scene, np.stack([q0, sweep]))
     speed = np.linalg.norm(np.diff(np.vstack([scene.tool(q0)[0], P]), axis=0), axis=1) * 20
     assert speed.max() <= TOOL_SPEED * 1.05 and speed.max() > TOOL_SPEED * 0.8
 
@@ -255,3 +272,30 @@ def test_a_way_across_beyond_reach_is_planned_to_the_first_close_in_pose_the_arm
     assert len(P2) == 6 + report["samples"] + len(P) - b - 1
     np.testing.assert_allclose(P2[5 + report["samples"]], P[b], atol=1e-3)
     np.testing.assert_array_equal(P2[6 + report["samples"]:], P[b + 1:])
+
+
+def test_an_arm_with_a_joint_to_spare_is_driven_through_the_joints_its_plan_checked():
+    """The Panda's seven joints leave one to spare: driven along the planned tool poses alone, the
+    operational-space controller spends it on the joints of its reset, and the arm passes through joints
+    the plan never checked for clearance (0.3 rad away at the end, the tool where it should be); held at
+    the plan's joints, it ends where the plan does."""
+    env = _make(import_robosuite(), "PickPlace", 900, 10 ** 6, robot="Panda")
+    try:
+        ends = []
+        for posture in (True, False):
+            obs = env.reset()
+            episode = _Episode(env, obs, 10 ** 6)
+            goal = np.array([0.1, 0.3, 1.0])  # above bin2, clear of everything
+            P, Q, _, J = move_to(env, episode.obs, goal, np.array(obs["robot0_eef_quat"], float),
+                                 random_state=0)
+            for p, q, joints in zip(P, Q, J, strict=True):
+                episode.step(p, q, -1.0, posture=joints if posture else None)
+            for _ in range(20):
+                episode.step(P[-1], Q[-1], -1.0)
+            ends.append((float(np.abs(np.array(episode.obs["robot0_joint_pos"]) - J[-1]).max()),
+                         float(np.linalg.norm(np.array(episode.obs["robot0_eef_pos"]) - goal))))
+    finally:
+        env.close()
+    (held, held_miss), (drifted, drifted_miss) = ends
+    assert held < 0.05 and drifted > 0.2
+    assert held_miss < 0.003 and drifted_miss < 0.003
