@@ -204,10 +204,10 @@ def test_the_gripper_acts_once_the_tool_is_where_the_path_says(lift, monkeypatch
     changes = []
     step = _evaluate._Episode.step
 
-    def watched(self, target, quat=None, grip=None):
+    def watched(self, target, quat=None, grip=None, posture=None):
         if grip is not None and grip != self.driver.grip:
             changes.append(float(np.linalg.norm(np.asarray(target) - self.obs["robot0_eef_pos"])))
-        step(self, target, quat, grip)
+        step(self, target, quat, grip, posture)
 
     monkeypatch.setattr(_evaluate._Episode, "step", watched)
     db, _ = lift
