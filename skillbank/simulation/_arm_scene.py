@@ -202,7 +202,11 @@ class ArmScene:
     def describe(self, contact) -> str:
         d, a, b = contact
         depth = f"{-d * 1000:.3g} mm into" if d < 0 else f"within {d * 1000:.3g} mm of"
-        return f"{self.names[a]} comes {depth} {self.names[b]}"
+        # a held object keeps its slack in the hand too: say so, or 25 mm reads as clear of a 10 mm margin
+        kept = self.margins[a]
+        extra = f" (held: it keeps {kept * 1000:.3g} mm, the margin and its slack in the hand)" \
+            if kept > self.margin else ""
+        return f"{self.names[a]} comes {depth} {self.names[b]}{extra}"
 
     def tool(self, q):
         """The tool pose robosuite reports at ``q``: (position, quaternion (x, y, z, w))."""

@@ -161,11 +161,11 @@ class _Driver:
         """Keep the arm's spare joints at ``joints`` while its tool is driven (an arm of seven joints).
 
         robosuite's operational-space controller moves the tool and spends what the arm's redundancy
-        leaves on holding the joints it was reset to. A planned move that keeps the elbow bent across a
-        bin's far side is then driven with the elbow drifting back towards the reset's (traced: the
-        Panda's straightened to its limit, the tool stopping 7-11 cm short of its goal): the joints the
-        plan passes through are the posture it holds instead. An arm of six joints has nothing to spare
-        and is not changed. The controller is built again at each reset, with its own posture.
+        leaves on holding the joints it was reset to: a planned move driven by its tool poses alone ended
+        on the Panda 0.3 rad from the joints the plan had checked for clearance, so the check no longer
+        said anything about the arm. The joints the plan passes through are the posture it holds instead.
+        An arm of six joints has nothing to spare and is not changed. The controller is built again at
+        each reset, with its own posture.
         """
         self.env.robots[0].part_controllers["right"].update_initial_joints(np.asarray(joints, float))
 

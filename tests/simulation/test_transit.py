@@ -144,6 +144,8 @@ def test_a_held_object_keeps_the_slack_it_has_in_the_hand_clear_too(env):
 
     assert can_near(tight) == []  # clear by the margin, 1 cm
     assert can_near(slack) and 0.01 < min(can_near(slack)) < 0.03  # not by the margin and the slack
+    said = slack.describe(slack.blocking(q))
+    assert said.endswith("(held: it keeps 30 mm, the margin and its slack in the hand)"), said
     assert tight.blocking(q0) is not None and slack.blocking(q0) is not None
     with pytest.raises(ValueError, match=r"slack: expected a non-negative number of metres, got -0\.01"):
         ArmScene(env, held="Can", slack=-0.01)
