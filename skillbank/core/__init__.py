@@ -18,6 +18,7 @@ True
 
 from ._constraints import Constraints, ViaPoint
 from ._demonstration import Demonstration
+from ._joints import JOINT_KINDS, Joint, fit_joint
 from ._obstacles import OBSTACLES, Box, Obstacle, Sphere, parse_obstacle
 from ._paths import laplacian_matrix, neighbour_weights, resample, resample_many
 from ._pose_point import POSE_OF, check_pose_of, state_pose_of
@@ -38,4 +39,5 @@ __all__ = [
     "resample", "resample_many", "laplacian_matrix", "neighbour_weights", "__version__",
     "check_quaternions", "continuous_quaternions", "slerp", "log_map", "exp_map", "quaternion_angle",
     "quaternion_to_matrix", "matrix_to_quaternion", "POSE_OF", "check_pose_of", "state_pose_of",
+    "Joint", "fit_joint", "JOINT_KINDS",
 ]

@@ -31,7 +31,13 @@ from ._lasa import lasa_shapes, load_lasa
 from ._lerobot import read_lerobot, select_episodes
 from ._rail import load_rail, read_rail_file
 from ._robomimic import ROBOSUITE_POSE_OF, read_robomimic
-from ._robosuite_raw import import_robosuite, read_robosuite_raw, robosuite_objects
+from ._robosuite_raw import (
+    import_robosuite,
+    read_robosuite_raw,
+    reported_body,
+    robosuite_objects,
+    with_object_poses,
+)
 from ._robot_h5 import read_robot_h5
 from ._ros import read_rosbag
 from ._ros_messages import parse_topics
@@ -57,6 +63,7 @@ __all__ = [
     "parse_topics",
     "read_lerobot",
     "read_robomimic", "ROBOSUITE_POSE_OF", "read_robosuite_raw", "import_robosuite", "robosuite_objects",
+    "with_object_poses", "reported_body",
     "select_episodes",
     "read_rail_file",
     "load_rail",

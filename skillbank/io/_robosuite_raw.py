@@ -28,14 +28,15 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..core import POSE_OF, Demonstration
+from ..core import POSE_OF, Demonstration, matrix_to_quaternion
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
 from ._h5 import open_h5
 from ._lerobot import select_episodes
 from ._robomimic import DEFAULT_CONTROL_FREQ, ROBOSUITE_POSE_OF, STANDARD_STREAMS
 
-__all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_robosuite", "robosuite_objects"]
+__all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_robosuite", "robosuite_objects",
+           "with_object_poses", "reported_body"]
 
 #: Largest distance (m) between the tool in the recorded world and in today's robosuite, same states.
 WORLD_TOLERANCE = 1e-3
@@ -143,6 +144,71 @@ def robosuite_objects(obs) -> list:
                   and "_to_" not in k and f"{k[:-4]}_quat" in obs)
 
 
+def _position_only(obs) -> list:
+    """The objects robosuite reports a position of and no orientation (``X_pos``, no ``X_quat``)."""
+    return [k[:-4] for k in obs if k.endswith("_pos") and not k.startswith("robot") and "_to_" not in k
+            and f"{k[:-4]}_quat" not in obs and np.size(obs[k]) == 3]
+
+
+def with_object_poses(env, obs) -> dict:
+    """``obs`` with the orientation of every object whose observables give only its position.
+
+    robosuite's ``Door`` reports ``door_pos`` and ``handle_pos`` (a body's and a site's positions) and no
+    orientation: a skill cannot be kept on a handle whose turn it never saw. The body or site of the
+    simulator's model that stands at the reported position (within a micrometre) is the one reported,
+    and its orientation is added as ``X_quat`` (x, y, z, w); a position no body or site stands at gets
+    none (it is not an object's pose). Observations that already hold every object's pose are returned
+    as they are.
+
+    Examples
+    --------
+    >>> with_object_poses(None, {"cube_pos": [0, 0, 0], "cube_quat": [0, 0, 0, 1]})["cube_quat"]
+    [0, 0, 0, 1]
+    """
+    missing = _position_only(obs)
+    if not missing:
+        return obs
+    data = env.sim.data._data  # MuJoCo's own data: positions and frames of every body and site
+    out = dict(obs)
+    for name in missing:
+        found = _reported(data, obs[name + "_pos"])
+        if found is not None:
+            turns = data.xmat if found[0] == "body" else data.site_xmat
+            out[name + "_quat"] = matrix_to_quaternion(np.asarray(turns[found[1]], float).reshape(3, 3))
+    return out
+
+
+def _reported(data, position):
+    """``("body" | "site", id)`` of what stands at ``position`` (within a micrometre), or None."""
+    p = np.asarray(position, float).reshape(3)
+    for kind, where in (("body", data.xpos), ("site", data.site_xpos)):
+        if len(where) == 0:
+            continue
+        gap = np.linalg.norm(np.asarray(where) - p, axis=1)
+        i = int(np.argmin(gap))
+        if gap[i] < 1e-6:
+            return kind, i
+    return None
+
+
+def reported_body(env, obs, name):
+    """The id of the simulator's body whose pose the observations report as object ``name`` (``X_pos``:
+    a body's origin or a site on it), or None where nothing stands there.
+
+    Examples
+    --------
+    >>> reported_body(None, {}, "cube") is None
+    True
+    """
+    if f"{name}_pos" not in obs:
+        return None
+    data = env.sim.data._data
+    found = _reported(data, obs[f"{name}_pos"])
+    if found is None:
+        return None
+    return int(found[1]) if found[0] == "body" else int(env.sim.model._model.site_bodyid[found[1]])
+
+
 def _replay(env, states) -> dict:
     """Observations at each state: ``{key: (n, d)}``."""
     sim = env.sim
@@ -150,7 +216,7 @@ def _replay(env, states) -> dict:
     for s in states:
         sim.set_state_from_flattened(s)
         sim.forward()
-        rows.append(env._get_observations(force_update=True))
+        rows.append(with_object_poses(env, env._get_observations(force_update=True)))
     keys = [k for k in ROBOT_OBS if k in rows[0]]
     keys += [f"{o}_{part}" for o in robosuite_objects(rows[0]) for part in ("pos", "quat")]
     return {k: np.stack([np.asarray(r[k], float).reshape(-1) for r in rows]) for k in keys}

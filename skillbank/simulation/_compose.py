@@ -67,7 +67,7 @@ from ._evaluate import (
     running_arm,
 )
 from ._reach import Reach
-from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite, robosuite_robot
+from ._robosuite import CONTROL_FREQ, _min_jerk_at, import_robosuite, robosuite_robot, with_object_poses
 from ._stack3 import CUBES, stack3_class
 from ._support import object_top
 from ._transit import check_planner, move_to, transit_timing
@@ -660,7 +660,7 @@ def _check_disturb(disturb):
 def _episode(env, spec, name, domain, bindings, phases, seed, goal, method, replan, horizon, disturb, search,
              random_state, paths, timings, planner="none"):
     _reseed(env, seed)
-    obs = env.reset()
+    obs = with_object_poses(env, env.reset())
     world = _World(env, spec, obs)
     atoms = _goal_atoms(spec, world, goal)
     if spec.goal == "tower":

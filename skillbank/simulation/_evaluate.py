@@ -50,6 +50,7 @@ from ..core import (
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..robots import MotionPlanningError
+from ..segmentation import part_joints
 from ..selection import METHODS, acted_on, object_streams, reuse
 from ..store import open_store
 from ._arms import check_pads, pose_points
@@ -67,8 +68,9 @@ from ._robosuite import (
     import_robosuite,
     recorded_robot,
     robosuite_robot,
+    with_object_poses,
 )
-from ._support import fixtures, object_extents, object_symmetry, pad_half_width, support
+from ._support import articulated, fixtures, object_extents, object_symmetry, pad_half_width, support
 from ._transit import check_planner, free_move, free_span, reachable, transit_timing
 
 __all__ = ["evaluate", "REASONS", "BASELINES", "binomial_interval", "DRIVEN_ROBOT", "driven_robot"]
@@ -666,7 +668,7 @@ class _Episode:
         self._after()
 
     def act(self, action):
-        self.driver.obs = self.env.step(np.asarray(action, float))[0]
+        self.driver.obs = with_object_poses(self.env, self.env.step(np.asarray(action, float))[0])
         self._after()
 
     def _after(self):
@@ -946,6 +948,44 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     return P, Q, grip
 
 
+def _jointed(seg, env, obs):
+    """``(chain,)`` for a segment that carries a part of an articulated object in the scene (a door's
+    handle): the joints the source moved it about (:func:`~skillbank.segmentation.part_joints`; None
+    where it did not move it); None for any other segment."""
+    if not _carries(seg.relation) or not articulated(env, obs, seg.scene(seg.relation.object)):
+        return None
+    return (part_joints(seg.primitive.demo, seg.relation.object),)
+
+
+def _path_articulated(seg, obs, chain):
+    """The tool moved about a part's joints as the source moved the part, from where the hand holds it now.
+
+    A part of an articulated object goes where its joints let it: the source's tool path, moved rigidly
+    into a new scene, would pull the handle off its arc by as much as this grasp differs from the
+    source's. The joints the source moved the part about (``chain``, found from its recorded poses) are
+    carried to where their anchor (the door) stands now, and the tool, as it holds the part now, is
+    turned about them by the values the source reached at each moment. A part the source did not move
+    (``chain`` None) is held where it is. The gripper's commands are the source's.
+    """
+    demo = seg.primitive.demo
+    t = np.asarray(demo.t, float)
+    n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
+    ts = np.linspace(t[0], t[-1], n)
+    P = np.tile(np.asarray(obs["robot0_eef_pos"], float), (n, 1))
+    Q = np.tile(np.asarray(obs["robot0_eef_quat"], float), (n, 1))
+    if chain is not None:
+        anchor = chain.anchor
+        here = seg.scene(anchor)
+        now = (np.asarray(obs[f"{here}_pos"], float), np.asarray(obs[f"{here}_quat"], float))
+        chain = chain.moved_with((demo[f"{anchor}_pos"][0], demo[f"{anchor}_quat"][0]), now)
+        for joint in chain.joints:
+            P, Q = joint.move(P, Q, np.interp(ts, t, joint.values))
+    commands = demo["actions"][:, 6]
+    grip = _grip(commands[np.clip(np.searchsorted(np.linspace(t[0], t[-1], len(commands)), ts), 0,
+                                  len(commands) - 1)])
+    return P, Q, grip
+
+
 def _carried_path(seg, obs, demo, goal_q):
     """The tool's path (one position per source sample) that takes the carried object along the path the
     source took it, moved into the segment's frame, as the tool holds it now.
@@ -1159,23 +1199,30 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
         else:
             tic = time.perf_counter()
             carried = None  # the scene's name of what the segment carries (None: nothing, or a rigid path)
+            jointed = None  # the joints of a part of an articulated object the segment moves
             postures = None  # the joints of a planned move at each of its samples
             try:
                 if method == "rigid":
                     P, Q, G = _path_rigid(seg, episode.obs)
                 else:
                     seg = _in_scene(seg, episode.env)
-                    P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
-                                            reachable(episode.env, episode.obs))
-                    carried = seg.scene(seg.relation.object) if _carries(seg.relation) else None
-                    P = _over_tops(P, G, episode.env, episode.obs, carried)
+                    jointed = _jointed(seg, episode.env, episode.obs)
+                    if jointed is not None:  # a door's handle: about its joints, never through free space
+                        P, Q, G = _path_articulated(seg, episode.obs, jointed[0])
+                    else:
+                        P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
+                                                reachable(episode.env, episode.obs))
+                        carried = seg.scene(seg.relation.object) if _carries(seg.relation) else None
+                        P = _over_tops(P, G, episode.env, episode.obs, carried)
             except ValueError as error:
                 return i, "unreachable", str(error).splitlines()[0]
             if episode.reach is not None:
                 P = episode.reach.keep(P, Q, episode.obs["robot0_joint_pos"],
                                        need=episode.reach.needed(G, let_go=let_go))
             if planner == "ompl" and method != "rigid":
-                span = free_span(len(P), G, let_go=let_go, close_in=CLOSE_IN[0])
+                # a part of an articulated object is moved about its joints all the way: no free space
+                span = None if jointed is not None else free_span(len(P), G, let_go=let_go,
+                                                                  close_in=CLOSE_IN[0])
                 try:
                     P, Q, G, report = (P, Q, G, None) if span is None else free_move(
                         episode.env, episode.obs, P, Q, G, span, random_state=random_state,

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ..core._validation import check_fraction, check_positive
-from ._robosuite import CONTROL_FREQ, TASKS, Task, _box, _closing_axis, _objects, _yaw
+from ._robosuite import CONTROL_FREQ, TASKS, Task, _box, _closing_axis, _objects, _yaw, with_object_poses
 
 __all__ = ["HumanDemonstrator"]
 
@@ -178,9 +178,10 @@ class _Operator:
     """One episode's person: what it sees (the observations) and the keys it presses."""
 
     def __init__(self, habits: HumanDemonstrator, env, obs, rng, *, limit=MAX_STEPS):
-        self.h, self.env, self.obs, self.rng, self.limit = habits, env, obs, rng, limit
+        self.h, self.env, self.rng, self.limit = habits, env, rng, limit
         self.sim_env = getattr(env, "env", env)  # the environment under a wrapper
-        self.objects = _objects(obs)
+        self.obs = with_object_poses(self.sim_env, obs)
+        self.objects = _objects(self.obs)
         self.grip, self.steps, self.held, self.grasps = -1.0, 0, 0, 0
         # what the person has learnt of the arm: how far one tap moves it from rest, and how far it
         # coasts once the taps stop (translation in metres, rotation in radians), refined as it goes
@@ -188,7 +189,8 @@ class _Operator:
 
     # -- what the person does with the keys ------------------------------------------------------
     def _step(self, action):
-        self.obs, _, _, _ = self.env.step(action)
+        obs, _, _, _ = self.env.step(action)
+        self.obs = with_object_poses(self.sim_env, obs)
         self.steps += 1
         self.held = self.held + 1 if self.sim_env._check_success() else 0
         if self.held >= SUCCESS_HOLD or self.steps >= self.limit:

@@ -31,11 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import log_map
+from ..core import log_map, matrix_to_quaternion, quaternion_to_matrix
 from ..core._pose_point import offset_pose_of
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
-from ..io import ROBOSUITE_POSE_OF
+from ..io import ROBOSUITE_POSE_OF, with_object_poses
 from ..io import import_robosuite as import_quiet_robosuite
 from ..io import robosuite_objects as _objects
 from ..robots import pose_point
@@ -64,7 +64,11 @@ class Task:
     square peg). ``site``: where to grasp (a site of the model, default the
     object's position), ``site_out`` metres further from the object's centre;
     ``across``: the object's axis (0, 1) the fingers
-    close along (default: any two faces).
+    close along (default: any two faces). ``turns``: an articulated object's joints (names in the
+    simulator's model) the grasped part is moved about, in order, each by its angle (rad) toward the
+    side of its range with room (a latch's lever pressed down, a door pulled open); the part is
+    approached along the first joint's axis and grasped ``site_in`` metres in from its ``site``
+    toward that axis.
     """
 
     pick: str
@@ -79,6 +83,8 @@ class Task:
     peg: str | None = None
     release: float = 0.0
     align: float = 0.0
+    turns: tuple = ()
+    site_in: float = 0.0
 
 
 #: The robosuite tasks the recorder knows (their objects are robosuite's own).
@@ -94,6 +100,10 @@ TASKS = {
     # the square peg (its top 0.1 m above the peg's centre)
     "NutAssemblySquare": Task(pick="SquareNut", site="SquareNut_handle_site", site_out=0.01, across=1,
                               peg="peg1", release=0.13, align=math.pi / 2),
+    # robosuite's latched door: the lever pressed down past the latch (its tip clears the frame at about
+    # 1.2 rad), then the door pulled about its hinge to its stop (0.4 rad; opened past 0.3)
+    "Door": Task(pick="handle", site="Door_handle", site_in=0.03, turns=(("Door_latch_joint", 1.4),
+                                                                           ("Door_hinge", 0.42))),
 }
 
 
@@ -133,6 +143,7 @@ class _Driver:
 
     def __init__(self, env, obs, *, keep=True):
         """``obs``: the observations of the episode's reset; ``keep``: keep the rows robomimic records."""
+        obs = with_object_poses(env, obs)  # a door's and its handle's turns, where robosuite shows none
         self.env, self.objects, self.keep = env, _objects(obs), keep
         self.obs = obs
         self.quat = np.array(self.obs["robot0_eef_quat"], float)  # held all episode
@@ -150,7 +161,8 @@ class _Driver:
         if self.keep:
             self.rows["states"].append(np.array(self.env.sim.get_state().flatten()))
             self.rows["obs"].append({k: np.array(obs[k], float) for k in self._keys()})
-        self.obs, reward, done, _ = self.env.step(action)
+        obs, reward, done, _ = self.env.step(action)
+        self.obs = with_object_poses(self.env, obs)
         if not self.keep:
             return
         self.rows["actions"].append(action)
@@ -279,6 +291,66 @@ def _facing(tool_q, object_q, closing, neighbours=()) -> np.ndarray:
     return quaternion_multiply(turn, np.asarray(tool_q, float))
 
 
+def _rotation(axis, angle) -> np.ndarray:
+    """The quaternion of a turn by ``angle`` about the unit ``axis``."""
+    return np.r_[np.asarray(axis, float) * math.sin(angle / 2), math.cos(angle / 2)]
+
+
+def _articulated(driver, env, task: Task, rng, steps):
+    """Grasp an articulated object's part and move it about its joints (``task.turns``), in order.
+
+    The recorder reads the joints from the simulator's model (a script knows the scene; what a skill
+    learns is found from the recorded poses alone, :func:`skillbank.core.fit_joint`). The gripper comes
+    in along the first joint's axis, its fingers closing across the part's height, and each turn moves
+    the tool along the joint's arc with the part.
+    """
+    model, data = env.sim.model, env.sim.data
+    site = np.array(data.site_xpos[model.site_name2id(task.site)], float)
+    joints = [model.joint_name2id(name) for name, _ in task.turns]
+    axis, anchor = np.array(data.xaxis[joints[0]], float), np.array(data.xanchor[joints[0]], float)
+    inward = axis if (anchor - site) @ axis > 0 else -axis
+    along = (anchor - site) - inward * ((anchor - site) @ inward)  # from the part's end toward its joint
+    grasp = site + along / max(np.linalg.norm(along), 1e-9) * (task.site_in + rng.uniform(-0.005, 0.005))
+    # the tool's approach axis (its z) turned onto ``inward``, its closing direction onto the vertical
+    R0 = quaternion_to_matrix(driver.quat)
+    closing = _pads(env)
+    closing = closing - R0[:, 2] * (closing @ R0[:, 2])
+    closing /= max(np.linalg.norm(closing), 1e-9)
+    up = np.array([0.0, 0.0, 1.0])
+    turn = np.c_[inward, up, np.cross(inward, up)] @ np.c_[R0[:, 2], closing, np.cross(R0[:, 2], closing)].T
+    driver.quat = matrix_to_quaternion(turn @ R0)
+    driver.move(grasp - rng.uniform(0.10, 0.14) * inward, steps(2.0))
+    driver.hold(steps(rng.uniform(0.2, 0.5)))
+    driver.move(grasp - 0.03 * inward, steps(0.8))
+    driver.move(grasp, steps(0.8), within=0.003)
+    driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)
+    for j, (_, angle) in zip(joints, task.turns, strict=True):
+        axis, anchor = np.array(data.xaxis[j], float), np.array(data.xanchor[j], float)
+        low, high = (float(v) for v in model.jnt_range[j])
+        value = float(data.qpos[model.jnt_qposadr[j]])
+        if high - value > value - low + 1e-6:
+            sign = 1.0
+        elif value - low > high - value + 1e-6:
+            sign = -1.0
+        else:  # room both ways: the part's far end goes down (a lever is pressed, not lifted)
+            lever = site - anchor
+            sign = 1.0 if (_axis_turn(axis, 0.1) @ lever)[2] < lever[2] else -1.0
+        angle = sign * angle * rng.uniform(0.95, 1.05)
+        q0, p0 = driver.quat.copy(), np.array(driver.obs["robot0_eef_pos"], float)
+        for s in _min_jerk(steps(2.0 * abs(angle)))[1:]:
+            driver.quat = quaternion_multiply(_rotation(axis, s * angle), q0)
+            driver.step(anchor + _axis_turn(axis, s * angle) @ (p0 - anchor))
+        driver.hold(steps(rng.uniform(0.1, 0.3)))
+        site = np.array(data.site_xpos[model.site_name2id(task.site)], float)
+    driver.hold(steps(rng.uniform(0.3, 0.5)), grip=-1.0)
+    driver.move(np.array(driver.obs["robot0_eef_pos"], float) - 0.08 * inward, steps(0.8))
+
+
+def _axis_turn(axis, angle) -> np.ndarray:
+    """The rotation matrix of a turn by ``angle`` about the unit ``axis``."""
+    return quaternion_to_matrix(_rotation(axis, angle))
+
+
 def _episode(env, task: Task, rng) -> tuple:
     """One scripted episode; ``(rows, success)``."""
     driver = _Driver(env, env.reset())
@@ -288,6 +360,9 @@ def _episode(env, task: Task, rng) -> tuple:
         return max(3, int(round(seconds * speed * CONTROL_FREQ)))
 
     driver.hold(max(3, int(rng.uniform(0.3, 0.6) * CONTROL_FREQ)))  # a look at the scene: objects settle
+    if task.turns:
+        _articulated(driver, env, task, rng, steps)
+        return driver.rows, bool(env._check_success())
     target = np.array(driver.obs[f"{task.pick}_pos"], float)
     if task.site is not None:
         target = np.array(env.sim.data.site_xpos[env.sim.model.site_name2id(task.site)], float)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..io import reported_body
 from ..robots._description import _geom_balls
 from ._robosuite import _box, _gripper
 
@@ -160,6 +161,26 @@ def object_extents(env, name):
     points, radii = _points(env.sim, gs)
     local = (points - d.xpos[body]) @ np.asarray(d.xmat[body], float).reshape(3, 3)
     return np.abs(local).max(axis=0) + radii.max(initial=0.0)
+
+
+def articulated(env, obs, name) -> bool:
+    """Whether the object ``name`` the observations ``obs`` report is a part of an articulated object: a
+    body that joints other than a free one attach to the world (a door's panel on its hinge, its handle on
+    the latch), read from the simulator's model. A part is moved about its joints, never carried through
+    free space; a loose object (a free joint) or one the model does not show is not one.
+    """
+    b = reported_body(env, obs, name)
+    if b is None:
+        return False
+    m = env.sim.model._model
+    jointed = False
+    while b != 0:
+        for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b]):
+            if m.jnt_type[j] == 0:  # mjJNT_FREE: a loose object
+                return False
+            jointed = True
+        b = m.body_parentid[b]
+    return jointed
 
 
 def object_top(env, name):

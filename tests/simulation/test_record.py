@@ -171,11 +171,12 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Lift', 'NutAssemblySquare', 'PickPlaceBread', "
-               r"'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', 'Stack'\]\), got 'Lift'"),
-    (["robosuite:Door"], r"env: the recorder knows robosuite tasks \['Lift', 'NutAssemblySquare', "
+    (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Door', 'Lift', 'NutAssemblySquare', "
+               r"'PickPlaceBread', 'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', "
+               r"'Stack'\]\), got 'Lift'"),
+    (["robosuite:Wipe"], r"env: the recorder knows robosuite tasks \['Door', 'Lift', 'NutAssemblySquare', "
                          r"'PickPlaceBread', 'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', 'Stack'\], "
-                         r"got 'Door'"),
+                         r"got 'Wipe'"),
     (["robosuite:Lift", "--episodes", "0"], r"episodes"),
     (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
      r"out: expected a file in an existing folder"),
