@@ -44,6 +44,35 @@ class PartJoints:
             p, q = joint.move(p, q, np.asarray(joint.values)[k])
         return p, q
 
+    def measure(self, start: dict, now: dict) -> np.ndarray:
+        """How far each joint has moved between two scenes' poses of the part and its anchor.
+
+        ``start`` and ``now``: ``{name: (position, quaternion)}`` of :attr:`part` and :attr:`anchor`, the
+        chain fixed where the anchor stood at ``start`` (as :meth:`moved_with` puts it). The anchor's own
+        joint is read from the anchor's motion in the world; the part's joint in its anchor, from the
+        part's motion in the anchor's frame.
+        """
+        out = []
+        a0, a1 = start[self.anchor], now[self.anchor]
+        for k, joint in enumerate(self.joints):
+            outer = k == len(self.joints) - 1
+            if outer:  # the anchor's (or a lone part's) motion in the world
+                p0, q0, p1, q1 = a0[0], a0[1], a1[0], a1[1]
+                axis = joint.axis
+                turn = log_map(quaternion_multiply(q1, quaternion_conjugate(q0)))
+                slide = np.asarray(p1, float) - np.asarray(p0, float)
+            else:  # the part in its anchor's frame (the axis, fitted with the anchor at its start, into it)
+                R0 = quaternion_to_matrix(a0[1])
+                axis = R0.T @ joint.axis
+                rel = [quaternion_multiply(quaternion_conjugate(a[1]), part[1])
+                       for a, part in ((a0, start[self.part]), (a1, now[self.part]))]
+                turn = log_map(quaternion_multiply(rel[1], quaternion_conjugate(rel[0])))
+                at = [quaternion_to_matrix(a[1]).T @ (np.asarray(part[0], float) - np.asarray(a[0], float))
+                      for a, part in ((a0, start[self.part]), (a1, now[self.part]))]
+                slide = at[1] - at[0]
+            out.append(float((turn if joint.kind == "revolute" else slide) @ axis))
+        return np.array(out)
+
     def moved_with(self, frame_from, frame_to) -> PartJoints:
         """The same chain in a scene where its anchor stands at ``frame_to`` (position, quaternion)
         instead of ``frame_from``."""

@@ -948,6 +948,19 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     return P, Q, grip
 
 
+def _recorded_joints(seg, env, n):
+    """The joints the source's arm had along the segment, at ``n`` samples spread over it as its adapted
+    path is (a reach from its last try, as :func:`_path_adapted` adapts it); None where the source was
+    recorded on another arm or records no joints."""
+    demo = seg.primitive.demo
+    if "robot0_joint_pos" not in demo.streams or recorded_robot(demo) != env.robots[0].name:
+        return None
+    if seg.relation is not None and not seg.relation.moves_with:
+        demo = demo.slice(_last_try(demo), demo.n_steps)
+    J = np.asarray(demo["robot0_joint_pos"], float)
+    return J[np.round(np.linspace(0, len(J) - 1, n)).astype(int)]
+
+
 def _jointed(seg, env, obs):
     """``(chain,)`` for a segment that carries a part of an articulated object in the scene (a door's
     handle): the joints the source moved it about (:func:`~skillbank.segmentation.part_joints`; None
@@ -958,32 +971,126 @@ def _jointed(seg, env, obs):
 
 
 def _path_articulated(seg, obs, chain):
-    """The tool moved about a part's joints as the source moved the part, from where the hand holds it now.
+    """``(values, grip, chain, slip)``: a part of an articulated object moved about its joints as the source
+    moved it, from where the hand holds it now.
 
-    A part of an articulated object goes where its joints let it: the source's tool path, moved rigidly
-    into a new scene, would pull the handle off its arc by as much as this grasp differs from the
-    source's. The joints the source moved the part about (``chain``, found from its recorded poses) are
-    carried to where their anchor (the door) stands now, and the tool, as it holds the part now, is
-    turned about them by the values the source reached at each moment. A part the source did not move
-    (``chain`` None) is held where it is. The gripper's commands are the source's.
+    A part goes where its joints let it: the source's tool path, moved rigidly into a new scene, would
+    pull the handle off its arc by as much as this grasp differs from the source's. The joints the source
+    moved the part about (``chain``, found from its recorded poses) are carried to where their anchor
+    (the door) stands now; ``values`` (one row per control step, one column per joint) are the source's,
+    the part's joint in its parent stretched to reach the angle the source reached
+    (:func:`_catch_up`); ``slip``, how the source's hand moved on the part (positions and turns in the
+    tool's frame, against its grip as the carry began: the fingers give, and a person's hand led the
+    lever by a quarter of a turn); the tool, as it holds the part now, moved on it as the source's did
+    and turned about the joints (:func:`_drive_jointed`). A part the source did not move (``chain``
+    None) is held where it is. The gripper's commands are the source's.
     """
     demo = seg.primitive.demo
     t = np.asarray(demo.t, float)
     n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
     ts = np.linspace(t[0], t[-1], n)
-    P = np.tile(np.asarray(obs["robot0_eef_pos"], float), (n, 1))
-    Q = np.tile(np.asarray(obs["robot0_eef_quat"], float), (n, 1))
-    if chain is not None:
-        anchor = chain.anchor
-        here = seg.scene(anchor)
-        now = (np.asarray(obs[f"{here}_pos"], float), np.asarray(obs[f"{here}_quat"], float))
-        chain = chain.moved_with((demo[f"{anchor}_pos"][0], demo[f"{anchor}_quat"][0]), now)
-        for joint in chain.joints:
-            P, Q = joint.move(P, Q, np.interp(ts, t, joint.values))
     commands = demo["actions"][:, 6]
     grip = _grip(commands[np.clip(np.searchsorted(np.linspace(t[0], t[-1], len(commands)), ts), 0,
                                   len(commands) - 1)])
-    return P, Q, grip
+    if chain is None:
+        return np.zeros((n, 0)), grip, None, None
+    stretch = _catch_up(demo, obs, seg, chain) if len(chain.joints) > 1 else 1.0
+    values = np.column_stack([np.interp(ts, t, j.values) * (stretch if k == 0 else 1.0)
+                              for k, j in enumerate(chain.joints)])
+    # how the source's hand moved on the part (its fingers gave; the hand led the lever): the tool in the
+    # part's frame, against where it held it as the carry began, at each control step
+    part = chain.part
+    Rp = quaternion_to_matrix(demo[f"{part}_quat"])
+    grip_p = np.einsum("nji,nj->ni", Rp, np.asarray(demo["position"], float) - demo[f"{part}_pos"])
+    grip_q = quaternion_multiply(quaternion_conjugate(demo[f"{part}_quat"]), demo["orientation"])
+    back = quaternion_conjugate(grip_q[0])
+    shift_q = quaternion_multiply(np.broadcast_to(back, grip_q.shape), grip_q)
+    shift_p = (grip_p - grip_p[0]) @ quaternion_to_matrix(back).T
+    at = np.clip(np.searchsorted(t, ts), 0, len(t) - 1)
+    anchor = chain.anchor
+    here = seg.scene(anchor)
+    now = (np.asarray(obs[f"{here}_pos"], float), np.asarray(obs[f"{here}_quat"], float))
+    return values, grip, chain.moved_with((demo[f"{anchor}_pos"][0], demo[f"{anchor}_quat"][0]), now), \
+        (shift_p[at], shift_q[at])
+
+
+def _drive_jointed(episode, seg, values, grip, chain, slip):
+    """Turn the tool about a part's joints through ``values`` (:func:`_path_articulated`), leading the part
+    by as much as it lags; the tool's last commanded position.
+
+    The fingers give: a lever pressed by a hand that only went where the source's hand went stops short
+    of where the latch lets go (0.17 rad of 0.97 on the human-like door). Each step the part's own
+    joint values are read from the scene (:meth:`~skillbank.segmentation.PartJoints.measure`) and the
+    hand is sent ahead of the source's value by a lead that grows with the part's lag (an integral
+    action: a proportional one leaves the lever short by what its spring holds back), at most a quarter
+    of the joint's demonstrated travel (a part held back by something else is not wrenched); once the
+    source's values are spent, the hand goes on leading until the part is where the source left it. The
+    values are followed at the pace the part keeps: while one joint lags by more than a tenth of its
+    travel the path waits for it, so the joints keep the order the source moved them in (the lever held
+    down until its door is past the frame). At most three seconds more than the source took.
+    """
+    obs = episode.obs
+    names = {chain.part: seg.scene(chain.part), chain.anchor: seg.scene(chain.anchor)}
+
+    def poses(o):
+        return {k: (np.asarray(o[f"{v}_pos"], float), np.asarray(o[f"{v}_quat"], float))
+                for k, v in names.items()}
+
+    start = poses(obs)
+    p0, q0 = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
+    travel = values[np.argmax(np.abs(values), axis=0), np.arange(values.shape[1])]  # signed, per joint
+    most = 0.25 * np.abs(travel)
+    lead = np.zeros(len(travel))
+    p = p0
+    at, last = 0.0, len(values) - 1  # where along the source's values the part is being taken
+    for _ in range(len(values) + 3 * CONTROL_FREQ):
+        if episode.over:
+            break
+        j = int(at)
+        want = values[j] + (at - j) * (values[min(j + 1, last)] - values[j])
+        lag = (want - chain.measure(start, poses(episode.obs))) * np.sign(travel)
+        if at >= last and np.all(np.abs(lag) <= 0.02 * np.abs(travel)):
+            break
+        # the source's values are a path through the joints, taken at the pace the part follows: while
+        # one joint lags by a tenth of its travel the others wait for it (a latch still pressed while
+        # its door is being pulled past the frame), then the path goes on at the source's pace
+        at = min(last, at + float(np.clip(1.0 - np.max(np.abs(lag) / (0.1 * np.abs(travel))), 0.0, 1.0)))
+        # the lead grows while the part lags and shrinks as it catches up (a person pushes on until the
+        # lever is where they want it): no lag left once the part is there, whatever holds it back
+        lead = np.clip(lead + 0.5 * lag, 0.0, most)
+        ahead = want + np.sign(travel) * lead
+        k = int(round(at))
+        p = p0 + quaternion_to_matrix(q0) @ slip[0][k]
+        q = quaternion_multiply(q0, slip[1][k])
+        for joint, v in zip(chain.joints, ahead, strict=True):
+            p, q = joint.move(p, q, v)
+        episode.step(p, q, grip[min(k, len(grip) - 1)])
+    return p
+
+
+def _catch_up(demo, obs, seg, chain):
+    """The factor on the source's values of a part's joint in its parent (a handle's latch in its door)
+    that brings it to the same angle in the parent as the source brought it to, from where it stands now.
+
+    The source's hand had already pressed the lever a little as its fingers closed (0.3 rad in a
+    person's demonstration): turned by as much again, a lever that stands at rest in a new scene stops
+    short of where the latch lets go. The part's angle in its parent now, against the source's as its
+    carry began, is read from both poses about the joint's axis (in the parent's frame); the values are
+    stretched so that their furthest reaches the source's furthest angle.
+    """
+    part, anchor = chain.part, chain.anchor
+    src = quaternion_multiply(quaternion_conjugate(demo[f"{anchor}_quat"][0]), demo[f"{part}_quat"][0])
+    here = quaternion_multiply(quaternion_conjugate(np.asarray(obs[f"{seg.scene(anchor)}_quat"], float)),
+                               np.asarray(obs[f"{seg.scene(part)}_quat"], float))
+    # the joint's axis was fitted in the parent's first pose, shown in the world; into the parent's frame
+    axis = quaternion_to_matrix(demo[f"{anchor}_quat"][0]).T @ chain.joints[0].axis
+    ahead = float(log_map(quaternion_multiply(quaternion_conjugate(src), here)) @ (
+        quaternion_to_matrix(src).T @ axis))  # how far the part stands past the source's start, about it
+    values = np.asarray(chain.joints[0].values, float)
+    furthest = float(values[np.argmax(np.abs(values))])
+    if abs(furthest) < 1e-6:
+        return 1.0
+    return max(0.0, (furthest - ahead) / furthest)
 
 
 def _carried_path(seg, obs, demo, goal_q):
@@ -1199,7 +1306,7 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
         else:
             tic = time.perf_counter()
             carried = None  # the scene's name of what the segment carries (None: nothing, or a rigid path)
-            jointed = None  # the joints of a part of an articulated object the segment moves
+            jointed = chain = None  # the joints of a part of an articulated object the segment moves
             postures = None  # the joints of a planned move at each of its samples
             try:
                 if method == "rigid":
@@ -1208,7 +1315,9 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     seg = _in_scene(seg, episode.env)
                     jointed = _jointed(seg, episode.env, episode.obs)
                     if jointed is not None:  # a door's handle: about its joints, never through free space
-                        P, Q, G = _path_articulated(seg, episode.obs, jointed[0])
+                        values, G, chain, slip = _path_articulated(seg, episode.obs, jointed[0])
+                        P = np.tile(np.asarray(episode.obs["robot0_eef_pos"], float), (len(G), 1))
+                        Q = np.tile(np.asarray(episode.obs["robot0_eef_quat"], float), (len(G), 1))
                     else:
                         P, Q, G = _path_adapted(seg, episode.obs, method, random_state, episode.fingers,
                                                 reachable(episode.env, episode.obs))
@@ -1227,7 +1336,8 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     P, Q, G, report = (P, Q, G, None) if span is None else free_move(
                         episode.env, episode.obs, P, Q, G, span, random_state=random_state,
                         held=carried if G[span[0]] > 0 else None,
-                        slack=_slack(seg.primitive.demo, seg.relation.object) if carried else 0.0)
+                        slack=_slack(seg.primitive.demo, seg.relation.object) if carried else 0.0,
+                        recorded=_recorded_joints(seg, episode.env, len(P)))
                 except MotionPlanningError as error:
                     return i, "no transit", str(error).splitlines()[0]
                 if report is not None and report["planned"]:
@@ -1244,6 +1354,9 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                 here = episode.obs
                 held = quaternion_to_matrix(np.asarray(here["robot0_eef_quat"], float)).T @ (
                     np.asarray(here[f"{carried}_pos"], float) - np.asarray(here["robot0_eef_pos"], float))
+            if jointed is not None and chain is not None:  # in closed loop about the part's joints
+                goal = _drive_jointed(episode, seg, values, G, chain, slip)
+                P, Q, G = P[:0], Q[:0], G[:0]
             for k, (p, q, g) in enumerate(zip(P, Q, G, strict=True)):
                 if episode.over:
                     break
@@ -1260,8 +1373,9 @@ def _run_segments(episode, segments, actions, method, random_state, timings, mis
                     # of the can push it away instead of holding it
                     episode.settle(p, q)
                 episode.step(p, q, g, posture=None if postures is None else postures[k])
-            episode.settle(P[-1] + shift, Q[-1])
-            goal = P[-1] + shift
+            if len(P):
+                episode.settle(P[-1] + shift, Q[-1])
+                goal = P[-1] + shift
         timings["driven"] += (episode.steps - steps0) / CONTROL_FREQ
         if episode.success:
             return None

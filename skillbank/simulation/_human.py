@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from ..core._rotations import log_map, quaternion_conjugate, quaternion_multiply, quaternion_to_matrix
 from ..core._validation import check_fraction, check_positive
 from ._robosuite import CONTROL_FREQ, TASKS, Task, _box, _closing_axis, _objects, _yaw, with_object_poses
 
@@ -182,6 +183,8 @@ class _Operator:
         self.sim_env = getattr(env, "env", env)  # the environment under a wrapper
         self.obs = with_object_poses(self.sim_env, obs)
         self.objects = _objects(self.obs)
+        # metres and radians per unit of the controller's input: how far a push of the puck goes
+        self.scale = np.abs(np.asarray(self.sim_env.robots[0].part_controllers["right"].output_max, float))
         self.grip, self.steps, self.held, self.grasps = -1.0, 0, 0, 0
         # what the person has learnt of the arm: how far one tap moves it from rest, and how far it
         # coasts once the taps stop (translation in metres, rotation in radians), refined as it goes
@@ -211,6 +214,21 @@ class _Operator:
         action[6] = self.grip
         for _ in range(self.h.pulse_steps):
             self._step(action)
+        self.idle(self.rng.integers(self.h.gap[0], self.h.gap[1] + 1))
+        if self.rng.random() < self.h.pause_probability:
+            self.wait(self.h.pause)
+
+    def push(self, puck, steps: int, *, gap=True):
+        """The puck of a SpaceMouse held at ``puck`` (six numbers in [-1, 1], the controller's input: moves
+        along and turns about the world's axes) for ``steps`` control steps, then (``gap``) let go for a
+        gap, as :meth:`tap`."""
+        action = np.zeros(7)
+        action[:6] = np.asarray(puck, float)
+        action[6] = self.grip
+        for _ in range(int(steps)):
+            self._step(action)
+        if not gap:
+            return
         self.idle(self.rng.integers(self.h.gap[0], self.h.gap[1] + 1))
         if self.rng.random() < self.h.pause_probability:
             self.wait(self.h.pause)
@@ -309,6 +327,9 @@ class _Operator:
     def one(self, task: Task):
         """Grasp the task's object and take it where it goes; again (up to three times) if it slips."""
         self.start_height = float(self.at(task.pick)[2])
+        if task.turns:
+            self.open(task)
+            return
         for _ in range(3):
             try:
                 self.grasp(task)
@@ -414,6 +435,94 @@ class _Operator:
             self.tap(k, 1.0 if change * axis[k] > 0 else -1.0)
             self.settled(lambda k=k: float(self.tool()[k]))
             self.wait(self.h.reaction)
+
+    # -- a part of an articulated object: a door's handle pressed down, the door pulled open ------------
+    def approach_axis(self) -> np.ndarray:
+        """The direction the tool points (its z axis, world)."""
+        return quaternion_to_matrix(np.asarray(self.obs["robot0_eef_quat"], float))[:, 2]
+
+    def _joint(self, name) -> tuple:
+        """``(axis, anchor, value)`` of a joint of the scene, as the person sees the part turn about it."""
+        sim = self.sim_env.sim
+        j = sim.model.joint_name2id(name)
+        return (np.array(sim.data.xaxis[j], float), np.array(sim.data.xanchor[j], float),
+                float(sim.data.qpos[sim.model.jnt_qposadr[j]]))
+
+    def open(self, task: Task):
+        """Point the hand at the part, take it, and move it about each of its joints in turn.
+
+        Keys move the tool along and turn it about the world's axes; the person turns the wrist until it
+        points at the door with the fingers across the lever, comes in, closes, then presses the lever
+        down and pulls the door with short taps, each time tapping the key that brings the hand nearest
+        to where the part is going (the hand held by the handle drifts off the arc between taps).
+        """
+        sim = self.sim_env.sim
+        site = lambda: np.array(sim.data.site_xpos[sim.model.site_name2id(task.site)], float)  # noqa: E731
+        axis, anchor, _ = self._joint(task.turns[0][0])
+        inward = axis if (anchor - site()) @ axis > 0 else -axis
+        # the wrist turned down-to-forward (about the world's x), then about the vertical to face the door
+        self.reach(3, lambda: math.atan2(self.approach_axis()[1], -self.approach_axis()[2]),
+                   math.atan2(inward[1], -inward[2]), 0.08, period=2 * math.pi)
+        self.reach(5, lambda: math.atan2(self.approach_axis()[1], self.approach_axis()[0]),
+                   math.atan2(inward[1], inward[0]), 0.08, period=2 * math.pi)
+        along = (anchor - site()) - inward * ((anchor - site()) @ inward)
+        grasp = site() + along / max(np.linalg.norm(along), 1e-9) * (
+            task.site_in + self.rng.uniform(-0.008, 0.008))
+        k = int(np.argmax(np.abs(inward)))
+        order = [i for i in (0, 2) if i != k] if self.rng.random() < 0.5 else [i for i in (2, 0) if i != k]
+        self.move(grasp - self.rng.uniform(0.08, 0.12) * inward, keys=tuple(order) + (k,), tol=0.01)
+        self.move(grasp, keys=tuple(order), tol=0.006)
+        self.move(grasp, keys=(k,), tol=0.006)
+        self.press_grip(True)
+        for name, angle in task.turns:
+            self.turn_part(task, name, angle * self.rng.uniform(0.95, 1.05), site)
+        while True:  # the part where it was taken: the person holds it until the task is seen done
+            self.idle(1)
+
+    def turn_part(self, task: Task, name: str, angle: float, site):
+        """Taps that carry the held part ``angle`` radians about joint ``name`` (toward the side of its
+        range with room; with room both ways, the part's far end down).
+
+        The person watches the part and, tap by tap, presses the key (a move along or a turn about a world
+        axis) that most reduces how far the hand is from where it would be with the part a little further
+        on, each error weighed by what one tap does (:attr:`travel`).
+        """
+        sim = self.sim_env.sim
+        j = sim.model.joint_name2id(name)
+        low, high = (float(v) for v in sim.model.jnt_range[j])
+        axis, anchor, start = self._joint(name)
+        if abs((high - start) - (start - low)) > 1e-6:
+            sign = 1.0 if high - start > start - low else -1.0
+        else:
+            lever = site() - anchor
+            sign = 1.0 if np.cross(axis, lever)[2] < 0 else -1.0
+        p0, q0 = self.tool(), np.asarray(self.obs["robot0_eef_quat"], float)
+        reached = 0.0  # how far the hand has been asked to go: a person pushes on, never back
+        best, since = 0.0, 0  # the furthest the part has gone, and the pushes since it went further
+        for _ in range(600):
+            _, _, value = self._joint(name)
+            done = sign * (value - start)
+            best, since = (done, 0) if done > best + 0.01 else (best, since + 1)
+            # done; or as far as it goes (a lever pressed to where it stops): the person goes on
+            if done >= angle or (since >= 8 and best >= 0.8 * angle):
+                return
+            # the hand leads the part (the fingers give a little): the person pushes on by a little at
+            # each push, or to a little past where the part is, up to a little past the aim
+            reached = min(1.15 * angle, max(reached + 0.04, done + 0.1))
+            ahead = sign * reached
+            turn = np.r_[axis * math.sin(ahead / 2), math.cos(ahead / 2)]
+            want_p = anchor + quaternion_to_matrix(turn) @ (p0 - anchor)
+            want_q = quaternion_multiply(turn, q0)
+            now_q = np.asarray(self.obs["robot0_eef_quat"], float)
+            error = np.r_[want_p - self.tool(),
+                          log_map(quaternion_multiply(want_q, quaternion_conjugate(now_q)))]
+            # the part resists (a latch's spring): the person pushes the SpaceMouse's puck the way the hand
+            # has to go, moving and turning at once, as far as the hand is off, and keeps it pushed (let
+            # go, the spring takes the lever back), looking again every few steps; not quite the right way
+            steps = int(self.rng.integers(2, 6))
+            push = error / self.scale * (1.0 + self.rng.normal(scale=0.15, size=6))
+            self.push(np.clip(push, -1.0, 1.0), steps, gap=False)
+        raise _Done  # the part would not move: the person gives up
 
     def lift(self, task: Task):
         self.move([0, 0, self.start_height + task.lift], keys=(2,), watch=task.pick, tol=0.02)

@@ -65,8 +65,7 @@ def parse_task(spec) -> str:
     >>> parse_task("robosuite:PickPlace")
     'PickPlace'
     """
-    # the person-like demonstrator picks and places; it does not yet turn a part about its joints
-    return parse_env(spec, sorted(k for k, task in TASKS.items() if not task.turns) + sorted(MULTI_TASKS))
+    return parse_env(spec, sorted(TASKS) + sorted(MULTI_TASKS))
 
 
 def command_statistics(actions) -> dict:

@@ -282,7 +282,8 @@ def free_span(n, grip, *, let_go=False, close_in=0.5):
     return (0, stop) if stop >= 2 else None
 
 
-def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN, slack=0.0):
+def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=MARGIN, slack=0.0,
+              recorded=None):
     """The tool path ``P (n, 3)``, ``Q (n, 4)`` (gripper commands ``G (n,)``) with its free ``span``
     replaced by a move planned for the whole arm.
 
@@ -297,7 +298,12 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     path to its last clear state (a close-in that begins at a bin's wall is the skill's own).
     :func:`plan_transit` joins the two and the planned joint path is driven as tool poses
     (:func:`_timed`); the path goes on from its end as adapted. A ``held`` object keeps ``margin`` and
-    ``slack`` more (:class:`ArmScene`): what it may move in the hand on the way.
+    ``slack`` more (:class:`ArmScene`): what it may move in the hand on the way. ``recorded`` (one row of
+    joints per sample of ``P``: the source's, where it was recorded on this arm): the span's end takes the
+    arm's branch nearest the joints the demonstrator's arm had there when that branch is clear, as a
+    start pose does (issue 43, item 3); inverse kinematics along a straight line from the start, with
+    the orientation of the end held all the way, can fold a Panda's elbow the other way round (a wrist
+    that turns a quarter turn to face a door: the elbow on the door's frame).
 
     Returns
     -------
@@ -348,7 +354,13 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
             break
         a, q = a + 1, nxt
     start = q
-    goal = _reached(scene, P[a], P[b], Q[b], start)
+    goal = None
+    if recorded is not None and np.shape(recorded)[1:] == np.shape(start):
+        goal = scene.ik(P[b], Q[b], np.asarray(recorded[b], float))
+        if goal is not None and scene.blocking(goal) is not None:
+            goal = None
+    if goal is None:
+        goal = _reached(scene, P[a], P[b], Q[b], start)
     if goal is None:
         # the demonstration's way across, moved onto this scene, leaves the arm's reach there (a
         # person's reach swings wide): it is free space, so the planned move goes on to the first pose

@@ -116,3 +116,21 @@ def test_an_observed_position_nothing_stands_at_gets_no_turn():
     assert reported_body(env, obs, "ghost") is None
     at_origin = with_object_poses(env, {"thing_pos": np.zeros(3)})
     assert np.allclose(at_origin["thing_quat"], [0, 0, 0, 1])
+
+
+def test_a_door_is_opened_from_one_human_like_demonstration_in_robosuites_raw_format(tmp_path):
+    """A person-like operator presses the lever and pulls the door with a SpaceMouse's pushes (its fingers
+    give; its hand leads the lever); the file is robosuite's raw collection format, read by replaying it.
+    Reproduced by following the lever and the door about their joints at the pace they keep."""
+    from skillbank.simulation import record_human
+
+    out = tmp_path / "door_human.hdf5"
+    record_human("robosuite:Door", episodes=1, out=out, seed=0, robot="Panda", max_tries=3)
+    db = tmp_path / "door_human.db"
+    with Library(db) as lib:
+        lib.add_files([out])
+        lib.cluster()
+        demo = lib.demonstration(lib.demonstration_ids()[0])
+    assert {"door_quat", "handle_quat"} <= set(demo.streams)  # read from the replayed simulator
+    report = evaluate(db, "robosuite:Door", episodes=2, seed=900, robot="Panda")
+    assert report["successes"] == 2, report["per_episode"]
