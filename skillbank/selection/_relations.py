@@ -22,7 +22,7 @@ import numpy as np
 from ..core import Demonstration, quaternion_to_matrix
 from ..core._rotations import check_quaternions, quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
-from ..segmentation import object_streams
+from ..segmentation import object_streams, part_joints
 from ..segmentation._phases import travel_with_tool
 
 __all__ = ["Relation", "object_streams", "acted_on", "compose"]
@@ -144,6 +144,9 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         frames = quaternion_to_matrix(check_quaternions(demo["orientation"], name="orientation"))
     carried, ends = [], []
+    # the gripper commanded shut all along (robosuite's actions), where the primitive records it
+    closed = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and bool(
+        np.all(demo["actions"][:, 6] > 0))
     for name in object_streams(demo):
         where = demo[f"{name}_pos"]
         gap = np.linalg.norm(where - P, axis=1)
@@ -155,6 +158,15 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             offset = np.einsum("nji,nj->ni", frames, offset)
         off = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) > rigid)
         held = len(gap) if off.size == 0 else int(off[0])
+        if held < len(gap) / 2 and np.linalg.norm(where - where[0], axis=1).max() > moved and closed:
+            # a part of an articulated object (a door's lever) pivots and slides between fingers that
+            # give, 3 cm of a 16 cm pull, but it goes where its joints take it: when the gripper is
+            # commanded shut all along and one chain of joints explains the part's poses to within a
+            # hundredth of its travel, it is held while the tool moves it (a lever springing back as
+            # the hand lets go and leaves moves about its joint too, with the gripper open)
+            chain = part_joints(demo, name)
+            if chain is not None and chain.residual < 0.01 * np.linalg.norm(where - where[0], axis=1).max():
+                held = len(gap)
         # it moved, and the tool's motion explains it (a cube settling at reset while the hand waits
         # above it moves too), for most of the primitive (an object that settles as the tool sets off
         # moves with it for a sample or two)

@@ -1027,7 +1027,9 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     source's values are spent, the hand goes on leading until the part is where the source left it. The
     values are followed at the pace the part keeps: while one joint lags by more than a tenth of its
     travel the path waits for it, so the joints keep the order the source moved them in (the lever held
-    down until its door is past the frame). At most three seconds more than the source took.
+    down until its door is past the frame). The hand gives up when the path has waited a second for a
+    part that has not moved (a door held shut by something the hand cannot move); the episode's horizon
+    bounds the rest.
     """
     obs = episode.obs
     names = {chain.part: seg.scene(chain.part), chain.anchor: seg.scene(chain.anchor)}
@@ -1043,18 +1045,23 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     lead = np.zeros(len(travel))
     p = p0
     at, last = 0.0, len(values) - 1  # where along the source's values the part is being taken
-    for _ in range(len(values) + 3 * CONTROL_FREQ):
-        if episode.over:
-            break
+    seen = []  # the part's joint values, the last second of them
+    while not episode.over:
         j = int(at)
         want = values[j] + (at - j) * (values[min(j + 1, last)] - values[j])
-        lag = (want - chain.measure(start, poses(episode.obs))) * np.sign(travel)
-        if at >= last and np.all(np.abs(lag) <= 0.02 * np.abs(travel)):
-            break
+        measured = chain.measure(start, poses(episode.obs))
+        lag = (want - measured) * np.sign(travel)
+        if at >= last and np.all(lag <= 0.02 * np.abs(travel)):
+            break  # where the source left it (or past it: a lever the door's swing pressed further)
         # the source's values are a path through the joints, taken at the pace the part follows: while
-        # one joint lags by a tenth of its travel the others wait for it (a latch still pressed while
+        # one joint lags behind by a tenth of its travel the others wait for it (a latch still pressed while
         # its door is being pulled past the frame), then the path goes on at the source's pace
-        at = min(last, at + float(np.clip(1.0 - np.max(np.abs(lag) / (0.1 * np.abs(travel))), 0.0, 1.0)))
+        pace = float(np.clip(1.0 - np.max(np.maximum(lag, 0.0) / (0.1 * np.abs(travel))), 0.0, 1.0))
+        waiting = pace < 1.0 or at >= last
+        seen = (seen + [measured])[-CONTROL_FREQ:] if waiting else []
+        if len(seen) == CONTROL_FREQ and np.all(np.ptp(seen, axis=0) < 0.01 * np.abs(travel)):
+            break  # waited a second for a part that has not moved: held by what the hand cannot move
+        at = min(last, at + pace)
         # the lead grows while the part lags and shrinks as it catches up (a person pushes on until the
         # lever is where they want it): no lag left once the part is there, whatever holds it back
         lead = np.clip(lead + 0.5 * lag, 0.0, most)

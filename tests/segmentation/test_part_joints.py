@@ -10,7 +10,7 @@ from skillbank.segmentation import part_joints
 
 def _door(n=40, hinge=(0.0, 0.0, 1.0), at=(0.5, 0.2, 1.0), seed=0):
     """A handle pressed 1.3 rad about its latch (the door's y axis) while the door stays shut, then held
-    while the door turns 0.4 rad about a hinge 0.45 m from the handle."""
+    while the door turns 0.4 rad about a hinge 0.3 m from the door's origin."""
     rng = np.random.default_rng(seed)
     latch = np.r_[np.linspace(0, 1.3, n // 2), np.full(n - n // 2, 1.3)]
     door = np.r_[np.zeros(n // 2), np.linspace(0, 0.4, n - n // 2)]
@@ -18,10 +18,11 @@ def _door(n=40, hinge=(0.0, 0.0, 1.0), at=(0.5, 0.2, 1.0), seed=0):
     d0 = exp_map(rng.normal(scale=0.1, size=3))  # the door's orientation at rest
     turn = exp_map(door[:, None] * hinge)
     door_q = quaternion_multiply(turn, np.broadcast_to(d0, turn.shape))
-    door_p = np.asarray(at) + np.einsum("nij,j->ni", quaternion_to_matrix(turn), [0.45, 0.0, 0.0])
+    door_p = np.asarray(at) + np.einsum("nij,j->ni", quaternion_to_matrix(turn), [0.30, 0.0, 0.0])
     local_q = exp_map(latch[:, None] * np.array([0.0, 1.0, 0.0]))
     handle_q = quaternion_multiply(door_q, local_q)
-    handle_p = door_p + np.einsum("nij,j->ni", quaternion_to_matrix(door_q), [0.0, -0.1, 0.0])
+    # the handle (its latch's origin) 15 cm further from the hinge than the door's, 10 cm out of it
+    handle_p = door_p + np.einsum("nij,j->ni", quaternion_to_matrix(door_q), [0.15, -0.1, 0.0])
     streams = {"door_pos": door_p, "door_quat": door_q, "handle_pos": handle_p, "handle_quat": handle_q}
     return Demonstration(np.arange(float(n)), streams), latch, door
 
@@ -78,3 +79,22 @@ def test_the_hinge_is_found_whichever_way_it_points(hinge):
     chain = part_joints(demo, "handle")
     want = np.asarray(hinge) / np.linalg.norm(hinge)
     assert abs(abs(chain.joints[1].axis @ want) - 1.0) < 1e-6
+
+
+@pytest.mark.parametrize("grip, carried", [(1.0, True), (-1.0, False)])
+def test_a_lever_that_slides_in_fingers_held_shut_is_carried_a_lever_let_go_is_not(grip, carried):
+    from skillbank.selection import acted_on
+
+    demo, _, _ = _door()
+    n = len(demo.t)
+    # the hand on the lever, sliding 3 cm along it as the lever is pressed (the first 40 %) and turning
+    # 0.3 rad on it as the fingers give: more than the 2 cm a rigidly held object may shift, early on
+    R = quaternion_to_matrix(demo["handle_quat"])
+    slide = np.clip(np.linspace(0.0, 0.075, n), 0.0, 0.03)[:, None] * np.array([1.0, 0.0, 0.0])
+    tool_p = demo["handle_pos"] + np.einsum("nij,nj->ni", R, slide + [0.0, -0.02, 0.0])
+    tool_q = quaternion_multiply(demo["handle_quat"], exp_map(np.linspace(0, 0.3, n)[:, None] * [0, 0, 1.0]))
+    actions = np.zeros((n, 7))
+    actions[:, 6] = grip
+    streams = dict(demo.streams, position=tool_p, orientation=tool_q, actions=actions)
+    relation = acted_on(Demonstration(demo.t, streams))
+    assert relation.object == "handle" and relation.moves_with is carried
