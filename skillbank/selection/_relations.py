@@ -66,6 +66,7 @@ class Relation:
     target: str | None = None
     target_position: np.ndarray | None = None
     target_orientation: np.ndarray | None = None
+    joints: tuple = ()
 
     @classmethod
     def from_dict(cls, doc: dict) -> Relation:
@@ -85,9 +86,16 @@ class Relation:
             value = doc.get(key)
             return None if value is None else np.asarray(value, dtype=float)
 
+        joints = doc.get("joints") or ()
+        if not isinstance(joints, list | tuple) or not all(
+                isinstance(j, dict) and {"kind", "in", "value"} <= set(j) for j in joints):
+            raise ValueError("relation: expected joints as a list of {kind, in, value}, as Relation.to_dict "
+                             "writes them")
         return cls(str(doc["object"]), bool(doc["moves_with"]), float(doc["distance"]), array("position"),
                    array("orientation"), array("start_position"), array("start_orientation"),
-                   doc.get("target"), array("target_position"), array("target_orientation"))
+                   doc.get("target"), array("target_position"), array("target_orientation"),
+                   tuple({"kind": str(j["kind"]), "in": str(j["in"]), "value": float(j["value"])}
+                         for j in joints))
 
     def to_dict(self) -> dict:
         return {"object": self.object, "moves_with": self.moves_with, "distance": float(self.distance),
@@ -98,7 +106,7 @@ class Relation:
                 self.start_orientation.tolist(), "target": self.target,
                 "target_position": None if self.target_position is None else self.target_position.tolist(),
                 "target_orientation": None if self.target_orientation is None else
-                self.target_orientation.tolist()}
+                self.target_orientation.tolist(), "joints": [dict(j) for j in self.joints]}
 
 
 def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, rigid: float = 0.02):
@@ -143,7 +151,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     frames = None
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         frames = quaternion_to_matrix(check_quaternions(demo["orientation"], name="orientation"))
-    carried, ends = [], []
+    carried, ends, chains = [], [], {}
     # the gripper commanded shut all along (robosuite's actions), where the primitive records it
     closed = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and bool(
         np.all(demo["actions"][:, 6] > 0))
@@ -164,7 +172,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             # commanded shut all along and one chain of joints explains the part's poses to within a
             # hundredth of its travel, it is held while the tool moves it (a lever springing back as
             # the hand lets go and leaves moves about its joint too, with the gripper open)
-            chain = part_joints(demo, name)
+            chain = chains[name] = part_joints(demo, name)
             if chain is not None and chain.residual < 0.01 * np.linalg.norm(where - where[0], axis=1).max():
                 held = len(gap)
         # it moved, and the tool's motion explains it (a cube settling at reset while the hand waits
@@ -197,8 +205,17 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         if others:
             target = min(others)[1]
             target_pose = end_pose(target, -1)
+    joints = ()
+    if carried:  # what one chain of joints explains of the carried object's motion (a door's handle)
+        chain = chains[name] if name in chains else part_joints(demo, name)
+        travel = float(np.linalg.norm(demo[f"{name}_pos"] - demo[f"{name}_pos"][0], axis=1).max())
+        if chain is not None and chain.residual < 0.01 * travel:
+            outer = len(chain.joints) - 1
+            joints = tuple({"kind": j.kind, "in": "world" if k == outer else chain.anchor,
+                            "value": round(float(j.values[np.argmax(np.abs(j.values))]), 4)}
+                           for k, j in enumerate(chain.joints))
     return Relation(name, bool(carried), float(np.linalg.norm(P[-1] - demo[f"{name}_pos"][-1])), position,
-                    orientation, start_position, start_orientation, target, *target_pose)
+                    orientation, start_position, start_orientation, target, *target_pose, joints)
 
 
 def compose(relation: Relation, position, orientation, *, at: str = "end") -> tuple:

@@ -98,3 +98,8 @@ def test_a_lever_that_slides_in_fingers_held_shut_is_carried_a_lever_let_go_is_n
     streams = dict(demo.streams, position=tool_p, orientation=tool_q, actions=actions)
     relation = acted_on(Demonstration(demo.t, streams))
     assert relation.object == "handle" and relation.moves_with is carried
+    if carried:  # the joints it moved about travel with the relation (library list shows them)
+        kinds = [(j["kind"], j["in"]) for j in relation.joints]
+        assert kinds == [("revolute", "door"), ("revolute", "world")]
+        assert [abs(j["value"]) for j in relation.joints] == pytest.approx([1.3, 0.4])
+        assert type(relation).from_dict(relation.to_dict()).joints == relation.joints
