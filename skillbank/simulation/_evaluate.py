@@ -1023,12 +1023,12 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     joint values are read from the scene (:meth:`~skillbank.segmentation.PartJoints.measure`) and the
     hand is sent ahead of the source's value by a lead that grows with the part's lag (an integral
     action: a proportional one leaves the lever short by what its spring holds back), at most a quarter
-    of the joint's demonstrated travel (a part held back by something else is not wrenched); once the
-    source's values are spent, the hand goes on leading until the part is where the source left it. The
-    values are followed at the pace the part keeps: while one joint lags by more than a tenth of its
+    of the joint's demonstrated travel (a part held back by something else is not wrenched). The values
+    are followed at the pace the part keeps: while one joint lags behind by more than a tenth of its
     travel the path waits for it, so the joints keep the order the source moved them in (the lever held
-    down until its door is past the frame). The hand gives up when the path has waited a second for a
-    part that has not moved (a door held shut by something the hand cannot move); the episode's horizon
+    down until its door is past the frame). Once the values are spent, the hand goes on leading until
+    the part is where the source left it or past it. It gives up when the path has waited a second for
+    a part that has not moved (a door held shut by what the hand cannot move); the episode's horizon
     bounds the rest.
     """
     obs = episode.obs
@@ -1045,21 +1045,23 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     lead = np.zeros(len(travel))
     p = p0
     at, last = 0.0, len(values) - 1  # where along the source's values the part is being taken
-    seen = []  # the part's joint values, the last second of them
+    seen = []  # where along the path and the part's joint values, the last second of them
     while not episode.over:
         j = int(at)
         want = values[j] + (at - j) * (values[min(j + 1, last)] - values[j])
         measured = chain.measure(start, poses(episode.obs))
         lag = (want - measured) * np.sign(travel)
-        if at >= last and np.all(lag <= 0.02 * np.abs(travel)):
-            break  # where the source left it (or past it: a lever the door's swing pressed further)
+        if at >= last and np.all(lag <= 0.0):
+            # where the source left it, or past it (a lever the door's swing pressed further): not a
+            # little short of it, where a door the source opened just past what the task asks is not
+            break
         # the source's values are a path through the joints, taken at the pace the part follows: while
         # one joint lags behind by a tenth of its travel the others wait for it (a latch still pressed while
         # its door is being pulled past the frame), then the path goes on at the source's pace
         pace = float(np.clip(1.0 - np.max(np.maximum(lag, 0.0) / (0.1 * np.abs(travel))), 0.0, 1.0))
-        waiting = pace < 1.0 or at >= last
-        seen = (seen + [measured])[-CONTROL_FREQ:] if waiting else []
-        if len(seen) == CONTROL_FREQ and np.all(np.ptp(seen, axis=0) < 0.01 * np.abs(travel)):
+        seen = (seen + [np.r_[at, measured]])[-CONTROL_FREQ:]
+        span = np.ptp(seen, axis=0)
+        if len(seen) == CONTROL_FREQ and span[0] < 1.0 and np.all(span[1:] < 0.01 * np.abs(travel)):
             break  # waited a second for a part that has not moved: held by what the hand cannot move
         at = min(last, at + pace)
         # the lead grows while the part lags and shrinks as it catches up (a person pushes on until the
