@@ -1042,6 +1042,9 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     p0, q0 = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
     travel = values[np.argmax(np.abs(values), axis=0), np.arange(values.shape[1])]  # signed, per joint
     most = 0.25 * np.abs(travel)
+    # a tenth of each joint's travel; a joint the source's values do not move (its part already past
+    # where the source took it) holds nothing up
+    tenth = np.where(np.abs(travel) > 1e-9, 0.1 * np.abs(travel), np.inf)
     lead = np.zeros(len(travel))
     p = p0
     at, last = 0.0, len(values) - 1  # where along the source's values the part is being taken
@@ -1056,12 +1059,12 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
             # little short of it, where a door the source opened just past what the task asks is not
             break
         # the source's values are a path through the joints, taken at the pace the part follows: while
-        # one joint lags behind by a tenth of its travel the others wait for it (a latch still pressed while
-        # its door is being pulled past the frame), then the path goes on at the source's pace
-        pace = float(np.clip(1.0 - np.max(np.maximum(lag, 0.0) / (0.1 * np.abs(travel))), 0.0, 1.0))
+        # one joint lags behind by a tenth of its travel the others wait for it (a latch still pressed
+        # while its door is being pulled past the frame), then the path goes on at the source's pace
+        pace = float(np.clip(1.0 - np.max(np.maximum(lag, 0.0) / tenth), 0.0, 1.0))
         seen = (seen + [np.r_[at, measured]])[-CONTROL_FREQ:]
         span = np.ptp(seen, axis=0)
-        if len(seen) == CONTROL_FREQ and span[0] < 1.0 and np.all(span[1:] < 0.01 * np.abs(travel)):
+        if len(seen) == CONTROL_FREQ and span[0] < 1.0 and np.all(span[1:] <= 0.01 * np.abs(travel)):
             break  # waited a second for a part that has not moved: held by what the hand cannot move
         at = min(last, at + pace)
         # the lead grows while the part lags and shrinks as it catches up (a person pushes on until the
