@@ -328,7 +328,10 @@ class _Operator:
         """Grasp the task's object and take it where it goes; again (up to three times) if it slips."""
         self.start_height = float(self.at(task.pick)[2])
         if task.turns:
-            self.open(task)
+            try:
+                self.open(task)
+            except _Lost:  # lost the part (a lever slipped out of the fingers): the person gives up
+                raise _Done from None
             return
         for _ in range(3):
             try:

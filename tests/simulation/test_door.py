@@ -134,3 +134,14 @@ def test_a_door_is_opened_from_one_human_like_demonstration_in_robosuites_raw_fo
     assert {"door_quat", "handle_quat"} <= set(demo.streams)  # read from the replayed simulator
     report = evaluate(db, "robosuite:Door", episodes=2, seed=900, robot="Panda")
     assert report["successes"] == 2, report["per_episode"]
+
+
+def test_a_person_like_episode_that_loses_the_lever_is_not_kept_and_says_so(tmp_path):
+    from skillbank.simulation import record_human
+
+    # seed 5's operator loses track on the way in (its taps stop moving the hand): the episode is given
+    # up, as a picking person's third miss is, not a traceback
+    with pytest.raises(ValueError, match=r"only 0 of 1 human-like episodes succeeded"):
+        record_human("robosuite:Door", episodes=1, out=tmp_path / "lost.hdf5", seed=5, robot="Panda",
+                     max_tries=1)
+    assert not (tmp_path / "lost.hdf5").exists()
