@@ -299,11 +299,13 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
     :func:`plan_transit` joins the two and the planned joint path is driven as tool poses
     (:func:`_timed`); the path goes on from its end as adapted. A ``held`` object keeps ``margin`` and
     ``slack`` more (:class:`ArmScene`): what it may move in the hand on the way. ``recorded`` (one row of
-    joints per sample of ``P``: the source's, where it was recorded on this arm): the span's end takes the
-    arm's branch nearest the joints the demonstrator's arm had there when that branch is clear, as a
-    start pose does (issue 43, item 3); inverse kinematics along a straight line from the start, with
-    the orientation of the end held all the way, can fold a Panda's elbow the other way round (a wrist
-    that turns a quarter turn to face a door: the elbow on the door's frame).
+    joints per sample of ``P``: the source's, where it was recorded on this arm): on an arm with a joint
+    to spare, the span's end takes the joints nearest those the demonstrator's arm had there when they
+    are clear, as a start pose does (issue 43, item 3): inverse kinematics along a straight line from
+    the start, with the orientation of the end held all the way, leaves a Panda's elbow wherever its
+    spare joint drifts, and folded it the other way round (a wrist that turns a quarter turn to face a
+    door: the elbow on the door's frame). An arm of six joints keeps the branch it is on (the UR5e's
+    recorded branch at one span's end put its upper arm into a bin at a later move: tuning seed 2304).
 
     Returns
     -------
@@ -355,7 +357,7 @@ def free_move(env, obs, P, Q, G, span, *, held=None, random_state=None, margin=M
         a, q = a + 1, nxt
     start = q
     goal = None
-    if recorded is not None and np.shape(recorded)[1:] == np.shape(start):
+    if recorded is not None and np.shape(recorded)[1:] == np.shape(start) and len(start) > 6:
         goal = scene.ik(P[b], Q[b], np.asarray(recorded[b], float))
         if goal is not None and scene.blocking(goal) is not None:
             goal = None
