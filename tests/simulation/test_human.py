@@ -188,7 +188,7 @@ def test_the_command_records_and_refuses_an_existing_file(cli, tmp_path):
     ({"episodes": 0}, "episodes: expected an integer > 0"),
     ({"seed": -1}, "seed: expected an integer"),
     ({"robot": "Puma"}, "robot: expected one of"),
-    ({"env": "robosuite:Door"}, "env: the recorder knows"),
+    ({"env": "robosuite:Wipe"}, "env: the recorder knows"),
     ({"env": "Lift"}, "env: expected robosuite:TASK"),
     ({"max_tries": 0}, "max_tries: expected an integer > 0"),
     ({"demonstrator": "keyboard"}, "demonstrator: expected a HumanDemonstrator"),
