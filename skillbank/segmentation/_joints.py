@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import Demonstration, Joint, fit_joint
+from ..core._joints import _STILL
 from ..core._rotations import log_map, quaternion_conjugate, quaternion_multiply, quaternion_to_matrix
 from ._phases import object_streams
 
@@ -83,10 +84,14 @@ class PartJoints:
         return PartJoints(self.part, self.anchor, joints, self.residual)
 
 
-def _moved(demo, name) -> bool:
-    p, q = demo[f"{name}_pos"], demo[f"{name}_quat"]
-    return bool(np.linalg.norm(p - p[0], axis=1).max() > 1e-4 or
-                np.linalg.norm(log_map(q, q[0]), axis=1).max() > 1e-3)
+def _moved(p, q) -> bool:
+    """Whether poses ``p``, ``q`` moved by more than :func:`~skillbank.core.fit_joint` takes for still."""
+    return bool(np.linalg.norm(p - p[0], axis=1).max() >= _STILL[0] or
+                np.linalg.norm(log_map(q, q[0]), axis=1).max() >= _STILL[1])
+
+
+def _poses(demo, name):
+    return np.asarray(demo[f"{name}_pos"], float), np.asarray(demo[f"{name}_quat"], float)
 
 
 def _in_parent(demo, part, parent):
@@ -131,17 +136,16 @@ def part_joints(demo: Demonstration, part: str) -> PartJoints | None:
     >>> chain.anchor, [j.kind for j in chain.joints], round(float(chain.joints[1].values[-1]), 6)
     ('door', ['revolute', 'revolute'], 0.4)
     """
-    if part not in object_streams(demo) or not _moved(demo, part):
+    if part not in object_streams(demo) or not _moved(*_poses(demo, part)):
         return None
-    p, q = np.asarray(demo[f"{part}_pos"], float), np.asarray(demo[f"{part}_quat"], float)
-    best = PartJoints(part, part, (fit_joint(p, q),), 0.0)
-    best = PartJoints(part, part, best.joints, best.joints[0].residual)
+    own = fit_joint(*_poses(demo, part))
+    best = PartJoints(part, part, (own,), own.residual)
     for parent in object_streams(demo):
-        if parent == part or not _moved(demo, parent):
+        if parent == part or not _moved(*_poses(demo, parent)):
             continue
-        outer = fit_joint(demo[f"{parent}_pos"], demo[f"{parent}_quat"])
+        outer = fit_joint(*_poses(demo, parent))
         local = _in_parent(demo, part, parent)
-        if not _moved(Demonstration(demo.t, {"x_pos": local[0], "x_quat": local[1]}), "x"):
+        if not _moved(*local):
             continue  # the part rode with its parent: the parent's joint alone is the part's
         inner = fit_joint(*local)
         chain = PartJoints(part, parent, (inner, outer), inner.residual + outer.residual)

@@ -151,10 +151,20 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     frames = None
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         frames = quaternion_to_matrix(check_quaternions(demo["orientation"], name="orientation"))
-    carried, ends, chains = [], [], {}
+    carried, ends = [], []
     # the gripper commanded shut all along (robosuite's actions), where the primitive records it
     closed = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and bool(
         np.all(demo["actions"][:, 6] > 0))
+    went, jointed = {}, {}  # how far each object went (with the tool or not); the joints that explain it
+
+    def joints_of(name):
+        """The chain of joints that explains the object's poses to a hundredth of how far it went, or
+        None (a part of an articulated object moves about its joints; a carried box does not)."""
+        if name not in jointed:
+            chain = part_joints(demo, name)
+            jointed[name] = chain if chain is not None and chain.residual < 0.01 * went[name] else None
+        return jointed[name]
+
     for name in object_streams(demo):
         where = demo[f"{name}_pos"]
         gap = np.linalg.norm(where - P, axis=1)
@@ -166,15 +176,14 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             offset = np.einsum("nji,nj->ni", frames, offset)
         off = np.flatnonzero(np.linalg.norm(offset - offset[0], axis=1) > rigid)
         held = len(gap) if off.size == 0 else int(off[0])
-        if held < len(gap) / 2 and np.linalg.norm(where - where[0], axis=1).max() > moved and closed:
+        went[name] = float(np.linalg.norm(where - where[0], axis=1).max())
+        if held < len(gap) / 2 and went[name] > moved and closed and joints_of(name) is not None:
             # a part of an articulated object (a door's lever) pivots and slides between fingers that
             # give, 3 cm of a 16 cm pull, but it goes where its joints take it: when the gripper is
-            # commanded shut all along and one chain of joints explains the part's poses to within a
-            # hundredth of its travel, it is held while the tool moves it (a lever springing back as
-            # the hand lets go and leaves moves about its joint too, with the gripper open)
-            chain = chains[name] = part_joints(demo, name)
-            if chain is not None and chain.residual < 0.01 * np.linalg.norm(where - where[0], axis=1).max():
-                held = len(gap)
+            # commanded shut all along and one chain of joints explains the part's poses, it is held
+            # while the tool moves it (a lever springing back as the hand lets go and leaves moves about
+            # its joint too, with the gripper open)
+            held = len(gap)
         # it moved, and the tool's motion explains it (a cube settling at reset while the hand waits
         # above it moves too), for most of the primitive (an object that settles as the tool sets off
         # moves with it for a sample or two)
@@ -206,14 +215,12 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             target = min(others)[1]
             target_pose = end_pose(target, -1)
     joints = ()
-    if carried:  # what one chain of joints explains of the carried object's motion (a door's handle)
-        chain = chains[name] if name in chains else part_joints(demo, name)
-        travel = float(np.linalg.norm(demo[f"{name}_pos"] - demo[f"{name}_pos"][0], axis=1).max())
-        if chain is not None and chain.residual < 0.01 * travel:
-            outer = len(chain.joints) - 1
-            joints = tuple({"kind": j.kind, "in": "world" if k == outer else chain.anchor,
-                            "value": round(float(j.values[np.argmax(np.abs(j.values))]), 4)}
-                           for k, j in enumerate(chain.joints))
+    chain = joints_of(name) if carried else None  # what a carried part moved about (a door's handle)
+    if chain is not None:
+        outer = len(chain.joints) - 1
+        joints = tuple({"kind": j.kind, "in": "world" if k == outer else chain.anchor,
+                        "value": round(float(j.values[np.argmax(np.abs(j.values))]), 4)}
+                       for k, j in enumerate(chain.joints))
     return Relation(name, bool(carried), float(np.linalg.norm(P[-1] - demo[f"{name}_pos"][-1])), position,
                     orientation, start_position, start_orientation, target, *target_pose, joints)
 

@@ -901,6 +901,27 @@ def _path_rigid(seg, obs):
             np.concatenate([np.full(RIGID_BLEND, grip[0]), grip]))
 
 
+def _adapted_from(seg):
+    """The samples of a segment's primitive that its path is adapted from: a reach from its last try
+    (:func:`_last_try`), anything else whole."""
+    demo = seg.primitive.demo
+    if seg.relation is not None and not seg.relation.moves_with:
+        demo = demo.slice(_last_try(demo), demo.n_steps)
+    return demo
+
+
+def _control_times(t):
+    """The control steps' times over the span of times ``t`` (at least two)."""
+    n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
+    return np.linspace(t[0], t[-1], n)
+
+
+def _grip_at(commands, t, ts):
+    """The gripper commands ``commands``, spread evenly over the span of ``t``, at times ``ts``."""
+    src_t = np.linspace(t[0], t[-1], len(commands))
+    return _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
+
+
 def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     """The primitive adapted by ``method`` from the robot's pose to the scene's goal, at the control rate.
 
@@ -908,9 +929,7 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     opened again is not part of the skill, and replayed by another gripper, whose fingers reach lower,
     it closes on the object and pushes it away.
     """
-    demo = seg.primitive.demo
-    if seg.relation is not None and not seg.relation.moves_with:
-        demo = demo.slice(_last_try(demo), demo.n_steps)
+    demo = _adapted_from(seg)
     goal_p, goal_q = _goal(seg, obs, fingers, reachable)
     # the second half closes in as the source did: its path moved rigidly so that its end is the goal,
     # pinned by via points; the first half is the representation's to adapt from where the robot is
@@ -938,14 +957,11 @@ def _path_adapted(seg, obs, method, random_state, fingers=None, reachable=None):
     result = reuse([demo], constraints, method=method, random_state=random_state)
     traj = result.trajectory
     t = np.asarray(traj.t, float)
-    n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
-    ts = np.linspace(t[0], t[-1], n)
+    ts = _control_times(t)
     P = np.column_stack([np.interp(ts, t, traj["position"][:, j]) for j in range(3)])
     Q = _oriented(seg, obs, (ts - ts[0]) / max(ts[-1] - ts[0], 1e-12), goal_q)
     commands = traj["actions"][:, 6] if "actions" in traj.streams else demo["actions"][:, 6]
-    src_t = np.linspace(t[0], t[-1], len(commands))
-    grip = _grip(commands[np.clip(np.searchsorted(src_t, ts), 0, len(commands) - 1)])
-    return P, Q, grip
+    return P, Q, _grip_at(commands, t, ts)
 
 
 def _recorded_joints(seg, env, n):
@@ -955,9 +971,7 @@ def _recorded_joints(seg, env, n):
     demo = seg.primitive.demo
     if "robot0_joint_pos" not in demo.streams or recorded_robot(demo) != env.robots[0].name:
         return None
-    if seg.relation is not None and not seg.relation.moves_with:
-        demo = demo.slice(_last_try(demo), demo.n_steps)
-    J = np.asarray(demo["robot0_joint_pos"], float)
+    J = np.asarray(_adapted_from(seg)["robot0_joint_pos"], float)
     return J[np.round(np.linspace(0, len(J) - 1, n)).astype(int)]
 
 
@@ -987,13 +1001,10 @@ def _path_articulated(seg, obs, chain):
     """
     demo = seg.primitive.demo
     t = np.asarray(demo.t, float)
-    n = max(2, int(round((t[-1] - t[0]) * CONTROL_FREQ)) + 1)
-    ts = np.linspace(t[0], t[-1], n)
-    commands = demo["actions"][:, 6]
-    grip = _grip(commands[np.clip(np.searchsorted(np.linspace(t[0], t[-1], len(commands)), ts), 0,
-                                  len(commands) - 1)])
+    ts = _control_times(t)
+    grip = _grip_at(demo["actions"][:, 6], t, ts)
     if chain is None:
-        return np.zeros((n, 0)), grip, None, None
+        return np.zeros((len(ts), 0)), grip, None, None
     stretch = _catch_up(demo, obs, seg, chain) if len(chain.joints) > 1 else 1.0
     values = np.column_stack([np.interp(ts, t, j.values) * (stretch if k == 0 else 1.0)
                               for k, j in enumerate(chain.joints)])
@@ -1032,13 +1043,7 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     bounds the rest.
     """
     obs = episode.obs
-    names = {chain.part: seg.scene(chain.part), chain.anchor: seg.scene(chain.anchor)}
-
-    def poses(o):
-        return {k: (np.asarray(o[f"{v}_pos"], float), np.asarray(o[f"{v}_quat"], float))
-                for k, v in names.items()}
-
-    start = poses(obs)
+    start = _chain_poses(obs, seg, chain)
     p0, q0 = np.asarray(obs["robot0_eef_pos"], float), np.asarray(obs["robot0_eef_quat"], float)
     travel = values[np.argmax(np.abs(values), axis=0), np.arange(values.shape[1])]  # signed, per joint
     most = 0.25 * np.abs(travel)
@@ -1052,7 +1057,7 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     while not episode.over:
         j = int(at)
         want = values[j] + (at - j) * (values[min(j + 1, last)] - values[j])
-        measured = chain.measure(start, poses(episode.obs))
+        measured = chain.measure(start, _chain_poses(episode.obs, seg, chain))
         lag = (want - measured) * np.sign(travel)
         if at >= last and np.all(lag <= 0.0):
             # where the source left it, or past it (a lever the door's swing pressed further): not a
@@ -1080,24 +1085,26 @@ def _drive_jointed(episode, seg, values, grip, chain, slip):
     return p
 
 
+def _chain_poses(obs, seg, chain):
+    """``{name: (position, quaternion)}`` of a chain's part and anchor (the source's names) in the scene
+    ``obs`` shows, as :meth:`~skillbank.segmentation.PartJoints.measure` takes them."""
+    return {k: (np.asarray(obs[f"{seg.scene(k)}_pos"], float), np.asarray(obs[f"{seg.scene(k)}_quat"], float))
+            for k in (chain.part, chain.anchor)}
+
+
 def _catch_up(demo, obs, seg, chain):
     """The factor on the source's values of a part's joint in its parent (a handle's latch in its door)
     that brings it to the same angle in the parent as the source brought it to, from where it stands now.
 
     The source's hand had already pressed the lever a little as its fingers closed (0.3 rad in a
     person's demonstration): turned by as much again, a lever that stands at rest in a new scene stops
-    short of where the latch lets go. The part's angle in its parent now, against the source's as its
-    carry began, is read from both poses about the joint's axis (in the parent's frame); the values are
-    stretched so that their furthest reaches the source's furthest angle.
+    short of where the latch lets go. How far the part stands in its parent now past where the source's
+    stood as its carry began is the chain's own measure of its inner joint
+    (:meth:`~skillbank.segmentation.PartJoints.measure`, the source's poses against this scene's); the
+    values are stretched so that their furthest reaches the source's furthest angle.
     """
-    part, anchor = chain.part, chain.anchor
-    src = quaternion_multiply(quaternion_conjugate(demo[f"{anchor}_quat"][0]), demo[f"{part}_quat"][0])
-    here = quaternion_multiply(quaternion_conjugate(np.asarray(obs[f"{seg.scene(anchor)}_quat"], float)),
-                               np.asarray(obs[f"{seg.scene(part)}_quat"], float))
-    # the joint's axis was fitted in the parent's first pose, shown in the world; into the parent's frame
-    axis = quaternion_to_matrix(demo[f"{anchor}_quat"][0]).T @ chain.joints[0].axis
-    ahead = float(log_map(quaternion_multiply(quaternion_conjugate(src), here)) @ (
-        quaternion_to_matrix(src).T @ axis))  # how far the part stands past the source's start, about it
+    source = {k: (demo[f"{k}_pos"][0], demo[f"{k}_quat"][0]) for k in (chain.part, chain.anchor)}
+    ahead = float(chain.measure(source, _chain_poses(obs, seg, chain))[0])
     values = np.asarray(chain.joints[0].values, float)
     furthest = float(values[np.argmax(np.abs(values))])
     if abs(furthest) < 1e-6:

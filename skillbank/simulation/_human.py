@@ -21,7 +21,19 @@ import numpy as np
 
 from ..core._rotations import log_map, quaternion_conjugate, quaternion_multiply, quaternion_to_matrix
 from ..core._validation import check_fraction, check_positive
-from ._robosuite import CONTROL_FREQ, TASKS, Task, _box, _closing_axis, _objects, _yaw, with_object_poses
+from ._robosuite import (
+    CONTROL_FREQ,
+    TASKS,
+    Task,
+    _box,
+    _closing_axis,
+    _joint_now,
+    _objects,
+    _rotation,
+    _turn_way,
+    _yaw,
+    with_object_poses,
+)
 
 __all__ = ["HumanDemonstrator"]
 
@@ -209,19 +221,14 @@ class _Operator:
         self.idle(max(1, int(round(self.rng.uniform(*seconds) * CONTROL_FREQ))))
 
     def tap(self, key: int, sign: float):
-        action = np.zeros(7)
-        action[key] = sign * (self.h.pulse if key < 3 else self.h.turn_pulse)
-        action[6] = self.grip
-        for _ in range(self.h.pulse_steps):
-            self._step(action)
-        self.idle(self.rng.integers(self.h.gap[0], self.h.gap[1] + 1))
-        if self.rng.random() < self.h.pause_probability:
-            self.wait(self.h.pause)
+        puck = np.zeros(6)
+        puck[key] = sign * (self.h.pulse if key < 3 else self.h.turn_pulse)
+        self.push(puck, self.h.pulse_steps)
 
     def push(self, puck, steps: int, *, gap=True):
         """The puck of a SpaceMouse held at ``puck`` (six numbers in [-1, 1], the controller's input: moves
-        along and turns about the world's axes) for ``steps`` control steps, then (``gap``) let go for a
-        gap, as :meth:`tap`."""
+        along and turns about the world's axes; a key's tap is one of them) for ``steps`` control steps,
+        then (``gap``) let go for a gap between taps, and now and then a pause to look."""
         action = np.zeros(7)
         action[:6] = np.asarray(puck, float)
         action[6] = self.grip
@@ -447,17 +454,14 @@ class _Operator:
     def _joint(self, name) -> tuple:
         """``(axis, anchor, value)`` of a joint of the scene, as the person sees the part turn about it."""
         sim = self.sim_env.sim
-        j = sim.model.joint_name2id(name)
-        return (np.array(sim.data.xaxis[j], float), np.array(sim.data.xanchor[j], float),
-                float(sim.data.qpos[sim.model.jnt_qposadr[j]]))
+        return _joint_now(sim, sim.model.joint_name2id(name))
 
     def open(self, task: Task):
         """Point the hand at the part, take it, and move it about each of its joints in turn.
 
-        Keys move the tool along and turn it about the world's axes; the person turns the wrist until it
-        points at the door with the fingers across the lever, comes in, closes, then presses the lever
-        down and pulls the door with short taps, each time tapping the key that brings the hand nearest
-        to where the part is going (the hand held by the handle drifts off the arc between taps).
+        With key taps the person turns the wrist until it points at the door with the fingers across the
+        lever, and comes in and closes; then works each joint with a SpaceMouse's pushes
+        (:meth:`turn_part`).
         """
         sim = self.sim_env.sim
         site = lambda: np.array(sim.data.site_xpos[sim.model.site_name2id(task.site)], float)  # noqa: E731
@@ -483,22 +487,16 @@ class _Operator:
             self.idle(1)
 
     def turn_part(self, task: Task, name: str, angle: float, site):
-        """Taps that carry the held part ``angle`` radians about joint ``name`` (toward the side of its
-        range with room; with room both ways, the part's far end down).
+        """Pushes that carry the held part ``angle`` radians about joint ``name`` (the way
+        :func:`_turn_way` says: toward the side of its range with room, else the part's far end down).
 
-        The person watches the part and, tap by tap, presses the key (a move along or a turn about a world
-        axis) that most reduces how far the hand is from where it would be with the part a little further
-        on, each error weighed by what one tap does (:attr:`travel`).
+        The person watches the part and pushes the puck toward where the hand would be with the part a
+        little further on, moving and turning at once, until the part has gone ``angle`` or as far as it
+        goes; a part that will not move ends the episode.
         """
         sim = self.sim_env.sim
-        j = sim.model.joint_name2id(name)
-        low, high = (float(v) for v in sim.model.jnt_range[j])
         axis, anchor, start = self._joint(name)
-        if abs((high - start) - (start - low)) > 1e-6:
-            sign = 1.0 if high - start > start - low else -1.0
-        else:
-            lever = site() - anchor
-            sign = 1.0 if np.cross(axis, lever)[2] < 0 else -1.0
+        sign = _turn_way(sim, sim.model.joint_name2id(name), site())
         p0, q0 = self.tool(), np.asarray(self.obs["robot0_eef_quat"], float)
         reached = 0.0  # how far the hand has been asked to go: a person pushes on, never back
         best, since = 0.0, 0  # the furthest the part has gone, and the pushes since it went further
@@ -513,7 +511,7 @@ class _Operator:
             # each push, or to a little past where the part is, up to a little past the aim
             reached = min(1.15 * angle, max(reached + 0.04, done + 0.1))
             ahead = sign * reached
-            turn = np.r_[axis * math.sin(ahead / 2), math.cos(ahead / 2)]
+            turn = _rotation(axis, ahead)
             want_p = anchor + quaternion_to_matrix(turn) @ (p0 - anchor)
             want_q = quaternion_multiply(turn, q0)
             now_q = np.asarray(self.obs["robot0_eef_quat"], float)

@@ -296,6 +296,24 @@ def _rotation(axis, angle) -> np.ndarray:
     return np.r_[np.asarray(axis, float) * math.sin(angle / 2), math.cos(angle / 2)]
 
 
+def _joint_now(sim, j) -> tuple:
+    """``(axis, anchor, value)`` of joint ``j`` of the scene as it stands: its axis and a point on it in
+    the world, and its position."""
+    return (np.array(sim.data.xaxis[j], float), np.array(sim.data.xanchor[j], float),
+            float(sim.data.qpos[sim.model.jnt_qposadr[j]]))
+
+
+def _turn_way(sim, j, site) -> float:
+    """+1 or -1: the way a demonstrator turns joint ``j``: toward the side of its range with room (a door
+    pulled open from its stop); with room both ways, so that the part's far end ``site`` goes down (a
+    lever is pressed, not lifted)."""
+    axis, anchor, value = _joint_now(sim, j)
+    low, high = (float(v) for v in sim.model.jnt_range[j])
+    if abs((high - value) - (value - low)) > 1e-6:
+        return 1.0 if high - value > value - low else -1.0
+    return 1.0 if np.cross(axis, np.asarray(site, float) - anchor)[2] < 0 else -1.0
+
+
 def _articulated(driver, env, task: Task, rng, steps):
     """Grasp an articulated object's part and move it about its joints (``task.turns``), in order.
 
@@ -307,7 +325,7 @@ def _articulated(driver, env, task: Task, rng, steps):
     model, data = env.sim.model, env.sim.data
     site = np.array(data.site_xpos[model.site_name2id(task.site)], float)
     joints = [model.joint_name2id(name) for name, _ in task.turns]
-    axis, anchor = np.array(data.xaxis[joints[0]], float), np.array(data.xanchor[joints[0]], float)
+    axis, anchor, _ = _joint_now(env.sim, joints[0])
     inward = axis if (anchor - site) @ axis > 0 else -axis
     along = (anchor - site) - inward * ((anchor - site) @ inward)  # from the part's end toward its joint
     grasp = site + along / max(np.linalg.norm(along), 1e-9) * (task.site_in + rng.uniform(-0.005, 0.005))
@@ -325,17 +343,8 @@ def _articulated(driver, env, task: Task, rng, steps):
     driver.move(grasp, steps(0.8), within=0.003)
     driver.hold(steps(rng.uniform(0.4, 0.7)), grip=1.0)
     for j, (_, angle) in zip(joints, task.turns, strict=True):
-        axis, anchor = np.array(data.xaxis[j], float), np.array(data.xanchor[j], float)
-        low, high = (float(v) for v in model.jnt_range[j])
-        value = float(data.qpos[model.jnt_qposadr[j]])
-        if high - value > value - low + 1e-6:
-            sign = 1.0
-        elif value - low > high - value + 1e-6:
-            sign = -1.0
-        else:  # room both ways: the part's far end goes down (a lever is pressed, not lifted)
-            lever = site - anchor
-            sign = 1.0 if (_axis_turn(axis, 0.1) @ lever)[2] < lever[2] else -1.0
-        angle = sign * angle * rng.uniform(0.95, 1.05)
+        axis, anchor, _ = _joint_now(env.sim, j)
+        angle = _turn_way(env.sim, j, site) * angle * rng.uniform(0.95, 1.05)
         q0, p0 = driver.quat.copy(), np.array(driver.obs["robot0_eef_pos"], float)
         for s in _min_jerk(steps(2.0 * abs(angle)))[1:]:
             driver.quat = quaternion_multiply(_rotation(axis, s * angle), q0)
