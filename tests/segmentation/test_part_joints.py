@@ -103,3 +103,13 @@ def test_a_lever_that_slides_in_fingers_held_shut_is_carried_a_lever_let_go_is_n
         assert kinds == [("revolute", "door"), ("revolute", "world")]
         assert [abs(j["value"]) for j in relation.joints] == pytest.approx([1.3, 0.4])
         assert type(relation).from_dict(relation.to_dict()).joints == relation.joints
+
+
+@pytest.mark.parametrize("joints", [{"kind": "revolute"}, [{"kind": "revolute", "in": "door"}], ["x"]])
+def test_a_relation_whose_joints_are_not_as_written_is_refused_in_one_line(joints):
+    from skillbank.selection import Relation
+
+    doc = Relation("handle", True, 0.02, np.zeros(3), None).to_dict()
+    doc["joints"] = joints
+    with pytest.raises(ValueError, match=r"^relation: expected joints as a list of \{kind, in, value\}"):
+        Relation.from_dict(doc)
