@@ -22,6 +22,7 @@ Examples
 ['joints', 'position', 'orientation', 'force', 'torque', 'gripper']
 """
 
+from ._arms import ARM_INDEX, arm_count, split_arms
 from ._confine import atomic_output, check_input_file, check_output_path
 from ._detect import detect_format, load, load_all
 from ._errors import FormatError
@@ -54,6 +55,9 @@ from ._trajectory_export import TRAJECTORY_FORMATS, trajectory_format, write_tra
 
 __all__ = [
     "FormatError",
+    "split_arms",
+    "arm_count",
+    "ARM_INDEX",
     "check_input_file",
     "atomic_output",
     "check_output_path",

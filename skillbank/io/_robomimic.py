@@ -10,6 +10,7 @@ import numpy as np
 from ..core import POSE_OF, Demonstration, check_pose_of
 from ..core._pose_point import offset_pose_of
 from ..core._validation import check_positive, summarise
+from ._arms import split_arms
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
 from ._h5 import open_h5
@@ -185,7 +186,31 @@ def read_robomimic(path, *, episodes=None, filter_key=None, obs_keys=None,
         arm = _arm(p, data, env_args)
         if arm is not None:
             common["arm"] = arm
-        return [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
+        demos = [_demo(p, data[numbers[n]], numbers[n], n, obs_keys, hz, common, budget) for n in chosen]
+        robots, points = _robots(p, data, env_args)
+    # a recording of several arms: one demonstration per arm (a library learns each arm's motion)
+    return [arm for demo in demos for arm in split_arms(demo, robots=robots, pose_of=points)]
+
+
+def _robots(path, data, env_args) -> tuple:
+    """The recorded arms' names and the point each one's poses are of, by index, for a recording of
+    several arms (skillbank's recorder: ``data.attrs["robots"]``; else ``env_args`` and each default
+    gripper's grip site); ``(None, None)`` where nothing says."""
+    raw = data.attrs.get("robots")
+    if raw is not None:
+        with reading(path, "invalid JSON in data.attrs['robots']"):
+            listed = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
+        if isinstance(listed, list) and all(isinstance(r, dict) for r in listed):
+            return ([r.get("name") for r in listed],
+                    [check_pose_of(r["pose_of"], name=f"{path}: data.attrs['robots'][{k}]['pose_of']")
+                     if isinstance(r.get("pose_of"), str) else None for k, r in enumerate(listed)])
+    kwargs = env_args.get("env_kwargs") or {}
+    robots = kwargs.get("robots")
+    if not (isinstance(robots, list) and all(isinstance(r, str) for r in robots)):
+        return None, None
+    default = kwargs.get("gripper_types", "default") in ("default", None) or kwargs.get("gripper_types") == [
+        "default"] * len(robots)
+    return robots, [ROBOSUITE_POSE_OF.get(r.lower()) if default else None for r in robots]
 
 
 #: skillbank's stream, robosuite's observation of it and its width (None: any): the tool position (m,

@@ -29,6 +29,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..core import POSE_OF, Demonstration, matrix_to_quaternion
+from ._arms import split_arms
 from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
 from ._h5 import open_h5
@@ -40,7 +41,8 @@ __all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_ro
 
 #: Largest distance (m) between the tool in the recorded world and in today's robosuite, same states.
 WORLD_TOLERANCE = 1e-3
-#: The observations kept: the robot's (as skillbank's recorder keeps them) and every object's pose.
+#: The observations kept: each arm's (as skillbank's recorder keeps them; ``robot1_...`` for a second arm)
+#: and every object's pose.
 ROBOT_OBS = ("robot0_eef_pos", "robot0_eef_quat", "robot0_joint_pos", "robot0_gripper_qpos")
 #: Largest recorded MJCF read for the world check (bytes); robosuite's worlds are 30-200 kB.
 MAX_MODEL_BYTES = 8 << 20
@@ -217,7 +219,8 @@ def _replay(env, states) -> dict:
         sim.set_state_from_flattened(s)
         sim.forward()
         rows.append(with_object_poses(env, env._get_observations(force_update=True)))
-    keys = [k for k in ROBOT_OBS if k in rows[0]]
+    keys = [k.replace("robot0_", f"robot{i}_") for i in range(len(env.robots)) for k in ROBOT_OBS]
+    keys = [k for k in keys if k in rows[0]]
     keys += [f"{o}_{part}" for o in robosuite_objects(rows[0]) for part in ("pos", "quat")]
     return {k: np.stack([np.asarray(r[k], float).reshape(-1) for r in rows]) for k in keys}
 
@@ -359,23 +362,25 @@ def read_robosuite_raw(path, *, episodes=None, check_world: bool = True) -> list
             check = ({"checked": False, "why": "not asked"} if not check_world else
                      {"checked": False, "why": "the file records no model_file"} if xml is None else
                      _world_check(p, env, xml, states, obs["robot0_eef_pos"]))
-            out.append(_demonstration(p, group_name, n, obs, actions, name, world, version, check))
+            out.extend(_demonstration(p, group_name, n, obs, actions, name, world, version, check))
     finally:
         env.close()
     return out
 
 
-def _demonstration(p, group_name, number, obs, actions, name, world, version, check) -> Demonstration:
+def _demonstration(p, group_name, number, obs, actions, name, world, version, check) -> list:
+    """The recorded episode's demonstrations: one per arm (:func:`~skillbank.io.split_arms`)."""
     streams = dict(obs)
     metadata = {"source": str(p), "format": "robosuite-raw", "demo": group_name, "episode": number,
                 "label": name, "arm": world["robots"][0], "rate_hz": DEFAULT_CONTROL_FREQ,
                 "rate_from": "default", "world_check": check}
     if version is not None:
         metadata["robosuite_version"] = str(version.decode() if isinstance(version, bytes) else version)
-    point = ROBOSUITE_POSE_OF.get(world["robots"][0].lower()) if world.get("gripper_types", "default") in (
-        "default", ["default"], None) and len(world["robots"]) == 1 else None
-    if point is not None:
-        metadata[POSE_OF] = point
+    default = world.get("gripper_types", "default") in ("default", None) or world.get("gripper_types") == [
+        "default"] * len(world["robots"])
+    points = [ROBOSUITE_POSE_OF.get(r.lower()) if default else None for r in world["robots"]]
+    if points[0] is not None:
+        metadata[POSE_OF] = points[0]
     if actions is not None and len(actions) == len(next(iter(obs.values()))):
         streams["actions"] = actions
     for stream, key, _ in STANDARD_STREAMS:
@@ -384,4 +389,5 @@ def _demonstration(p, group_name, number, obs, actions, name, world, version, ch
             metadata.setdefault("renamed", {})[key] = stream
     n = len(streams["position"])
     with reading(p, f"invalid demonstration '{group_name}'"):
-        return Demonstration(np.arange(n) / DEFAULT_CONTROL_FREQ, streams, metadata)
+        demo = Demonstration(np.arange(n) / DEFAULT_CONTROL_FREQ, streams, metadata)
+        return split_arms(demo, robots=world["robots"], pose_of=points)

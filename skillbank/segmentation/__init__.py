@@ -9,10 +9,12 @@ default window. :func:`demonstration_phases` is **the** home of a manipulation
 demonstration's phases (reach, carry, retreat, per object), where the segmenter
 cuts it and which relations, evaluation and composition read; :func:`part_joints`,
 the joints a carried part of an articulated object moved about (a handle's
-latch, then its door's hinge), found from the recorded poses.
+latch, then its door's hinge), found from the recorded poses; :func:`arm_constraints`, when
+one arm's segment of a two-arm recording waited for the other arm's.
 The other helpers live in the private modules and may change without notice.
 """
 
+from ._arms import ArmSpan, arm_constraints
 from ._changepoints import detect_changepoints
 from ._gate import gate_changepoints
 from ._joints import PartJoints, part_joints
@@ -27,5 +29,5 @@ __all__ = [
     "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
     "motion_time_scale", "speed_correlation_time",
     "Phase", "PHASE_KINDS", "demonstration_phases", "carried", "object_streams",
-    "PartJoints", "part_joints",
+    "PartJoints", "part_joints", "ArmSpan", "arm_constraints",
 ]

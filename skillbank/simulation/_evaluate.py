@@ -49,12 +49,14 @@ from ..core import (
 )
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
+from ..io import ARM_INDEX
 from ..robots import MotionPlanningError
-from ..segmentation import part_joints
+from ..segmentation import ArmSpan, arm_constraints, part_joints
 from ..selection import METHODS, acted_on, object_streams, reuse
 from ..store import open_store
 from ._arms import check_pads, pose_points
 from ._episodes import check_episode_cluster, fresh, run_episodes
+from ._lockstep import ArmEnv, Lockstep, Stopped, arm_obs
 from ._robosuite import (
     CONTROL_FREQ,
     _box,
@@ -153,6 +155,8 @@ class _Source:
     segments: list = field(default_factory=list)
     robot: str | None = None  # the arm it was recorded on, where the recording says
     pose_of: str | None = None  # the point of that arm its poses are of (metadata["pose_of"]), if said
+    arm: int = 0  # which arm of a recording of several (metadata["arm_index"]; robosuite's robotK_)
+    recording: tuple = ()  # the recorded episode (file, episode): the arms of one recording share it
 
 
 def _pose(demo, obj, k):
@@ -316,7 +320,9 @@ def _choose_frames(sources):
     groups = {}
     for src in sources:
         for seg in src.segments:
-            key = (seg.primitive.cluster, _signature(seg.relation))
+            # one arm's members only: two arms' reaches may be one skill (each for its handle of a pot),
+            # but each arm ends where it does on the object, and they would blur each other's frame
+            key = (seg.primitive.cluster, _signature(seg.relation), src.arm)
             groups.setdefault(key, []).append(seg)
     for members in groups.values():
         frames = _candidate_frames(members[0].relation, members[0].released)
@@ -408,11 +414,17 @@ def _sources(store):
             raise ValueError(f"{store.location}: demonstration {demo_id}'s actions have "
                              f"{demo['actions'].shape[1]} columns; expected robosuite's 7 (OSC pose deltas "
                              "and the gripper) of a one-arm robot")
+        meta = demo.metadata
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
                       np.asarray(demo["actions"], float), robot=recorded_robot(demo),
-                      pose_of=demo.metadata.get(POSE_OF))
+                      pose_of=meta.get(POSE_OF), arm=int(meta.get(ARM_INDEX, 0)),
+                      recording=(str(meta.get("source")), str(meta.get("demo", meta.get("episode")))))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
+            if relation is None and p.demo["actions"][-1, 6] > 0 > p.demo["actions"][0, 6]:
+                # a reach that closes the gripper grasps something: the nearest object, however far its
+                # grip is from the object's origin (a pot's handle, 17 cm out)
+                relation = acted_on(p.demo, near=10.0)  # m: anywhere in an arm's reach
             released = _released(p.demo)
             src.segments.append(_Segment(p, relation, _candidate_frames(relation, released)[0],
                                          released=released))
@@ -620,8 +632,10 @@ class _Contacts:
         # a geom without a name (robosuite's bins) goes by its body's
         names = [model.geom_id2name(i) or model.body_id2name(model.geom_bodyid[i]) or f"geom {i}"
                  for i in range(model.ngeom)]
-        self.arm = np.array([n.startswith("robot0_") for n in names])
-        self.robot = np.array([n.startswith(("robot0_", "gripper0_", "mount0_", "fixed_mount0_"))
+        # the arm's own prefix (robot1_ for the second arm of a two-arm task): another arm is scene to it
+        k = env.robots[0].robot_model.naming_prefix[len("robot"):-1]
+        self.arm = np.array([n.startswith(f"robot{k}_") for n in names])
+        self.robot = np.array([n.startswith((f"robot{k}_", f"gripper{k}_", f"mount{k}_", f"fixed_mount{k}_"))
                                for n in names])
         self.names, self.data = names, env.sim.data._data
 
@@ -1303,17 +1317,23 @@ def _check(seg, before, episode):
     return None
 
 
-def _run_segments(episode, segments, actions, method, random_state, timings, misses=None, planner="none"):
+def _run_segments(episode, segments, actions, method, random_state, timings, misses=None, planner="none",
+                  gate=None):
     """Run ``segments`` (of one source, whose recorded ``actions`` replay uses); ``(index, reason, detail)``
     of the first failure, or None. With a list ``misses``, a tool that stops short of a segment's goal is
     noted there instead of being a failure. ``planner="ompl"``: each adapted segment's free span is
     planned for the whole arm where its path would bring a body near the scene
-    (:func:`~skillbank.simulation._transit.free_move`)."""
+    (:func:`~skillbank.simulation._transit.free_move`). ``gate(i)``: called before segment ``i`` begins
+    (an arm of several waits there for the others, :func:`_evaluate_arms_episode`)."""
     let_go = False  # whether the last segment opened the gripper: what follows only leaves
     for i, seg in enumerate(segments):
         if episode.over:
             break
         episode.segment = i
+        if gate is not None:
+            gate(i)
+            if episode.over:
+                break
         before = {k: np.array(v, float) for k, v in episode.obs.items() if isinstance(v, np.ndarray)}
         goal = None  # the tool's, where the segment was adapted (replay has none)
         if method == "replay":  # the source's own actions over the segment's samples, open loop
@@ -1455,13 +1475,13 @@ def _horizon(groups) -> int:
     return max(DEFAULT_HORIZON, int(need))
 
 
-def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT):
+def _make(suite, task, seed, horizon, robot=DRIVEN_ROBOT, arms=1):
     if task not in suite.ALL_ENVIRONMENTS:
         raise ValueError(f"env: robosuite has no task {task!r}; its tasks are "
                          f"{sorted(suite.ALL_ENVIRONMENTS)}")
     # hard_reset=False: robosuite then keeps its model and placement samplers across resets, so the
     # widened ranges and the episode's generator stay where they were put
-    env = suite.make(task, robots=[robot], control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
+    env = suite.make(task, robots=[robot] * arms, control_freq=CONTROL_FREQ, horizon=horizon, seed=int(seed),
                      has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
                      ignore_done=True, reward_shaping=False, hard_reset=False)
     try:
@@ -1486,6 +1506,8 @@ class _Evaluation:
     random_state: object
     paths: bool
     planner: str = "ompl"  # free spans planned for the whole arm (_transit); "none": as adapted
+    arms: int = 1  # the task's arms: with several, each group is the recordings' demonstrations per arm
+    sync: bool = True  # whether an arm waits where its recording says it waited for another
 
 
 def _evaluate_episode(job, seed):
@@ -1556,10 +1578,157 @@ def _evaluate_episode(job, seed):
     return row, timings
 
 
+def _arm_recordings(sources, arms: int) -> list:
+    """The library's recordings of a task of ``arms`` arms: per recording, its demonstration of each arm,
+    in arm order."""
+    recordings = {}
+    for src in sources:
+        recordings.setdefault(src.recording, {}).setdefault(src.arm, []).append(src)
+    out = []
+    for by_arm in recordings.values():
+        ids = sorted({s.id for v in by_arm.values() for s in v})
+        if sorted(by_arm) != list(range(arms)):
+            raise ValueError(f"the library's demonstration(s) {ids} are of arm(s) {sorted(by_arm)} of a "
+                             f"recording of {arms} arms; add every arm's demonstration of it (library add "
+                             "reads them all from the recording)")
+        if any(len(v) > 1 for v in by_arm.values()):
+            raise ValueError(f"the library's demonstrations {ids} move several objects in turn with one arm "
+                             "of a two-arm recording; a two-arm task is run from recordings in which each "
+                             "arm acts on one object")
+        out.append([by_arm[k][0] for k in range(arms)])
+    return out
+
+
+def _rest_arms(env, obs, objects, arms, *, most=2 * CONTROL_FREQ, still=0.5e-3):
+    """:meth:`_Episode.rest` for every arm at once: hold still until the objects do."""
+    where = np.array([obs[f"{o}_pos"] for o in objects])
+    for _ in range(most):
+        obs = with_object_poses(env, env.step(np.tile(np.r_[np.zeros(6), -1.0], arms))[0])
+        now = np.array([obs[f"{o}_pos"] for o in objects])
+        if np.abs(now - where).max() < still:
+            break
+        where = now
+    return obs
+
+
+def _arm_spans(src) -> list:
+    """The source's segments on its recording's clock, and whether each began holding on."""
+    return [ArmSpan(int(seg.primitive.start), int(seg.primitive.stop),
+                    bool(src.actions[seg.primitive.start, 6] > 0)) for seg in src.segments]
+
+
+def _evaluate_arms_episode(job, seed):
+    """:func:`_evaluate_episode` for a task of several arms: each arm runs its demonstration of the nearest
+    recording in a thread of its own, stepped together (:class:`~skillbank.simulation._lockstep.Lockstep`);
+    a segment begins once the other arms have come as far as they had in the recording
+    (:func:`~skillbank.segmentation.arm_constraints`; not with ``job.sync`` false)."""
+    import threading
+
+    arms = job.arms
+    timings = [{"adapt": 0.0, "driven": 0.0, "segments": 0} for _ in range(arms)]
+    suite = import_robosuite()
+    environment = _make(suite, job.task, seed, job.horizon, job.robot, arms=arms)
+    recordings = job.groups
+    try:
+        if job.placement is not None:
+            _widen(environment, job.placement)
+        _reseed(environment, seed)
+        obs = with_object_poses(environment, environment.reset())
+        objects = sorted({o for pair in recordings for src in pair for o in src.start})
+        missing = [o for o in objects if f"{o}_pos" not in obs]
+        if missing:
+            raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
+                             "evaluate the library in the task it was recorded in")
+        obs = _rest_arms(environment, obs, objects, arms)
+        scene = {o: [round(float(v), 6) for v in obs[f"{o}_pos"]] for o in objects}
+        lock = Lockstep(environment, obs, arms)
+        episodes = []
+        for k in range(arms):
+            view = ArmEnv(environment, k, lock)
+            episode = _Episode(view, arm_obs(lock.obs, k), job.horizon, trace=job.paths)
+            episode.fingers = _fingers(view, episode.obs)
+            episodes.append(episode)
+        pair = min(recordings, key=lambda p: sum(_cost(src.segments, episodes[k].obs, episodes[k].fingers)
+                                                 for k, src in enumerate(p)))
+        need = arm_constraints([_arm_spans(src) for src in pair]) if job.sync else None
+        results, errors = [None] * arms, []
+
+        def run(k):
+            episode, src = episodes[k], pair[k]
+
+            def gate(i):
+                with lock.cond:
+                    lock.reached[k] = i
+                if need is None:
+                    return
+                here = np.array(episode.obs["robot0_eef_pos"], float)
+                while not episode.over and not all(lock.reached[a] >= m for a, m in need[k][i].items()):
+                    episode.step(here)  # waits where the recording waited: holds still
+
+            try:
+                results[k] = _run_segments(episode, src.segments, src.actions, job.method,
+                                           fresh(job.random_state), timings[k], planner=job.planner,
+                                           gate=gate)
+                timings[k]["segments"] += len(src.segments)
+                if results[k] is not None:
+                    lock.stop()  # one arm failed: the task has
+            except Stopped:
+                pass
+            except BaseException as error:  # re-raised in the caller's thread
+                errors.append(error)
+                lock.stop()
+            finally:
+                with lock.cond:
+                    lock.reached[k] = len(src.segments)
+                lock.done(k, episode.driver.grip)
+
+        threads = [threading.Thread(target=run, args=(k,), name=f"arm {k}") for k in range(arms)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        if errors:
+            raise errors[0]
+        success = any(e.success for e in episodes)
+        steps = lock.steps
+        for _ in range(SETTLE):  # a last second for the objects to come to rest
+            if success or steps >= job.horizon or lock.stopped:
+                break
+            environment.step(np.concatenate(lock.rest))
+            steps += 1
+            success = bool(environment._check_success())
+    finally:
+        environment.close()
+    row = {"seed": int(seed), "success": success, "steps": steps, "source": pair[0].id,
+           "sources": [src.id for src in pair], "objects": scene}
+    contact = next(((k, e.contact) for k, e in enumerate(episodes) if e.contact is not None), None)
+    row["arm_contact"] = None if contact is None else \
+        {"arm": contact[0], "segment": contact[1][0], "detail": contact[1][1]}
+    if job.paths:
+        row["path"] = np.round(np.array(episodes[0].path), 6).tolist()
+        row["paths"] = [np.round(np.array(e.path), 6).tolist() for e in episodes]
+    if not success:
+        failed = next(((k, r) for k, r in enumerate(results) if r is not None), None)
+        if failed is None:
+            k = int(np.argmax([e.steps for e in episodes]))  # the arm that went on longest
+            last = len(pair[k].segments) - 1
+            failed = (k, (last, "timeout", f"{steps} steps") if steps >= job.horizon else
+                      (last, "misplaced", "the environment's success check fails"))
+        k, (i, reason, detail) = failed
+        if contact is not None and contact[0] == k and contact[1][0] <= i and reason != "timeout":
+            reason, detail = ("collision",
+                              f"{contact[1][1]} in segment {contact[1][0]}; then {reason}: {detail}")
+        row["failure"] = {"arm": k, "segment": i, "primitive": pair[k].segments[i].primitive.id,
+                          "source": pair[k].id, "reason": reason, "detail": detail}
+    total = {key: sum(t[key] for t in timings) for key in ("adapt", "driven", "segments")}
+    total["transits"] = [x for t in timings for x in t.get("transits", [])]
+    return row, total
+
+
 def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=None, method: str = "lte",
              horizon: int | None = None, order=None, random_state=None, paths: bool = False,
              progress=None, robot: str = DRIVEN_ROBOT, workers=None, scheduler=None,
-             verbose: bool = False, planner: str = "ompl") -> dict:
+             verbose: bool = False, planner: str = "ompl", sync: bool = True) -> dict:
     """Run the library's skills in ``episodes`` new robosuite scenes and count the environment's successes.
 
     Parameters
@@ -1616,6 +1785,12 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         a ValueError naming its seed, and no report is made.
     verbose : bool, default=False
         Let robosuite's log (and a local cluster's) through, on stderr.
+    sync : bool, default=True
+        For a library of a two-arm task (its demonstrations each of one arm of a recording,
+        ``metadata["arm_index"]``): each episode runs every arm's demonstration of the nearest recording
+        at once, and a segment of one arm begins only once the others have come as far as they had in the
+        recording (:func:`~skillbank.segmentation.arm_constraints`). ``False`` runs the arms without
+        waiting for each other, to see what the waits are for. A failure names its ``arm``.
 
     Returns
     -------
@@ -1654,17 +1829,34 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         if store is not library:
             store.close()
     arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
-    groups = {}
-    for src in sources:  # the parts of a task: the sources that act on the same objects
-        groups.setdefault(tuple(sorted(src.start)), []).append(src)
-    order = _order(groups, order)
-    if horizon is None:
-        horizon = _horizon(groups)
+    arms = 1 + max(src.arm for src in sources)
+    if arms > 1:  # a task of several arms: each recording's demonstrations, one per arm, run together
+        groups = _arm_recordings(sources, arms)
+        if planner != "none":
+            # a planned move is checked against a still scene, and the other arm moves (OMPL's callbacks
+            # into Python from two arms' threads are not safe either): each arm's moves stay as adapted
+            arm = {**arm, "notes": arm["notes"] + [f"planner {planner!r} is not used with {arms} arms: each "
+                                                   "arm's free moves are followed as adapted"]}
+            planner = "none"
+        order = []
+        if horizon is None:
+            # the arms' segments one after the other: an arm may wait for all the other's
+            horizon = max(DEFAULT_HORIZON, SETTLE + max(
+                sum(seg.primitive.demo.n_steps + SETTLE + CONTROL_FREQ for src in p for seg in src.segments)
+                for p in groups))
+    else:
+        groups = {}
+        for src in sources:  # the parts of a task: the sources that act on the same objects
+            groups.setdefault(tuple(sorted(src.start)), []).append(src)
+        order = _order(groups, order)
+        if horizon is None:
+            horizon = _horizon(groups)
     job = _Evaluation(task=task, groups=groups, order=order, horizon=horizon, robot=robot,
                       placement=placement, method=method, random_state=random_state, paths=paths,
-                      planner=planner)
+                      planner=planner, arms=arms, sync=sync)
     # each episode builds its own environment from its seed: the same rows here and on any worker
-    results, address = run_episodes(_evaluate_episode, job, [int(seed) + k for k in range(episodes)],
+    results, address = run_episodes(_evaluate_episode if arms == 1 else _evaluate_arms_episode, job,
+                                    [int(seed) + k for k in range(episodes)],
                                     workers=workers, scheduler=scheduler, progress=progress, verbose=verbose)
     rows = [row for row, _ in results]
     timings = {key: sum(t[key] for _, t in results) for key in ("adapt", "driven", "segments")}

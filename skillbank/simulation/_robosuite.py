@@ -138,6 +138,24 @@ def _min_jerk(n: int) -> np.ndarray:
     return _min_jerk_at(np.linspace(0.0, 1.0, max(int(n), 2)))
 
 
+def osc_action(obs, prefix, target, quat, grip, controller) -> np.ndarray:
+    """One arm's ``OSC_POSE`` delta action (and gripper command ``grip``) that moves its tool, observed as
+    ``prefix + "eef_pos"`` / ``"eef_quat"``, toward position ``target`` and orientation ``quat`` (world).
+
+    ``controller``: the arm's controller. Its ``output_max`` is the metres and radians one unit of input
+    moves; its inputs are in the arm's base frame (robosuite's ``input_ref_frame="base"``, its
+    ``origin_ori``): the same as the world's for an arm standing square to it, a quarter turn off for
+    each arm of a two-arm task facing the other.
+    """
+    scale = np.abs(np.asarray(controller.output_max, float))
+    base = getattr(controller, "origin_ori", None)
+    turn = np.eye(3) if base is None or getattr(controller, "input_ref_frame", "base") != "base" else \
+        np.asarray(base, float).reshape(3, 3)
+    pos_err = turn.T @ (np.asarray(target, float) - obs[prefix + "eef_pos"])
+    rot_err = turn.T @ log_map(quaternion_multiply(quat, quaternion_conjugate(obs[prefix + "eef_quat"])))
+    return np.concatenate([np.clip(pos_err / scale[:3], -1, 1), np.clip(rot_err / scale[3:], -1, 1), [grip]])
+
+
 class _Driver:
     """Steps the environment towards tool targets with OSC deltas, and keeps what robomimic records."""
 
@@ -154,10 +172,8 @@ class _Driver:
 
     def step(self, target):
         obs = self.obs
-        pos_err = np.asarray(target, float) - obs["robot0_eef_pos"]
-        rot_err = log_map(quaternion_multiply(self.quat, quaternion_conjugate(obs["robot0_eef_quat"])))
-        action = np.concatenate([np.clip(pos_err / self.scale[:3], -1, 1),
-                                 np.clip(rot_err / self.scale[3:], -1, 1), [self.grip]])
+        action = osc_action(obs, "robot0_", target, self.quat, self.grip,
+                            self.env.robots[0].part_controllers["right"])
         if self.keep:
             self.rows["states"].append(np.array(self.env.sim.get_state().flatten()))
             self.rows["obs"].append({k: np.array(obs[k], float) for k in self._keys()})
@@ -210,17 +226,18 @@ def _yaw(q) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-def _pads(env) -> np.ndarray:
-    """The left finger pad's centre less the right's (m, world frame), from robosuite's pad geoms."""
-    geoms = _gripper(env).important_geoms
+def _pads(env, arm: int = 0) -> np.ndarray:
+    """The left finger pad's centre less the right's (m, world frame), from robosuite's pad geoms; ``arm``:
+    which of the scene's arms."""
+    geoms = _gripper(env, arm).important_geoms
     pad = {side: np.mean([env.sim.data.geom_xpos[env.sim.model.geom_name2id(n)]
                           for n in geoms[f"{side}_fingerpad"]], axis=0) for side in ("left", "right")}
     return pad["left"] - pad["right"]
 
 
-def _gripper(env):
+def _gripper(env, arm: int = 0):
     """The robot's gripper model (robosuite keeps one per arm, by side, for some robots)."""
-    gripper = env.robots[0].gripper
+    gripper = env.robots[arm].gripper
     return gripper["right"] if isinstance(gripper, dict) else gripper
 
 
@@ -242,9 +259,9 @@ def _box(sim, geoms) -> tuple:
     return lo, hi
 
 
-def _closing_axis(env) -> np.ndarray:
+def _closing_axis(env, arm: int = 0) -> np.ndarray:
     """The horizontal direction the gripper closes along, from its finger pads."""
-    axis = _pads(env) * [1, 1, 0]
+    axis = _pads(env, arm) * [1, 1, 0]
     return axis / max(np.linalg.norm(axis), 1e-9)
 
 
@@ -518,7 +535,7 @@ def _pose(env, kind: str, name: str) -> np.ndarray:
     return T
 
 
-def robot_frames(env) -> dict:
+def robot_frames(env, arm: int = 0) -> dict:
     """Where the recorded arm stands and what its tool pose is: ``{"name", "base", "flange", "tool"}``.
 
     ``base``: the arm's base body (``robot0_base``) in the world; ``tool``: the pose the observations
@@ -528,28 +545,31 @@ def robot_frames(env) -> dict:
     ``fk(robot0_joint_pos)`` is the recorded tool pose (``robot_model("panda", base=..., tool=...)``;
     docs/robots.md).
     """
-    robot = env.robots[0]
+    robot = env.robots[arm]
+    prefix = robot.robot_model.naming_prefix  # robot0_, robot1_, ...
     gripper = robot.gripper["right"] if isinstance(robot.gripper, dict) else robot.gripper
     site = gripper.important_sites["grip_site"]
     eef = robot.robot_model.eef_name
     eef = eef["right"] if isinstance(eef, dict) else eef
-    flange = np.linalg.inv(_pose(env, "body", "robot0_right_hand"))
+    flange = np.linalg.inv(_pose(env, "body", f"{prefix}right_hand"))
     tool = flange @ _pose(env, "body", eef)
     tool[:3, 3] = (flange @ _pose(env, "site", site))[:3, 3]
     # the point by its name when robosuite's is the gripper's registered grip site (checked, not assumed)
     named = ROBOSUITE_POSE_OF.get(str(robot.name).lower())
     same = named is not None and np.abs(pose_point(named).transform - tool).max() < 1e-6
     pose_of = named if same else offset_pose_of(tool)
-    return {"name": robot.name, "base": _pose(env, "body", "robot0_base").tolist(),
+    return {"name": robot.name, "base": _pose(env, "body", f"{prefix}base").tolist(),
             "flange": "right_hand", "tool": tool.tolist(), "pose_of": pose_of}
 
 
-def _env_args(task: str, horizon: int, seed: int, robot: str = "UR5e") -> dict:
+def _env_args(task: str, horizon: int, seed: int, robot: str = "UR5e", arms: int = 1) -> dict:
     # robosuite 1.5 draws every placement from its own generator, seeded here
-    return {"env_name": task, "type": 1, "env_version": None,
-            "env_kwargs": {"robots": [robot], "control_freq": CONTROL_FREQ, "horizon": horizon, "seed": seed,
-                           "has_renderer": False, "has_offscreen_renderer": False,
-                           "use_camera_obs": False, "ignore_done": True, "reward_shaping": False}}
+    kwargs = {"robots": [robot] * arms, "control_freq": CONTROL_FREQ, "horizon": horizon, "seed": seed,
+              "has_renderer": False, "has_offscreen_renderer": False, "use_camera_obs": False,
+              "ignore_done": True, "reward_shaping": False}
+    if arms > 1:
+        kwargs["env_configuration"] = "opposed"  # robosuite's default for two arms, said in the file
+    return {"env_name": task, "type": 1, "env_version": None, "env_kwargs": kwargs}
 
 
 def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progress=None,
@@ -559,7 +579,8 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
     Parameters
     ----------
     env : str
-        ``robosuite:TASK``, TASK a key of :data:`TASKS`.
+        ``robosuite:TASK``, TASK a key of :data:`TASKS`, or of
+        :data:`~skillbank.simulation._two_arms.TWO_ARM_TASKS` (both arms, ``robot`` each).
     episodes : int
         Successful episodes to keep.
     out : path-like
@@ -573,14 +594,17 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
     robot : str, default="UR5e"
         robosuite's arm (:data:`RECORD_ROBOTS`), with its default gripper. The file's
         ``data.attrs["robot"]`` (JSON, :func:`robot_frames`) says where it stood and which tool
-        frame its poses are of.
+        frame its poses are of; with two arms, ``data.attrs["robots"]`` lists both.
 
     Returns
     -------
     dict
         ``{"env", "episodes", "tried", "seed", "out", "samples", "robot"}``.
     """
-    task = parse_env(env)
+    from ._two_arms import TWO_ARM_TASKS, two_arm_episode  # it builds on this module's driver
+
+    task = parse_env(env, sorted(TASKS) + sorted(TWO_ARM_TASKS))
+    two = task in TWO_ARM_TASKS
     robot = robosuite_robot(robot)
     episodes = check_positive(episodes, name="episodes", integer=True)
     tries = 3 * episodes if max_tries is None else check_positive(max_tries, name="max_tries", integer=True)
@@ -595,21 +619,22 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
     import h5py  # core dependency; only when a file is written
 
     horizon = 1000
-    args = _env_args(task, horizon, int(seed), robot)
+    args = _env_args(task, horizon, int(seed), robot, arms=2 if two else 1)
     rng = np.random.default_rng(seed)
     environment = suite.make(task, **args["env_kwargs"])
     kept, tried = [], 0
     frames = None
     try:
         while len(kept) < episodes and tried < tries:
-            rows, ok = _episode(environment, TASKS[task], rng)
+            rows, ok = (two_arm_episode(environment, TWO_ARM_TASKS[task], rng) if two else
+                        _episode(environment, TASKS[task], rng))
             tried += 1
             if ok:
                 kept.append(rows)
             if progress is not None:
                 progress(len(kept), tried)
         # fixed transforms, read after the episodes: an extra reset would move robosuite's placements
-        frames = robot_frames(environment)
+        frames = [robot_frames(environment, k) for k in range(len(environment.robots))]
     finally:
         environment.close()
     if len(kept) < episodes:
@@ -620,7 +645,10 @@ def record(env: str, *, episodes: int, out, seed: int = 0, max_tries=None, progr
         with h5py.File(part, "w") as h5:
             data = h5.create_group("data")
             data.attrs["env_args"] = json.dumps(args)
-            data.attrs["robot"] = json.dumps(frames)
+            if two:
+                data.attrs["robots"] = json.dumps(frames)
+            else:
+                data.attrs["robot"] = json.dumps(frames[0])
             total = 0
             for k, rows in enumerate(kept):
                 g = data.create_group(f"demo_{k}")

@@ -249,7 +249,7 @@ def test_public_api():
         "jerk", "jerk_profile", "detect_changepoints", "gate_changepoints",
         "motion_time_scale", "speed_correlation_time",
         "Phase", "PHASE_KINDS", "demonstration_phases", "carried", "object_streams",
-        "PartJoints", "part_joints",
+        "PartJoints", "part_joints", "ArmSpan", "arm_constraints",
     ])
     assert all(hasattr(segmentation, name) for name in segmentation.__all__)
     for name in ("to_samples", "windowed_mean", "speed_norm", "smoothed_speed", "refine_to_jerk_centre"):

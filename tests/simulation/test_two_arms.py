@@ -1,0 +1,79 @@
+"""Two arms: robosuite's TwoArmLift recorded with both arms, read one demonstration per arm, and run with
+both arms stepped together in new scenes (real episodes on two Pandas facing each other)."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+pytest.importorskip("robosuite")  # the extra skillbank[sim]
+
+from skillbank.core import Demonstration  # noqa: E402
+from skillbank.io import read_robomimic, split_arms  # noqa: E402
+from skillbank.pipeline import Library  # noqa: E402
+from skillbank.simulation import evaluate, record  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def lift(tmp_path_factory):
+    """Two scripted TwoArmLift episodes (seed 0) and the library of their four arm demonstrations."""
+    folder = tmp_path_factory.mktemp("two_arms")
+    out = folder / "lift.hdf5"
+    report = record("robosuite:TwoArmLift", episodes=2, out=out, seed=0, robot="panda")
+    with Library(folder / "lift.db") as lib:
+        lib.add_files([out])
+        lib.cluster()
+    return out, folder / "lift.db", report
+
+
+def test_a_two_arm_recording_is_read_as_one_demonstration_per_arm(lift):
+    out, _, report = lift
+    assert report["episodes"] == 2
+    with h5py.File(out) as h5:
+        g = h5["data/demo_0"]
+        assert g["actions"].shape[1] == 14  # both arms' OSC_POSE and gripper, side by side
+        both = g["obs/robot1_eef_pos"][:]
+    demos = read_robomimic(out)
+    arms = [(d.metadata["arm_index"], d.metadata["episode"]) for d in demos]
+    assert arms == [(0, 0), (1, 0), (0, 1), (1, 1)]
+    for d in demos:
+        assert d.metadata["arm"] == "Panda" and d.metadata["pose_of"] == "panda_hand:grip_site"
+        assert d["actions"].shape[1] == 7 and {"pot_pos", "pot_quat"} <= set(d.streams)
+        assert not any(s.startswith(f"robot{1 - d.metadata['arm_index']}_") for s in d.streams)
+    np.testing.assert_array_equal(demos[1]["position"], both)
+    # each arm closes its gripper on its own handle and lifts: the two tools end 0.3 m apart across the pot
+    ends = [d["position"][-1] for d in demos[:2]]
+    assert 0.25 < np.linalg.norm(ends[0] - ends[1]) < 0.4
+
+
+def test_split_arms_refuses_actions_that_do_not_split():
+    t = np.arange(2.0)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
+    demo = Demonstration(t, {"position": np.zeros((2, 3)), "orientation": q,
+                             "robot1_eef_pos": np.ones((2, 3)), "robot1_eef_quat": q,
+                             "actions": np.zeros((2, 13))})
+    with pytest.raises(ValueError, match="13 columns do not split among the recording's 2 arms"):
+        split_arms(demo)
+    del demo.streams["robot1_eef_quat"]
+    demo.streams["actions"] = np.zeros((2, 14))
+    with pytest.raises(ValueError, match="arm 1: the recording has no robot1_eef_quat"):
+        split_arms(demo)
+
+
+def test_both_arms_lift_the_pot_in_new_scenes(lift):
+    _, library, _ = lift
+    report = evaluate(library, "robosuite:TwoArmLift", robot="panda", episodes=2, seed=900)
+    assert report["successes"] == 2, [e.get("failure") for e in report["per_episode"]]
+    for row in report["per_episode"]:
+        assert len(row["sources"]) == 2  # one demonstration per arm, of one recording
+    assert any("not used with 2 arms" in note for note in report["notes"])
+
+
+def test_a_library_missing_an_arm_of_its_recording_is_refused(lift, tmp_path):
+    out, _, _ = lift
+    with Library(tmp_path / "one_arm.db") as lib:
+        lib.add_many([d for d in read_robomimic(out) if d.metadata["arm_index"] == 1])
+        lib.cluster()
+    with pytest.raises(ValueError, match=r"are of arm\(s\) \[1\] of a recording of 2 arms"):
+        evaluate(tmp_path / "one_arm.db", "robosuite:TwoArmLift", robot="panda", episodes=1, seed=900)
