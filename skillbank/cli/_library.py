@@ -338,7 +338,8 @@ def _list(args) -> int:
         on = "" if acts is None else (
             f", carries {acts['object']}{to}{_joints(acts)}" if acts["moves_with"] else
             f", ends at {acts['object']} ({acts['distance']:.3f} m)")
-        print(f"  {p['id']}: demonstration {p['demonstration']}, cluster {cluster}, "
+        arm = "" if p.get("arm_index") is None else f" (arm {p['arm_index']})"
+        print(f"  {p['id']}: demonstration {p['demonstration']}{arm}, cluster {cluster}, "
               f"label {p['label'] or '-'}{_how(p)}, {p['n_steps']} samples{on}")
     return 0
 

@@ -317,9 +317,10 @@ class Library(Adding):
             ``{"n_demonstrations": int, "version": int or None,
             "skills": [{"cluster", "label", "label_source", "count"}],
             "unassigned": {"count": int, "ids": [primitive ids]},
-            "demonstrations": [{"id", "pose_of"}],
+            "demonstrations": [{"id", "pose_of", "arm_index"}],
             "primitives": [{"id", "demonstration", "cluster", "label", "label_source", "n_steps",
-            "acts_on", "pose_of"}]}``;
+            "acts_on", "pose_of", "arm_index"}]}``; ``arm_index``: which arm of a recording of several
+            (robosuite's ``robotK_``) a demonstration is of, None for one arm's;
             skills are the clusters (0..k-1) of the current clustering
             ``version``; ``unassigned`` the primitives in none of them (an
             add with ``assign="none"``, a primitive that could not join, or
@@ -354,12 +355,19 @@ class Library(Adding):
             relation[p.id] = known[k] if isinstance(known, list) and k < len(known) else None
         meta = self.store.demonstration_metadata()
         pose_of = {d: meta.get(d, {}).get(POSE_OF) for d in ids}
+        # which arm of a recording of several a demonstration is of (io.split_arms); None: a one-arm one
+        arm = {}
+        for d in ids:
+            index, arms = meta.get(d, {}).get("arm_index"), meta.get(d, {}).get("arms")
+            ok = all(isinstance(v, int) and not isinstance(v, bool) for v in (index, arms))
+            arm[d] = index if ok and arms > 1 else None
         return {"n_demonstrations": len(ids), "version": version, "skills": skills,
                 "unassigned": {"count": len(unassigned), "ids": unassigned},
-                "demonstrations": [{"id": d, "pose_of": pose_of[d]} for d in ids],
+                "demonstrations": [{"id": d, "pose_of": pose_of[d], "arm_index": arm[d]} for d in ids],
                 "primitives": [{"id": p.id, "demonstration": p.demonstration_id, "cluster": p.cluster,
                                 "label": p.label, "label_source": p.label_source, "n_steps": p.n_steps,
-                                "acts_on": relation[p.id], "pose_of": pose_of.get(p.demonstration_id)}
+                                "acts_on": relation[p.id], "pose_of": pose_of.get(p.demonstration_id),
+                                "arm_index": arm.get(p.demonstration_id)}
                                for p in prims]}
 
     def check(self) -> str:

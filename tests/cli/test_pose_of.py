@@ -37,7 +37,7 @@ def test_library_list_says_what_point_the_poses_are_of(cli, press_library):
     assert code == 0, err
     assert "poses of the flange: demonstration(s) 1" in out
     doc = json.loads(cli("library", "list", press_library["db"], "--json")[1])
-    assert doc["demonstrations"] == [{"id": 1, "pose_of": "flange"}]
+    assert doc["demonstrations"] == [{"id": 1, "pose_of": "flange", "arm_index": None}]
     assert {p["pose_of"] for p in doc["primitives"]} == {"flange"}
 
 

@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("robosuite")  # the extra skillbank[sim]
 
+from skillbank.cli import main  # noqa: E402
 from skillbank.core import Demonstration  # noqa: E402
 from skillbank.io import read_robomimic, split_arms  # noqa: E402
 from skillbank.pipeline import Library  # noqa: E402
@@ -77,3 +78,24 @@ def test_a_library_missing_an_arm_of_its_recording_is_refused(lift, tmp_path):
         lib.cluster()
     with pytest.raises(ValueError, match=r"are of arm\(s\) \[1\] of a recording of 2 arms"):
         evaluate(tmp_path / "one_arm.db", "robosuite:TwoArmLift", robot="panda", episodes=1, seed=900)
+
+
+def test_library_list_shows_each_primitives_arm(lift, capsys):
+    _, library, _ = lift
+    assert main(["library", "list", str(library)]) == 0
+    out = capsys.readouterr().out
+    assert "demonstration 1 (arm 0)," in out and "demonstration 2 (arm 1)," in out
+
+
+def test_a_handover_is_recorded_the_giving_hand_opening_only_once_the_taking_hand_holds(tmp_path):
+    out = tmp_path / "handover.hdf5"
+    assert record("robosuite:TwoArmHandover", episodes=1, out=out, seed=0, robot="panda")["episodes"] == 1
+    giver, taker = read_robomimic(out)
+    assert (giver.metadata["arm_index"], taker.metadata["arm_index"]) == (0, 1)
+    closed = [d["actions"][:, 6] > 0 for d in (giver, taker)]
+    taken = int(np.argmax(closed[1]))  # the taking hand closes
+    held = np.flatnonzero(closed[0])
+    let_go = int(held[-1]) + 1  # the giving hand opens for the last time
+    assert int(held[0]) < taken < let_go
+    # the hammer goes from the table into the taking hand, well above where it lay
+    assert taker["hammer_pos"][-1, 2] - taker["hammer_pos"][0, 2] > 0.1
