@@ -118,7 +118,9 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         A primitive: stream ``position`` (the tool's, m) and, optionally, ``orientation``, and the object
         poses of :func:`object_streams`.
     near : float, default=0.15
-        Farthest an object may be from the tool's end and still be what a reach acts on (m).
+        Farthest an object may be from the tool's end and still be what a reach acts on (m); a reach
+        that closes the gripper (robosuite's ``actions``, open at its start and shut at its end) acts on
+        the nearest object however far.
     moved : float, default=0.01
         How far an object must move during the primitive to count as carried (m).
     rigid : float, default=0.02
@@ -128,7 +130,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     -------
     Relation or None
         None when no object moved with the tool and none is within ``near`` of its end (a move in free
-        space), or when ``demo`` records no object poses.
+        space) and the gripper did not close on one, or when ``demo`` records no object poses.
 
     Examples
     --------
@@ -195,7 +197,11 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         name = max(carried)[1]  # the one carried furthest
     else:
         best = min(ends, default=None)
-        if best is None or best[0] > near:
+        # a reach that closes the gripper grasps something: the nearest object, however far its grip is
+        # from the object's origin (a pot's handle, 17 cm out)
+        grasps = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and \
+            demo["actions"][-1, 6] > 0 >= demo["actions"][0, 6]
+        if best is None or (best[0] > near and not grasps):
             return None
         name = best[1]
     q_tool = None

@@ -421,10 +421,6 @@ def _sources(store):
                       recording=(str(meta.get("source")), str(meta.get("demo", meta.get("episode")))))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
-            if relation is None and p.demo["actions"][-1, 6] > 0 > p.demo["actions"][0, 6]:
-                # a reach that closes the gripper grasps something: the nearest object, however far its
-                # grip is from the object's origin (a pot's handle, 17 cm out)
-                relation = acted_on(p.demo, near=10.0)  # m: anywhere in an arm's reach
             released = _released(p.demo)
             src.segments.append(_Segment(p, relation, _candidate_frames(relation, released)[0],
                                          released=released))

@@ -80,6 +80,21 @@ def test_a_move_in_free_space_acts_on_nothing():
     assert acted_on(Demonstration(T, {"position": _reach([0.2, 0.0, 0.3])})) is None  # no objects recorded
 
 
+def test_a_reach_that_closes_the_gripper_grasps_the_nearest_object_however_far_its_origin():
+    # a pot's handle is 17 cm from the pot's origin: the hand ends there and closes
+    pot = np.tile([0.5, 0.17, 0.02], (41, 1))
+    cube = np.tile([1.0, 1.0, 0.02], (41, 1))
+    demo = _demo(_reach([0.5, 0.0, 0.02]), pot=(pot, UP), cube=(cube, UP))
+    assert acted_on(demo) is None  # nothing within 15 cm, nothing said about the gripper
+    actions = np.zeros((41, 7))
+    actions[:, 6] = np.where(T < T[-1] - 0.2, -1.0, 1.0)  # open, then shut at the end
+    closes = Demonstration(T, {**demo.streams, "actions": actions})
+    r = acted_on(closes)
+    assert r.object == "pot" and not r.moves_with and r.distance == pytest.approx(0.17)
+    actions[:, 6] = -1.0  # a reach that stays open reached for nothing
+    assert acted_on(Demonstration(T, {**demo.streams, "actions": actions})) is None
+
+
 def test_object_streams_are_robosuites_pose_pairs_only():
     pos = np.zeros((41, 3))
     d = Demonstration(T, {"position": pos, "cube_pos": pos, "cube_quat": UP, "lone_pos": pos,
