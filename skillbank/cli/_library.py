@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core._text import printable
 from ..core._validation import summarise
+from ..selection import describe_relation
 from ._cluster import FEATURE_KIND, LIBRARY_FEATURES, library_features
 from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
 from ._library_transfer import _copy, _export, _import
@@ -334,24 +335,11 @@ def _list(args) -> int:
     for p in doc["primitives"]:
         cluster = "-" if p["cluster"] is None else p["cluster"]
         acts = p.get("acts_on")
-        to = (f" to {acts['target']}" if acts["target"] else "") if acts is not None else ""
-        on = "" if acts is None else (
-            f", carries {acts['object']}{to}{_joints(acts)}" if acts["moves_with"] else
-            f", ends at {acts['object']} ({acts['distance']:.3f} m)")
+        on = "" if acts is None else f", {describe_relation(acts)}"
         arm = "" if p.get("arm_index") is None else f" (arm {p['arm_index']})"
         print(f"  {p['id']}: demonstration {p['demonstration']}{arm}, cluster {cluster}, "
               f"label {p['label'] or '-'}{_how(p)}, {p['n_steps']} samples{on}")
     return 0
-
-
-def _joints(acts) -> str:
-    """`` about its joints: ...`` for a carried part one chain of joints explains (a door's handle)."""
-    joints = acts.get("joints") or []
-    if not joints:
-        return ""
-    said = [f"{'turned' if j['kind'] == 'revolute' else 'slid'} {abs(j['value']):.3g} "
-            f"{'rad' if j['kind'] == 'revolute' else 'm'} in {j['in']}" for j in joints]
-    return f" about {len(joints)} joint(s): " + ", ".join(said)
 
 
 def _how(p) -> str:

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._validation import check_positive
+from ..selection import describe_relation
 from ._segmentation import unit_text
 from ._view_html import (
     ASSETS_CSS,
@@ -360,6 +361,11 @@ class LibraryView:
         members = [p for p in state["prims"] if p.id in shown]
         demos = self.store.demonstrations(sorted({p.demonstration_id for p in members})) if members else {}
         label, source, note = self._skill_label(state, cluster) if cluster is not None else (None, None, "")
+        # what each member acts on, recorded when it was added (the primitive's place in its demonstration)
+        place, count = {}, {}
+        for q in sorted(state["prims"], key=lambda q: (q.demonstration_id, q.start)):
+            place[q.id] = count[q.demonstration_id] = count.get(q.demonstration_id, -1) + 1
+        relations = {d: (self.store.provenance(d) or {}).get("relations") for d in demos}
         traces, rows = [], []
         for p in members:
             demo = demos[p.demonstration_id]
@@ -373,9 +379,14 @@ class LibraryView:
                                "marker": {"size": 2}, "line": {"width": 4},
                                "hovertemplate": f"primitive {p.id}<extra></extra>"})
             lab = self._label_cell(p.label, p.label_source)
+            known = relations.get(p.demonstration_id)
+            acts = known[place[p.id]] if isinstance(known, list) and place[p.id] < len(known) else None
+            arms, arm = demo.metadata.get("arms"), demo.metadata.get("arm_index")
             rows.append([str(p.id), link(f"demonstration-{p.demonstration_id}.html",
                                          f"demonstration {p.demonstration_id}"),
-                         f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}", lab])
+                         text(str(arm)) if isinstance(arms, int) and arms > 1 else "-",
+                         f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}",
+                         text(describe_relation(acts) if isinstance(acts, dict) else "") or "-", lab])
         drawn = [np.column_stack([tr["x"], tr["y"], tr["z"]]) for tr in traces]
         # the top margin holds plotly's toolbar; the legend starts under it (it covered the first entry)
         layout = {"margin": {"l": 0, "r": 0, "t": TOOLBAR, "b": 0}, "showlegend": len(traces) <= 30,
@@ -395,7 +406,7 @@ class LibraryView:
             figures["members"] = {"data": traces, "layout": layout}
         else:
             body.append('<p class="note">No member has a position stream to draw.</p>')
-        headers = ["primitive", "demonstration", "samples", "time (s)", "label"]
+        headers = ["primitive", "demonstration", "arm", "samples", "time (s)", "acts on", "label"]
         body += ["<h2>Members</h2>", table(headers, rows, cls="members"), _pages_nav(name, number, total)]
         return page(f"{title} ({label or 'no label'})", "\n".join(body), figures=figures, plotly=bool(traces))
 

@@ -33,11 +33,12 @@ from ._execution import (
     peak_rates,
     retime,
 )
-from ._relations import Relation, acted_on, compose, object_streams
+from ._relations import Relation, acted_on, compose, describe_relation, object_streams
 from ._reuse import METHODS, ReuseResult, reproduce_selection, reuse
 
 __all__ = [
     "keep_clear", "MAX_REPAIRS", "shift_near", "Relation", "acted_on", "compose", "object_streams",
+    "describe_relation",
     "reuse", "ReuseResult", "select_candidates", "reproduce_selection", "Selection", "Candidate",
     "METHODS", "RANKINGS", "SHORTLIST", "make_executable", "Executable", "retime", "peak_rates", "LIMITS",
     "DISCRETE_STREAMS", "executable_dict",

@@ -80,11 +80,20 @@ def test_a_library_missing_an_arm_of_its_recording_is_refused(lift, tmp_path):
         evaluate(tmp_path / "one_arm.db", "robosuite:TwoArmLift", robot="panda", episodes=1, seed=900)
 
 
-def test_library_list_shows_each_primitives_arm(lift, capsys):
+def test_library_list_shows_each_primitives_arm_also_after_export_and_import(lift, capsys, tmp_path):
     _, library, _ = lift
     assert main(["library", "list", str(library)]) == 0
     out = capsys.readouterr().out
     assert "demonstration 1 (arm 0)," in out and "demonstration 2 (arm 1)," in out
+    assert "ends at pot (0.1" in out  # a grasp of the pot's handle, 17 cm from the pot's origin
+    copy = tmp_path / "copy.db"
+    assert main(["library", "export", str(library), str(tmp_path / "exported")]) == 0
+    assert main(["library", "init", str(copy)]) == 0
+    assert main(["library", "import", str(copy), str(tmp_path / "exported")]) == 0
+    capsys.readouterr()
+    assert main(["library", "list", str(copy)]) == 0
+    again = capsys.readouterr().out
+    assert again.splitlines()[1:] == out.splitlines()[1:]  # all but the first line, which names the file
 
 
 def test_a_handover_is_recorded_the_giving_hand_opening_only_once_the_taking_hand_holds(tmp_path):
@@ -99,3 +108,15 @@ def test_a_handover_is_recorded_the_giving_hand_opening_only_once_the_taking_han
     assert int(held[0]) < taken < let_go
     # the hammer goes from the table into the taking hand, well above where it lay
     assert taker["hammer_pos"][-1, 2] - taker["hammer_pos"][0, 2] > 0.1
+
+
+def test_the_web_view_shows_each_members_arm_and_what_it_acts_on(lift):
+    from skillbank.plotting._view import LibraryView
+
+    _, library, _ = lift
+    with Library(library, readonly=True) as lib:
+        view = LibraryView(lib)
+        pages = [view.render(name) for name in view.pages() if name.startswith("skill-")]
+    html = "\n".join(p for p in pages if p)
+    assert "<th>arm</th>" in html and "<th>acts on</th>" in html
+    assert "<td>1</td>" in html and "ends at pot (0.1" in html and "carries pot" in html
