@@ -158,6 +158,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     closed = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and bool(
         np.all(demo["actions"][:, 6] > 0))
     went, jointed = {}, {}  # how far each object went (with the tool or not); the joints that explain it
+    slipped = set()  # the parts that moved in the fingers, where they went told by their joints alone
 
     def joints_of(name):
         """The chain of joints that explains the object's poses to a hundredth of how far it went, or
@@ -180,6 +181,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         held = len(gap) if off.size == 0 else int(off[0])
         went[name] = float(np.linalg.norm(where - where[0], axis=1).max())
         if held < len(gap) / 2 and went[name] > moved and closed and joints_of(name) is not None:
+            slipped.add(name)
             # a part of an articulated object (a door's lever) pivots and slides between fingers that
             # give, 3 cm of a 16 cm pull, but it goes where its joints take it: when the gripper is
             # commanded shut all along and one chain of joints explains the part's poses, it is held
@@ -222,6 +224,9 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
             target_pose = end_pose(target, -1)
     joints = ()
     chain = joints_of(name) if carried else None  # what a carried part moved about (a door's handle)
+    if chain is not None and name not in slipped and all(j.kind == "prismatic" for j in chain.joints):
+        # held fast and carried along a line: a lift says nothing of a rail (any straight carry is a slide)
+        chain = None
     if chain is not None:
         outer = len(chain.joints) - 1
         joints = tuple({"kind": j.kind, "in": "world" if k == outer else chain.anchor,

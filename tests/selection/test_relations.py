@@ -95,6 +95,16 @@ def test_a_reach_that_closes_the_gripper_grasps_the_nearest_object_however_far_i
     assert acted_on(Demonstration(T, {**demo.streams, "actions": actions})) is None
 
 
+def test_a_straight_lift_held_fast_is_a_carry_not_a_slide_along_a_rail():
+    tool = np.column_stack([0.5 + 0 * T, 0 * T, 0.05 + 0.1 * T])  # straight up, 20 cm
+    cube = tool - [0.0, 0.0, 0.01]
+    actions = np.zeros((41, 7))
+    actions[:, 6] = 1.0  # shut all along
+    demo = Demonstration(T, {**_demo(tool, cube=(cube, UP)).streams, "actions": actions})
+    r = acted_on(demo)
+    assert r.object == "cube" and r.moves_with and r.joints == ()
+
+
 def test_object_streams_are_robosuites_pose_pairs_only():
     pos = np.zeros((41, 3))
     d = Demonstration(T, {"position": pos, "cube_pos": pos, "cube_quat": UP, "lone_pos": pos,
