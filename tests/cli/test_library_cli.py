@@ -47,7 +47,7 @@ def test_end_to_end_on_rail(run, tmp_path, new_library, data_dir):
     assert doc["skills"][0] == {"cluster": 0, "label": "first", "count": doc["skills"][0]["count"],
                                 "label_source": "given"}
     assert set(doc["primitives"][0]) == {"id", "demonstration", "cluster", "label", "label_source", "n_steps",
-                                         "acts_on", "pose_of"}
+                                         "acts_on", "pose_of", "arm_index"}
     assert doc["primitives"][0]["acts_on"] is None  # RAIL records no object poses
     assert [p["label"] for p in doc["primitives"][:12]] == ["reaching"] * 12
     assert doc["primitives"][0]["n_steps"] == 1000

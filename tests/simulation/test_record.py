@@ -173,10 +173,10 @@ def test_the_command_records_and_says_so(tmp_path, capsys):
 @pytest.mark.parametrize("argv, match", [
     (["Lift"], r"env: expected robosuite:TASK \(TASK one of \['Door', 'Lift', 'NutAssemblySquare', "
                r"'PickPlaceBread', 'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', "
-               r"'Stack', 'TwoArmLift'\]\), got 'Lift'"),
+               r"'Stack', 'TwoArmHandover', 'TwoArmLift'\]\), got 'Lift'"),
     (["robosuite:Wipe"], r"env: the recorder knows robosuite tasks \['Door', 'Lift', 'NutAssemblySquare', "
                          r"'PickPlaceBread', 'PickPlaceCan', 'PickPlaceCereal', 'PickPlaceMilk', 'Stack', "
-                         r"'TwoArmLift'\], "
+                         r"'TwoArmHandover', 'TwoArmLift'\], "
                          r"got 'Wipe'"),
     (["robosuite:Lift", "--episodes", "0"], r"episodes"),
     (["robosuite:Lift", "--out", "/nonexistent/folder/x.hdf5"],
