@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._relation_words import describe_relation
 from ..core._text import printable
 from ..core._validation import summarise
-from ..selection import describe_relation
 from ._cluster import FEATURE_KIND, LIBRARY_FEATURES, library_features
 from ._library_location import _DB, _DB_READ, _URL, _library, _location, _open
 from ._library_transfer import _copy, _export, _import

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core._relation_words import describe_relation
 from ..core._validation import check_positive
-from ..selection import describe_relation
 from ._segmentation import unit_text
 from ._view_html import (
     ASSETS_CSS,

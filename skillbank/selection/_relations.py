@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import Demonstration, quaternion_to_matrix
+from ..core._relation_words import describe_relation
 from ..core._rotations import check_quaternions, quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
 from ..segmentation import object_streams, part_joints
@@ -267,31 +268,3 @@ def compose(relation: Relation, position, orientation, *, at: str = "end") -> tu
     p = p_obj + quaternion_to_matrix(q_obj) @ rel_p
     q = None if rel_q is None else quaternion_multiply(q_obj, rel_q)
     return p, q
-
-
-def describe_relation(acts) -> str:
-    """What a primitive acts on, in words, from :meth:`Relation.to_dict` (or None: ``""``).
-
-    ``"carries handle about 2 joint(s): turned 1.38 rad in door, turned 0.393 rad in world"``,
-    ``"carries cube to plate"``, ``"ends at pot (0.170 m)"``: as ``library list`` and the web view say it.
-
-    Examples
-    --------
-    >>> describe_relation({"object": "pot", "moves_with": False, "distance": 0.17, "target": None})
-    'ends at pot (0.170 m)'
-    >>> describe_relation({"object": "handle", "moves_with": True, "target": None,
-    ...                    "joints": [{"kind": "revolute", "in": "door", "value": 1.38}]})
-    'carries handle about 1 joint(s): turned 1.38 rad in door'
-    """
-    if not isinstance(acts, dict) or not acts.get("object"):
-        return ""
-    if not acts.get("moves_with"):
-        far = acts.get("distance")
-        return f"ends at {acts['object']}" + (f" ({far:.3f} m)" if isinstance(far, int | float) else "")
-    to = f" to {acts['target']}" if acts.get("target") else ""
-    joints = [j for j in acts.get("joints") or []
-              if isinstance(j, dict) and {"kind", "value", "in"} <= set(j)]
-    said = [f"{'turned' if j['kind'] == 'revolute' else 'slid'} {abs(float(j['value'])):.3g} "
-            f"{'rad' if j['kind'] == 'revolute' else 'm'} in {j['in']}" for j in joints]
-    about = f" about {len(joints)} joint(s): " + ", ".join(said) if joints else ""
-    return f"carries {acts['object']}{to}{about}"
