@@ -22,7 +22,7 @@ Examples
 ['joints', 'position', 'orientation', 'force', 'torque', 'gripper']
 """
 
-from ._arms import ARM_INDEX, arm_count, split_arms
+from ._arms import ARM_INDEX, arm_count, arm_of, split_arms
 from ._confine import atomic_output, check_input_file, check_output_path
 from ._detect import detect_format, load, load_all
 from ._errors import FormatError
@@ -57,6 +57,7 @@ __all__ = [
     "FormatError",
     "split_arms",
     "arm_count",
+    "arm_of",
     "ARM_INDEX",
     "check_input_file",
     "atomic_output",

@@ -16,7 +16,7 @@ import re
 
 from ..core import POSE_OF, Demonstration
 
-__all__ = ["split_arms", "arm_count", "ARM_INDEX", "ARM_STREAMS"]
+__all__ = ["split_arms", "arm_count", "arm_of", "ARM_INDEX", "ARM_STREAMS"]
 
 #: Metadata key: which of the recording's arms a demonstration is of (robosuite's ``robotK_``).
 ARM_INDEX = "arm_index"
@@ -41,6 +41,22 @@ def arm_count(streams) -> int:
     while f"robot{k}_eef_pos" in names:
         k += 1
     return k
+
+
+def arm_of(metadata) -> int | None:
+    """Which arm of a recording of several a demonstration's ``metadata`` says it is of (``arm_index``, with
+    ``arms`` above 1, as :func:`split_arms` writes them); None for one arm's, or where it says nothing
+    usable.
+
+    Examples
+    --------
+    >>> arm_of({"arm_index": 1, "arms": 2}), arm_of({"arm": "Panda"}), arm_of({"arm_index": "1", "arms": 2})
+    (1, None, None)
+    """
+    index, arms = metadata.get(ARM_INDEX), metadata.get("arms")
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (index, arms)) or arms < 2:
+        return None
+    return index
 
 
 def split_arms(demo: Demonstration, *, robots=None, pose_of=None) -> list[Demonstration]:

@@ -46,6 +46,20 @@ def _env_args(path, data) -> dict:
 ROBOSUITE_POSE_OF = {"panda": "panda_hand:grip_site", "ur5e": "robotiq_2f85:grip_site"}
 
 
+def grip_sites(robots, grippers="default") -> list:
+    """The point each of robosuite's arms ``robots`` reports as ``robotK_eef_pos``: its default gripper's
+    grip site (:data:`ROBOSUITE_POSE_OF`; None for an arm not listed there), or None for every arm when
+    ``grippers`` (robosuite's ``gripper_types``) names grippers other than the defaults.
+
+    Examples
+    --------
+    >>> grip_sites(["Panda", "Panda"]), grip_sites(["Panda"], ["Robotiq85Gripper"])
+    (['panda_hand:grip_site', 'panda_hand:grip_site'], [None])
+    """
+    default = grippers in ("default", None) or grippers == ["default"] * len(robots)
+    return [ROBOSUITE_POSE_OF.get(r.lower()) if default else None for r in robots]
+
+
 def _pose_of(path, data, env_args):
     """Which point the file's ``robot0_eef_*`` poses are of, as the file states it, else None.
 
@@ -65,10 +79,8 @@ def _pose_of(path, data, env_args):
     kwargs = env_args.get("env_kwargs") or {}
     robots = kwargs.get("robots")
     robots = [robots] if isinstance(robots, str) else robots
-    grippers = kwargs.get("gripper_types", "default")
-    if isinstance(robots, list) and len(robots) == 1 and isinstance(robots[0], str) and grippers in (
-            "default", ["default"], None):
-        return ROBOSUITE_POSE_OF.get(robots[0].lower())
+    if isinstance(robots, list) and len(robots) == 1 and isinstance(robots[0], str):
+        return grip_sites(robots, kwargs.get("gripper_types", "default"))[0]
     return None
 
 
@@ -208,9 +220,7 @@ def _robots(path, data, env_args) -> tuple:
     robots = kwargs.get("robots")
     if not (isinstance(robots, list) and all(isinstance(r, str) for r in robots)):
         return None, None
-    default = kwargs.get("gripper_types", "default") in ("default", None) or kwargs.get("gripper_types") == [
-        "default"] * len(robots)
-    return robots, [ROBOSUITE_POSE_OF.get(r.lower()) if default else None for r in robots]
+    return robots, grip_sites(robots, kwargs.get("gripper_types", "default"))
 
 
 #: skillbank's stream, robosuite's observation of it and its width (None: any): the tool position (m,

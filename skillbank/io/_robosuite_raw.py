@@ -34,7 +34,7 @@ from ._confine import ReadBudget
 from ._errors import FormatError, as_file, reading, real_array
 from ._h5 import open_h5
 from ._lerobot import select_episodes
-from ._robomimic import DEFAULT_CONTROL_FREQ, ROBOSUITE_POSE_OF, STANDARD_STREAMS
+from ._robomimic import DEFAULT_CONTROL_FREQ, STANDARD_STREAMS, grip_sites
 
 __all__ = ["read_robosuite_raw", "is_states_only", "WORLD_TOLERANCE", "import_robosuite", "robosuite_objects",
            "with_object_poses", "reported_body"]
@@ -376,9 +376,7 @@ def _demonstration(p, group_name, number, obs, actions, name, world, version, ch
                 "rate_from": "default", "world_check": check}
     if version is not None:
         metadata["robosuite_version"] = str(version.decode() if isinstance(version, bytes) else version)
-    default = world.get("gripper_types", "default") in ("default", None) or world.get("gripper_types") == [
-        "default"] * len(world["robots"])
-    points = [ROBOSUITE_POSE_OF.get(r.lower()) if default else None for r in world["robots"]]
+    points = grip_sites(world["robots"], world.get("gripper_types", "default"))
     if points[0] is not None:
         metadata[POSE_OF] = points[0]
     if actions is not None and len(actions) == len(next(iter(obs.values()))):

@@ -10,6 +10,7 @@ from tqdm import tqdm
 from ..core import POSE_OF, Demonstration
 from ..core._defaults import FEATURE_KINDS, SHORTLIST, TIME_LIMIT
 from ..core._validation import check_id, check_positive
+from ..io._arms import arm_of
 from ..store import SCHEMA_VERSION, Store, open_store
 from ..store._rows import MAX_N_POINTS
 from ._adding import Adding, check_one_dimension
@@ -355,12 +356,7 @@ class Library(Adding):
             relation[p.id] = known[k] if isinstance(known, list) and k < len(known) else None
         meta = self.store.demonstration_metadata()
         pose_of = {d: meta.get(d, {}).get(POSE_OF) for d in ids}
-        # which arm of a recording of several a demonstration is of (io.split_arms); None: a one-arm one
-        arm = {}
-        for d in ids:
-            index, arms = meta.get(d, {}).get("arm_index"), meta.get(d, {}).get("arms")
-            ok = all(isinstance(v, int) and not isinstance(v, bool) for v in (index, arms))
-            arm[d] = index if ok and arms > 1 else None
+        arm = {d: arm_of(meta.get(d, {})) for d in ids}  # which arm of a recording of several; None: one
         return {"n_demonstrations": len(ids), "version": version, "skills": skills,
                 "unassigned": {"count": len(unassigned), "ids": unassigned},
                 "demonstrations": [{"id": d, "pose_of": pose_of[d], "arm_index": arm[d]} for d in ids],

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..core._relation_words import describe_relation
 from ..core._validation import check_positive
+from ..io._arms import arm_of
 from ._segmentation import unit_text
 from ._view_html import (
     ASSETS_CSS,
@@ -381,10 +382,10 @@ class LibraryView:
             lab = self._label_cell(p.label, p.label_source)
             known = relations.get(p.demonstration_id)
             acts = known[place[p.id]] if isinstance(known, list) and place[p.id] < len(known) else None
-            arms, arm = demo.metadata.get("arms"), demo.metadata.get("arm_index")
+            arm = arm_of(demo.metadata)
             rows.append([str(p.id), link(f"demonstration-{p.demonstration_id}.html",
                                          f"demonstration {p.demonstration_id}"),
-                         text(str(arm)) if isinstance(arms, int) and arms > 1 else "-",
+                         "-" if arm is None else str(arm),
                          f"{p.start}:{p.stop}", f"{t0:.3f} – {t1:.3f}",
                          text(describe_relation(acts) if isinstance(acts, dict) else "") or "-", lab])
         drawn = [np.column_stack([tr["x"], tr["y"], tr["z"]]) for tr in traces]

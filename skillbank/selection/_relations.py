@@ -155,9 +155,10 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
     if "orientation" in demo.streams and demo["orientation"].shape[1:] == (4,):
         frames = quaternion_to_matrix(check_quaternions(demo["orientation"], name="orientation"))
     carried, ends = [], []
-    # the gripper commanded shut all along (robosuite's actions), where the primitive records it
-    closed = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and bool(
-        np.all(demo["actions"][:, 6] > 0))
+    # the gripper's commands (robosuite's actions), where the primitive records them
+    commands = demo["actions"][:, 6] if "actions" in demo.streams and demo["actions"].shape[1:] == (7,) \
+        else None
+    closed = commands is not None and bool(np.all(commands > 0))  # shut all along
     went, jointed = {}, {}  # how far each object went (with the tool or not); the joints that explain it
     slipped = set()  # the parts that moved in the fingers, where they went told by their joints alone
 
@@ -202,8 +203,7 @@ def acted_on(demo: Demonstration, *, near: float = 0.15, moved: float = 0.01, ri
         best = min(ends, default=None)
         # a reach that closes the gripper grasps something: the nearest object, however far its grip is
         # from the object's origin (a pot's handle, 17 cm out)
-        grasps = "actions" in demo.streams and demo["actions"].shape[1:] == (7,) and \
-            demo["actions"][-1, 6] > 0 >= demo["actions"][0, 6]
+        grasps = commands is not None and commands[-1] > 0 >= commands[0]
         if best is None or (best[0] > near and not grasps):
             return None
         name = best[1]

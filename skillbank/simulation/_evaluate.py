@@ -49,7 +49,7 @@ from ..core import (
 )
 from ..core._rotations import quaternion_conjugate, quaternion_multiply
 from ..core._validation import check_positive
-from ..io import ARM_INDEX
+from ..io import arm_of
 from ..robots import MotionPlanningError
 from ..segmentation import ArmSpan, arm_constraints, part_joints
 from ..selection import METHODS, acted_on, object_streams, reuse
@@ -417,7 +417,7 @@ def _sources(store):
         meta = demo.metadata
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
                       np.asarray(demo["actions"], float), robot=recorded_robot(demo),
-                      pose_of=meta.get(POSE_OF), arm=int(meta.get(ARM_INDEX, 0)),
+                      pose_of=meta.get(POSE_OF), arm=arm_of(meta) or 0,
                       recording=(str(meta.get("source")), str(meta.get("demo", meta.get("episode")))))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
@@ -701,13 +701,11 @@ class _Episode:
         robosuite places objects above their resting height (a nut falls 6 cm after a reset): the scene
         is read once it is at rest, as a person looks before reaching.
         """
-        where = np.array([self.obs[f"{o}_pos"] for o in objects])
-        for _ in range(most):
+        def hold():
             self.act(np.r_[np.zeros(6), self.driver.grip])
-            now = np.array([self.obs[f"{o}_pos"] for o in objects])
-            if np.abs(now - where).max() < still:
-                break
-            where = now
+            return self.obs
+
+        _at_rest(hold, self.obs, objects, most=most, still=still)
 
     def settle(self, goal, quat):
         for _ in range(SETTLE):
@@ -1565,13 +1563,19 @@ def _evaluate_episode(job, seed):
             failure = ((last, "timeout", f"{episode.steps} steps") if episode.steps >= horizon else
                        (last, "misplaced", "the environment's success check fails"))
         i, reason, detail = failure
-        if episode.contact is not None and episode.contact[0] <= i and reason != "timeout":
-            # an arm link hit something on the way to this failure: that is what went wrong first
-            reason, detail = "collision", (f"{episode.contact[1]} in segment {episode.contact[0]}; "
-                                           f"then {reason}: {detail}")
+        reason, detail = _blamed(episode.contact, i, reason, detail)
         row["failure"] = {"segment": i, "primitive": chain[i][1].primitive.id,
                           "source": chain[i][0].id, "reason": reason, "detail": detail}
     return row, timings
+
+
+def _blamed(contact, i, reason, detail) -> tuple:
+    """``(reason, detail)`` of a failure in segment ``i``: a collision when an arm link of the episode hit
+    something (``contact``: ``(segment, what touched what)``) on the way to it, for that is what went
+    wrong first (not for a timeout)."""
+    if contact is not None and contact[0] <= i and reason != "timeout":
+        return "collision", f"{contact[1]} in segment {contact[0]}; then {reason}: {detail}"
+    return reason, detail
 
 
 def _arm_recordings(sources, arms: int) -> list:
@@ -1595,11 +1599,13 @@ def _arm_recordings(sources, arms: int) -> list:
     return out
 
 
-def _rest_arms(env, obs, objects, arms, *, most=2 * CONTROL_FREQ, still=0.5e-3):
-    """:meth:`_Episode.rest` for every arm at once: hold still until the objects do."""
+def _at_rest(hold, obs, objects, *, most=2 * CONTROL_FREQ, still=0.5e-3):
+    """Call ``hold()`` (one control step holding still; it returns the observations after it) until no
+    object of ``objects`` moves more than ``still`` metres in a step, at most ``most`` times; the last
+    observations (``obs`` when none was taken)."""
     where = np.array([obs[f"{o}_pos"] for o in objects])
     for _ in range(most):
-        obs = with_object_poses(env, env.step(np.tile(np.r_[np.zeros(6), -1.0], arms))[0])
+        obs = hold()
         now = np.array([obs[f"{o}_pos"] for o in objects])
         if np.abs(now - where).max() < still:
             break
@@ -1635,7 +1641,8 @@ def _evaluate_arms_episode(job, seed):
         if missing:
             raise ValueError(f"the environment shows no pose of the library's object(s) {missing}; "
                              "evaluate the library in the task it was recorded in")
-        obs = _rest_arms(environment, obs, objects, arms)
+        obs = _at_rest(lambda: with_object_poses(environment, environment.step(  # every arm holds still
+            np.tile(np.r_[np.zeros(6), -1.0], arms))[0]), obs, objects)
         scene = {o: [round(float(v), 6) for v in obs[f"{o}_pos"]] for o in objects}
         lock = Lockstep(environment, obs, arms)
         episodes = []
@@ -1711,9 +1718,7 @@ def _evaluate_arms_episode(job, seed):
             failed = (k, (last, "timeout", f"{steps} steps") if steps >= job.horizon else
                       (last, "misplaced", "the environment's success check fails"))
         k, (i, reason, detail) = failed
-        if contact is not None and contact[0] == k and contact[1][0] <= i and reason != "timeout":
-            reason, detail = ("collision",
-                              f"{contact[1][1]} in segment {contact[1][0]}; then {reason}: {detail}")
+        reason, detail = _blamed(episodes[k].contact, i, reason, detail)
         row["failure"] = {"arm": k, "segment": i, "primitive": pair[k].segments[i].primitive.id,
                           "source": pair[k].id, "reason": reason, "detail": detail}
     total = {key: sum(t[key] for t in timings) for key in ("adapt", "driven", "segments")}

@@ -165,8 +165,6 @@ class _Driver:
         self.env, self.objects, self.keep = env, _objects(obs), keep
         self.obs = obs
         self.quat = np.array(self.obs["robot0_eef_quat"], float)  # held all episode
-        arm = env.robots[0].part_controllers["right"]
-        self.scale = np.abs(np.asarray(arm.output_max, float))  # metres and radians per unit input
         self.rows = {"obs": [], "actions": [], "rewards": [], "dones": [], "states": []}
         self.grip = -1.0  # open
 

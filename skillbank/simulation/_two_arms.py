@@ -20,7 +20,7 @@ import numpy as np
 
 from ..io import robosuite_objects as _objects
 from ..io import with_object_poses
-from ._robosuite import CONTROL_FREQ, _closing_axis, _min_jerk, _turn, osc_action
+from ._robosuite import CONTROL_FREQ, _closing_axis, _min_jerk, _pose, _turn, osc_action
 
 __all__ = ["TWO_ARM_TASKS", "TwoArmTask", "two_arm_episode"]
 
@@ -131,10 +131,6 @@ class _Arms:
             yield here
 
 
-def _site(env, name) -> np.ndarray:
-    return np.array(env.sim.data.site_xpos[env.sim.model.site_name2id(name)], float)
-
-
 def _geom(env, name) -> tuple:
     """``(centre, turn, half sizes)`` of a box geom of the scene as it lies now."""
     i = env.sim.model.geom_name2id(name)
@@ -236,7 +232,7 @@ def two_arm_episode(env, task: TwoArmTask, rng) -> tuple:
         if site is None:
             moves.append(None)
             continue
-        at = _site(env, site)
+        at = _pose(env, "site", site)[:3, 3]
         # the fingers close along the line from the object's centre out to its handle: across the bar
         out = (at - centre) * [1, 1, 0]
         out = out / max(np.linalg.norm(out), 1e-9)
