@@ -156,6 +156,7 @@ class _Source:
     robot: str | None = None  # the arm it was recorded on, where the recording says
     pose_of: str | None = None  # the point of that arm its poses are of (metadata["pose_of"]), if said
     arm: int = 0  # which arm of a recording of several (metadata["arm_index"]; robosuite's robotK_)
+    arms: int = 1  # how many arms its recording has (metadata["arms"])
     recording: tuple = ()  # the recorded episode (file, episode): the arms of one recording share it
 
 
@@ -418,6 +419,7 @@ def _sources(store):
         src = _Source(demo_id, {o: np.asarray(demo[f"{o}_pos"][0], float) for o in objects},
                       np.asarray(demo["actions"], float), robot=recorded_robot(demo),
                       pose_of=meta.get(POSE_OF), arm=arm_of(meta) or 0,
+                      arms=1 if arm_of(meta) is None else meta["arms"],
                       recording=(str(meta.get("source")), str(meta.get("demo", meta.get("episode")))))
         for p in sorted(ps, key=lambda p: p.start):
             relation = acted_on(p.demo)
@@ -1830,7 +1832,8 @@ def evaluate(library, env: str, *, episodes: int = 10, seed: int = 0, placement=
         if store is not library:
             store.close()
     arm = running_arm(sources, robot)  # before any episode: a point the arm cannot take is refused
-    arms = 1 + max(src.arm for src in sources)
+    # as many arms as the recordings have, whichever of them the library holds (one arm's alone is refused)
+    arms = max(src.arms for src in sources)
     if arms > 1:  # a task of several arms: each recording's demonstrations, one per arm, run together
         groups = _arm_recordings(sources, arms)
         if planner != "none":

@@ -150,3 +150,30 @@ def test_a_two_arm_recording_in_robosuites_raw_format_is_read_as_the_same_arms(l
             np.testing.assert_allclose(a[stream], b[stream], atol=WORLD_TOLERANCE)
         turned = 2 * np.arccos(np.clip(np.abs(np.sum(a["orientation"] * b["orientation"], axis=1)), 0, 1))
         assert np.degrees(turned).max() < 0.5
+
+
+def test_the_cli_refuses_a_library_missing_an_arm_in_one_line(lift, tmp_path, capsys):
+    out, _, _ = lift
+    with Library(tmp_path / "one_arm.db") as lib:
+        lib.add_many([d for d in read_robomimic(out) if d.metadata["arm_index"] == 0])
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code = main(["sim", "evaluate", str(tmp_path / "one_arm.db"), "--env", "robosuite:TwoArmLift",
+                 "--robot", "panda", "--episodes", "1", "--seed", "900"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "are of arm(s) [0] of a recording of 2 arms; add every arm's demonstration" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_recordings_arms_said_in_invalid_json_are_one_clear_error(lift, tmp_path):
+    import shutil
+
+    from skillbank.io import FormatError
+
+    out, _, _ = lift
+    bad = tmp_path / "bad.hdf5"
+    shutil.copy(out, bad)
+    with h5py.File(bad, "r+") as h5:
+        h5["data"].attrs["robots"] = "[{not json"
+    with pytest.raises(FormatError, match=r"invalid JSON in data.attrs\['robots'\]"):
+        read_robomimic(bad)
